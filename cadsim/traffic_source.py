@@ -1,0 +1,52 @@
+"""The interface every traffic source implements (SUMO, the robot arena, highway-env).
+
+A source runs one seeded simulation (libsumo allows one per process), yields world snapshots at
+the scenario's sampling instants, and proposes observer pairs for a snapshot. Everything after
+this boundary (rendering, noise, detection, dataset) is source-agnostic.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+from cadsim.camera import Camera
+from cadsim.world import Snapshot
+
+
+@dataclass(frozen=True)
+class ObserverPair:
+    """Two cameras that may see the same scene. observer*_id: the id of the object carrying the
+    camera (excluded from its own view), or "" for a camera on no object. meta: e.g. junction id."""
+
+    camera1: Camera
+    camera2: Camera
+    observer1_id: str = ""
+    observer2_id: str = ""
+    meta: dict = field(default_factory=dict)
+
+
+class TrafficSource(ABC):
+    """One seeded simulation. Use as a context manager: ``with source: for snap in source.snapshots()``."""
+
+    def __enter__(self) -> TrafficSource:
+        self.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def start(self) -> None:  # noqa: B027 - optional hook
+        """Start the simulation (default: nothing to start)."""
+
+    def close(self) -> None:  # noqa: B027 - optional hook
+        """Release the simulation (default: nothing to release)."""
+
+    @abstractmethod
+    def snapshots(self) -> Iterator[Snapshot]:
+        """Yield snapshots at the scenario's sampling instants, deterministically for the seed."""
+
+    @abstractmethod
+    def observer_pairs(self, snapshot: Snapshot) -> list[ObserverPair]:
+        """Candidate observer pairs for this snapshot, in a deterministic order."""

@@ -1,0 +1,1 @@
+"""eval: metrics, experiment runner, tables and figures for cadsim datasets and matchers."""
