@@ -1,5 +1,6 @@
 # cadsim — every target sets itself up; nothing needs to be installed or exported by hand.
 SHELL := /bin/bash
+.SHELLFLAGS := -o pipefail -c
 PYTHON ?= python3
 VENV := .venv
 PY := $(VENV)/bin/python
@@ -17,8 +18,8 @@ all: test
 # The venv is rebuilt only when pyproject.toml changes: a second `make test` installs nothing.
 $(STAMP): pyproject.toml
 	@test -x $(PY) || $(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[$(EXTRAS)]'
+	$(PY) -m pip install --quiet --upgrade pip 2>&1 | { grep -v '^WARNING: Location' || true; }
+	$(PY) -m pip install --quiet -e '.[$(EXTRAS)]' 2>&1 | { grep -vE '^WARNING: Location|BuildBackendWarning|^ *$$' || true; }
 	@touch $(STAMP)
 
 venv: sysdeps $(STAMP)

@@ -1,0 +1,585 @@
+"""Scenario files (TOML): loading and validation.
+
+A scenario file names a traffic source (``[traffic] source = "sumo"``, ...), the cameras, how
+observer pairs are chosen, the depth-noise and detection parameters, the sampling schedule, the
+seed and the number of frame pairs. Every key is checked here, once, so that a typo fails at load
+time with a message naming the file, the dotted key and what was expected. The file format is
+documented in docs/scenarios.md.
+
+Each traffic source kind registers the schema of its ``[traffic]`` table with
+:func:`register_source_schema`; the ``[noise]`` and ``[detection]`` tables are checked against
+the fields of ``cadsim.depth_noise.NoiseConfig`` and ``cadsim.detection.DetectionConfig``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import logging
+import os
+import tomllib
+import types
+import typing
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+log = logging.getLogger(__name__)
+
+REQUIRED: Any = type("Required", (), {"__repr__": lambda self: "REQUIRED"})()
+"""Default marking a key that must be present."""
+
+
+class ScenarioError(ValueError):
+    """A scenario file is malformed. ``path``: the file; ``key``: dotted key ("traffic.sumocfg");
+    the message also says what was found and what was expected."""
+
+    def __init__(self, path: str | Path, key: str, problem: str, expected: str = "") -> None:
+        self.path = Path(path)
+        self.key = key
+        self.problem = problem
+        self.expected = expected
+        where = f"{self.path}: {key}" if key else str(self.path)
+        text = f"{where}: {problem}"
+        if expected:
+            text += f"; expected {expected}"
+        super().__init__(text)
+
+
+@dataclass(frozen=True)
+class ScenarioContext:
+    """Where a table is being validated: the scenario file and the folder relative paths resolve
+    against. Schema checks raise ``ctx.error(key, problem, expected)``."""
+
+    path: Path
+
+    @property
+    def base_dir(self) -> Path:
+        return self.path.parent
+
+    def error(self, key: str, problem: str, expected: str = "") -> ScenarioError:
+        return ScenarioError(self.path, key, problem, expected)
+
+    def resolve(self, value: str) -> Path:
+        """A path from the file as an absolute path: ``~`` and environment variables expanded
+        (``$SUMO_HOME`` defaults to the installed SUMO), relative paths taken against the
+        scenario's folder."""
+        if "SUMO_HOME" in value and "SUMO_HOME" not in os.environ:
+            _set_sumo_home()
+        p = Path(os.path.expandvars(value)).expanduser()
+        return (p if p.is_absolute() else self.base_dir / p).resolve()
+
+
+@dataclass(frozen=True)
+class Field:
+    """One key of a table.
+
+    types: the accepted Python type(s) after TOML parsing (an int is accepted where a float is
+    expected and converted). default: the value when the key is absent (``REQUIRED``: must be
+    given; ``None``: stays None). item: element type for lists. gt/ge/le: numeric bounds.
+    choices: allowed values. path: "file" (one existing file) or "files" (a list of them),
+    resolved to absolute path strings. check: extra predicate on the converted value.
+    expect: how the expectation reads in error messages (derived when empty).
+    """
+
+    types: type | tuple[type, ...]
+    default: Any = REQUIRED
+    doc: str = ""
+    item: type | None = None
+    gt: float | None = None
+    ge: float | None = None
+    le: float | None = None
+    choices: tuple = ()
+    path: str = ""
+    check: Callable[[Any], bool] | None = None
+    expect: str = ""
+
+    def expectation(self) -> str:
+        if self.expect:
+            return self.expect
+        if self.path == "file":
+            return "a path to an existing file (relative to the scenario file's folder)"
+        if self.path == "files":
+            return "a list of paths to existing files (relative to the scenario file's folder)"
+        if self.choices:
+            return "one of " + ", ".join(repr(c) for c in self.choices)
+        text = " or ".join(_type_name(t) for t in _as_tuple(self.types))
+        if self.item is not None:
+            text += f" of {_type_name(self.item)}"
+        bounds = [f"> {self.gt:g}" if self.gt is not None else ""]
+        bounds += [f">= {self.ge:g}" if self.ge is not None else ""]
+        bounds += [f"<= {self.le:g}" if self.le is not None else ""]
+        bounds = [b for b in bounds if b]
+        return text + (" " + " and ".join(bounds) if bounds else "")
+
+
+@dataclass(frozen=True)
+class Table:
+    """A TOML table: its fields (a Field or a nested Table per key).
+
+    when_absent: "defaults" (an absent table is filled with its defaults) or "omit" (an absent
+    table stays absent / None). check: cross-field validation, called with the validated dict and
+    the context, raising ``ctx.error(...)``; it may also add derived entries.
+    """
+
+    fields: Mapping[str, Field | Table]
+    doc: str = ""
+    when_absent: str = "defaults"
+    check: Callable[[dict, ScenarioContext, str], None] | None = None
+
+
+@dataclass(frozen=True)
+class CameraConfig:
+    """Forward camera of an observer. width/height: pixels. hfov_deg: horizontal field of view,
+    degrees. mount_height: metres above the ground, or "roof" (on the carrying vehicle's roof).
+    pitch_deg: tilt, degrees, negative looks down."""
+
+    width: int = 640
+    height: int = 480
+    hfov_deg: float = 90.0
+    mount_height: float | str = 1.6
+    pitch_deg: float = 0.0
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated scenario file. ``text`` is the file's exact contents (for manifests);
+    ``traffic`` is the validated [traffic] table with relative paths resolved to absolute;
+    ``noise`` and ``detection`` are the raw tables (keys checked against NoiseConfig /
+    DetectionConfig); ``observers`` and ``sampling`` have their defaults filled in."""
+
+    path: Path
+    text: str
+    name: str
+    seed: int
+    pairs: int
+    traffic: dict
+    camera: CameraConfig
+    observers: dict
+    noise: dict
+    detection: dict
+    sampling: dict
+
+
+def _set_sumo_home() -> None:
+    """Importing the eclipse-sumo wheel sets SUMO_HOME (if it is installed)."""
+    try:
+        import sumo  # noqa: F401
+    except ImportError:
+        pass
+
+
+# --------------------------------------------------------------------------------------------
+# Schemas of the tables every scenario has.
+
+CAMERA = Table(
+    {
+        "width": Field(int, 640, "image width, pixels", ge=16),
+        "height": Field(int, 480, "image height, pixels", ge=16),
+        "hfov_deg": Field(float, 90.0, "horizontal field of view, degrees", gt=0, le=170),
+        "mount_height": Field(
+            (float, str),
+            1.6,
+            'camera height above the ground, metres, or "roof" (the vehicle\'s roof)',
+            check=lambda v: v == "roof" if isinstance(v, str) else v > 0,
+            expect='a number > 0 (metres) or "roof"',
+        ),
+        "pitch_deg": Field(float, 0.0, "camera tilt, degrees, negative looks down", ge=-60, le=60),
+    }
+)
+
+OBSERVERS = Table(
+    {
+        "max_distance": Field(
+            float,
+            40.0,
+            "an observer is at most this far (metres, along its route) from the junction",
+            gt=0,
+        ),
+        "min_distance": Field(
+            float, 0.0, "an observer is at least this far (metres) from the junction", ge=0
+        ),
+        "min_separation": Field(
+            float, 5.0, "the two observers are at least this far apart (metres)", ge=0
+        ),
+        "classes": Field(
+            list, ["car", "van", "bus", "truck"], "object classes that may carry a camera", item=str
+        ),
+        "junctions": Field(
+            list, [], "junction ids to observe (empty: every usable junction)", item=str
+        ),
+    }
+)
+
+SAMPLING = Table(
+    {
+        "warm_up": Field(float, 60.0, "simulated seconds before the first snapshot", ge=0),
+        "interval": Field(float, 2.0, "simulated seconds between snapshots", gt=0),
+        "pairs_per_snapshot": Field(
+            int, 1, "at most this many frame pairs from one snapshot", ge=1
+        ),
+        "pairs_per_episode": Field(
+            int, 10, "frame pairs taken from one simulation before a new one starts", ge=1
+        ),
+        "max_time": Field(
+            float, None, "stop a simulation at this time (s); absent: when its demand ends", gt=0
+        ),
+    }
+)
+
+TOP_LEVEL = {
+    "name": Field(str, None, "scenario name (default: the file name without .toml)"),
+    "description": Field(str, "", "free text"),
+    "seed": Field(int, 0, "base seed of every random choice", ge=0),
+    "pairs": Field(int, 50, "number of frame pairs in a dataset", ge=1),
+}
+TABLES = ("traffic", "camera", "observers", "noise", "detection", "sampling")
+
+# kind -> schema of its [traffic] table; kinds listed in _SCHEMA_MODULES register on first use.
+_SOURCE_SCHEMAS: dict[str, Table] = {}
+_SCHEMA_MODULES: dict[str, str] = {
+    "sumo": "cadsim.sumo_schema",
+    "arena": "cadsim.arena_config",
+    "highway-env": "cadsim.highway_schema",
+}
+
+# [noise] / [detection] -> the dataclass whose fields they set.
+_CONFIG_CLASSES: dict[str, tuple[str, str]] = {
+    "noise": ("cadsim.depth_noise", "NoiseConfig"),
+    "detection": ("cadsim.detection", "DetectionConfig"),
+}
+
+
+def register_source_schema(kind: str, schema: Table | Mapping[str, Field | Table] | type) -> None:
+    """Declare the ``[traffic]`` table of source ``kind``: a :class:`Table`, a mapping of key to
+    :class:`Field`/:class:`Table`, or a dataclass whose typed fields are the keys. The ``source``
+    key itself is implicit."""
+    if isinstance(schema, Table):
+        _SOURCE_SCHEMAS[kind] = schema
+    elif isinstance(schema, type) and dataclasses.is_dataclass(schema):
+        _SOURCE_SCHEMAS[kind] = Table(_fields_of_dataclass(schema))
+    elif isinstance(schema, Mapping):
+        _SOURCE_SCHEMAS[kind] = Table(dict(schema))
+    else:
+        raise TypeError(f"schema for source {kind!r} must be a Table, a mapping or a dataclass")
+
+
+def source_schema(kind: str) -> Table | None:
+    """The registered schema of a source kind (importing its module on first use), or None."""
+    if kind not in _SOURCE_SCHEMAS and kind in _SCHEMA_MODULES:
+        importlib.import_module(_SCHEMA_MODULES[kind])
+    return _SOURCE_SCHEMAS.get(kind)
+
+
+def known_source_kinds() -> list[str]:
+    return sorted(set(_SOURCE_SCHEMAS) | set(_SCHEMA_MODULES))
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario file; raise :class:`ScenarioError` on any problem."""
+    path = Path(path).expanduser().resolve()
+    ctx = ScenarioContext(path)
+    if not path.is_file():
+        raise ScenarioError(path, "", "scenario file does not exist", "an existing .toml file")
+    text = path.read_bytes().decode("utf-8")
+    try:
+        raw = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(path, "", f"invalid TOML ({exc})", "a TOML document") from None
+
+    for key in raw:
+        if key not in TOP_LEVEL and key not in TABLES:
+            raise ctx.error(
+                key, "unknown key", "one of " + ", ".join(sorted([*TOP_LEVEL, *TABLES]))
+            )
+    top = validate_table({k: raw[k] for k in TOP_LEVEL if k in raw}, Table(TOP_LEVEL), ctx, "")
+    for key in TABLES:
+        if key in raw and not isinstance(raw[key], dict):
+            raise ctx.error(key, f"is a {_type_name(type(raw[key]))}", "a table")
+
+    traffic = _validate_traffic(raw.get("traffic"), ctx)
+    camera = CameraConfig(**validate_table(raw.get("camera", {}), CAMERA, ctx, "camera"))
+    observers = validate_table(raw.get("observers", {}), OBSERVERS, ctx, "observers")
+    sampling = validate_table(raw.get("sampling", {}), SAMPLING, ctx, "sampling")
+    noise = dict(raw.get("noise", {}))
+    detection = dict(raw.get("detection", {}))
+    for key, table in (("noise", noise), ("detection", detection)):
+        config_class = _config_class(key)
+        if config_class is not None:
+            validate_dataclass_table(table, config_class, ctx, key)
+
+    return Scenario(
+        path=path,
+        text=text,
+        name=top["name"] or path.stem,
+        seed=top["seed"],
+        pairs=top["pairs"],
+        traffic=traffic,
+        camera=camera,
+        observers=observers,
+        noise=noise,
+        detection=detection,
+        sampling=sampling,
+    )
+
+
+def _validate_traffic(raw: Any, ctx: ScenarioContext) -> dict:
+    if raw is None:
+        raise ctx.error("traffic", "missing", "a [traffic] table with a 'source' key")
+    if "source" not in raw:
+        raise ctx.error("traffic.source", "missing", "one of " + ", ".join(known_source_kinds()))
+    kind = raw["source"]
+    schema = source_schema(kind) if isinstance(kind, str) else None
+    if schema is None:
+        raise ctx.error(
+            "traffic.source",
+            f"unknown source {kind!r}",
+            "one of " + ", ".join(known_source_kinds()),
+        )
+    body = {k: v for k, v in raw.items() if k != "source"}
+    return {"source": kind, **validate_table(body, schema, ctx, "traffic")}
+
+
+def _config_class(table: str) -> type | None:
+    module_name, class_name = _CONFIG_CLASSES[table]
+    try:
+        module = importlib.import_module(module_name)
+    except ModuleNotFoundError as exc:
+        if exc.name != module_name:
+            raise
+        log.warning("%s is not installed: [%s] is not validated", module_name, table)
+        return None
+    return getattr(module, class_name)
+
+
+# --------------------------------------------------------------------------------------------
+# Generic validation.
+
+
+def validate_table(raw: Mapping, schema: Table, ctx: ScenarioContext, prefix: str) -> dict:
+    """Check ``raw`` against ``schema``; return a new dict with defaults filled in, ints widened
+    to floats where floats are expected and paths resolved. ``prefix``: dotted key of the table."""
+    out: dict = {}
+    for key in raw:
+        if key not in schema.fields:
+            raise ctx.error(
+                _join(prefix, key), "unknown key", "one of " + ", ".join(sorted(schema.fields))
+            )
+    for key, spec in schema.fields.items():
+        dotted = _join(prefix, key)
+        if isinstance(spec, Table):
+            if key in raw:
+                if not isinstance(raw[key], dict):
+                    raise ctx.error(dotted, f"is a {_type_name(type(raw[key]))}", "a table")
+                out[key] = validate_table(raw[key], spec, ctx, dotted)
+            elif spec.when_absent == "defaults":
+                out[key] = validate_table({}, spec, ctx, dotted)
+            else:
+                out[key] = None
+            continue
+        if key not in raw:
+            if spec.default is REQUIRED:
+                raise ctx.error(dotted, "missing", spec.expectation())
+            out[key] = _copy_default(spec.default)
+            continue
+        out[key] = _validate_value(raw[key], spec, ctx, dotted)
+    if schema.check is not None:
+        schema.check(out, ctx, prefix)
+    return out
+
+
+def _validate_value(value: Any, spec: Field, ctx: ScenarioContext, dotted: str) -> Any:
+    expected = spec.expectation()
+    converted = _convert(value, _as_tuple(spec.types))
+    if converted is _MISMATCH:
+        raise ctx.error(dotted, f"has the wrong type ({_describe_value(value)})", expected)
+    value = converted
+    if isinstance(value, list) and spec.item is not None:
+        items = [_convert(v, (spec.item,)) for v in value]
+        if any(v is _MISMATCH for v in items):
+            bad = next(i for i, v in enumerate(items) if v is _MISMATCH)
+            raise ctx.error(
+                f"{dotted}[{bad}]", f"has the wrong type ({_describe_value(value[bad])})", expected
+            )
+        value = items
+    if spec.choices and value not in spec.choices:
+        raise ctx.error(dotted, f"is {value!r}", expected)
+    if isinstance(value, int | float) and not isinstance(value, bool):
+        out_of_range = (
+            (spec.gt is not None and not value > spec.gt)
+            or (spec.ge is not None and not value >= spec.ge)
+            or (spec.le is not None and not value <= spec.le)
+        )
+        if out_of_range:
+            raise ctx.error(dotted, f"is {value!r}", expected)
+    if spec.check is not None and not spec.check(value):
+        raise ctx.error(dotted, f"is {value!r}", expected)
+    if spec.path == "file":
+        value = str(_existing_file(value, ctx, dotted, expected))
+    elif spec.path == "files":
+        value = [
+            str(_existing_file(v, ctx, f"{dotted}[{i}]", expected)) for i, v in enumerate(value)
+        ]
+    return value
+
+
+def _existing_file(value: str, ctx: ScenarioContext, dotted: str, expected: str) -> Path:
+    p = ctx.resolve(value)
+    if not p.is_file():
+        raise ctx.error(dotted, f"file {str(p)!r} does not exist", expected)
+    return p
+
+
+_MISMATCH: Any = object()
+
+
+def _convert(value: Any, accepted: tuple[type, ...]) -> Any:
+    """``value`` if it is one of ``accepted`` (bool is not an int; int widens to float), else
+    _MISMATCH."""
+    for t in accepted:
+        if t is bool and isinstance(value, bool):
+            return value
+        if t is int and isinstance(value, int) and not isinstance(value, bool):
+            return value
+        if t is float and isinstance(value, int | float) and not isinstance(value, bool):
+            return float(value)
+        if t not in (bool, int, float) and isinstance(value, t):
+            return value
+    return _MISMATCH
+
+
+def validate_dataclass_table(raw: Mapping, cls: type, ctx: ScenarioContext, prefix: str) -> None:
+    """Check that every key of ``raw`` is an init field of dataclass ``cls``, that its value
+    matches the field's type annotation (int accepted for float; tuple fields accept lists), and
+    that ``cls(**raw)`` accepts the values (its own range checks)."""
+    hints = typing.get_type_hints(cls)
+    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
+    for key, value in raw.items():
+        dotted = _join(prefix, key)
+        if key not in fields:
+            raise ctx.error(dotted, "unknown key", "one of " + ", ".join(sorted(fields)))
+        hint = hints.get(key, Any)
+        if not _matches(value, hint):
+            raise ctx.error(
+                dotted, f"has the wrong type ({_describe_value(value)})", _describe_hint(hint)
+            )
+    try:
+        cls(**raw)
+    except (TypeError, ValueError) as exc:
+        named = [k for k in raw if k in str(exc)]
+        key = _join(prefix, named[0]) if len(named) == 1 else prefix
+        raise ctx.error(key, f"rejected ({exc})", f"values {cls.__name__} accepts") from None
+
+
+def _fields_of_dataclass(cls: type) -> dict[str, Field]:
+    """A Table's fields from a dataclass: each init field's annotation checked by _matches."""
+    hints = typing.get_type_hints(cls)
+    out = {}
+    for f in dataclasses.fields(cls):
+        if not f.init:
+            continue
+        if f.default is not dataclasses.MISSING:
+            default = f.default
+        elif f.default_factory is not dataclasses.MISSING:
+            default = f.default_factory()
+        else:
+            default = REQUIRED
+        hint = hints.get(f.name, Any)
+        out[f.name] = Field(
+            object,
+            default,
+            check=lambda v, h=hint: _matches(v, h),
+            expect=_describe_hint(hint),
+        )
+    return out
+
+
+def _matches(value: Any, hint: Any) -> bool:
+    """Whether a TOML value fits a type annotation."""
+    if hint is Any or hint is object:
+        return True
+    origin = typing.get_origin(hint)
+    args = typing.get_args(hint)
+    if origin is typing.Union or origin is types.UnionType:
+        return any(_matches(value, a) for a in args)
+    if origin is typing.Literal:
+        return any(value == a and type(value) is type(a) for a in args)
+    if hint is type(None):
+        return value is None
+    if hint is bool:
+        return isinstance(value, bool)
+    if hint is int:
+        return isinstance(value, int) and not isinstance(value, bool)
+    if hint is float:
+        return isinstance(value, int | float) and not isinstance(value, bool)
+    if origin in (list, tuple, typing.Sequence) or hint in (list, tuple):
+        if not isinstance(value, list | tuple):
+            return False
+        if not args:
+            return True
+        if origin is tuple and not (len(args) == 2 and args[1] is Ellipsis):
+            return len(value) == len(args) and all(
+                _matches(v, a) for v, a in zip(value, args, strict=True)
+            )
+        return all(_matches(v, args[0]) for v in value)
+    if origin is dict or hint is dict:
+        return isinstance(value, dict)
+    if isinstance(hint, type):
+        return isinstance(value, hint)
+    return True
+
+
+def _describe_hint(hint: Any) -> str:
+    if isinstance(hint, type):
+        return hint.__name__
+    return str(hint).replace("typing.", "")
+
+
+def _describe_value(value: Any) -> str:
+    return f"{_type_name(type(value))} {value!r}"
+
+
+def _type_name(t: type) -> str:
+    return {
+        str: "a string",
+        int: "an integer",
+        float: "a number",
+        bool: "a boolean",
+        list: "a list",
+        dict: "a table",
+    }.get(t, getattr(t, "__name__", str(t)))
+
+
+def _as_tuple(t: type | tuple[type, ...]) -> tuple[type, ...]:
+    return t if isinstance(t, tuple) else (t,)
+
+
+def _join(prefix: str, key: str) -> str:
+    return f"{prefix}.{key}" if prefix else key
+
+
+def _copy_default(value: Any) -> Any:
+    return (
+        list(value)
+        if isinstance(value, list)
+        else dict(value)
+        if isinstance(value, dict)
+        else value
+    )
+
+
+__all__ = [
+    "REQUIRED",
+    "CameraConfig",
+    "Field",
+    "Scenario",
+    "ScenarioContext",
+    "ScenarioError",
+    "Table",
+    "load_scenario",
+    "register_source_schema",
+    "source_schema",
+    "validate_dataclass_table",
+    "validate_table",
+]
