@@ -13,11 +13,20 @@ import sys
 
 # name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
-    "generate": ("cadsim.commands.generate", "simulate, render and detect: write a frame-pair dataset"),
-    "info": ("cadsim.commands.info", "summarise a dataset (objects, covisibility, classes, depths)"),
+    "generate": (
+        "cadsim.commands.generate",
+        "simulate, render and detect: write a frame-pair dataset",
+    ),
+    "info": (
+        "cadsim.commands.info",
+        "summarise a dataset (objects, covisibility, classes, depths)",
+    ),
     "show": ("cadsim.commands.show", "draw one frame pair with boxes and ground-truth lines"),
     "evaluate": ("eval.commands.evaluate", "run matchers on datasets (cached, parallel)"),
-    "sweep-noise": ("eval.commands.sweep_noise", "re-detect at several depth-noise rates and evaluate"),
+    "sweep-noise": (
+        "eval.commands.sweep_noise",
+        "re-detect at several depth-noise rates and evaluate",
+    ),
     "table": ("eval.commands.table", "re-render tables and figures from cached results"),
     "synthetic": ("eval.synthetic", "published synthetic benchmarks (BCAGM protocols)"),
 }

@@ -59,7 +59,9 @@ class Problem:
             if len(p2) and f2.shape[0] != p2.shape[0]:
                 raise ValueError(f"features2: {f2.shape[0]} rows for {p2.shape[0]} points")
             if len(p1) and len(p2) and f1.shape[1] != f2.shape[1]:
-                raise ValueError(f"features2: width {f2.shape[1]} differs from features1's {f1.shape[1]}")
+                raise ValueError(
+                    f"features2: width {f2.shape[1]} differs from features1's {f1.shape[1]}"
+                )
             object.__setattr__(self, "features1", f1)
             object.__setattr__(self, "features2", f2)
 

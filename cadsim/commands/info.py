@@ -1,0 +1,125 @@
+"""`cadsim info DIR [--json]`: objects per view, covisible and non-covisible counts, class mix and
+object depth ranges of a frame-pair dataset."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections import Counter
+
+import numpy as np
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("dataset", help="dataset folder written by `cadsim generate`")
+    parser.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def _range(values: np.ndarray) -> list[float] | None:
+    return [float(values.min()), float(values.max())] if values.size else None
+
+
+def _stats(values: list[int]) -> dict:
+    a = np.asarray(values, float)
+    if not a.size:
+        return {"mean": None, "min": None, "max": None}
+    return {"mean": float(a.mean()), "min": float(a.min()), "max": float(a.max())}
+
+
+def summarise(ds) -> dict:
+    """The dataset summary ``cadsim info --json`` prints. Depths are detections' z (metres along
+    each observer's optical axis, from the stored noisy positions)."""
+    pairs, class_mix, depths = [], Counter(), []
+    for pair in ds:
+        cov = len(pair.gt_pairs)
+        z1, z2 = pair.view1.positions[:, 2], pair.view2.positions[:, 2]
+        depths.extend([z1, z2])
+        class_mix.update(pair.view1.classes + pair.view2.classes)
+        pairs.append(
+            {
+                "index": pair.index,
+                "name": pair.name,
+                "episode": pair.episode,
+                "slot": pair.slot,
+                "n1": len(pair.view1),
+                "n2": len(pair.view2),
+                "covisible": cov,
+                "non_covisible1": len(pair.view1) - cov,
+                "non_covisible2": len(pair.view2) - cov,
+                "classes1": dict(sorted(Counter(pair.view1.classes).items())),
+                "classes2": dict(sorted(Counter(pair.view2.classes).items())),
+                "depth1": _range(z1),
+                "depth2": _range(z2),
+            }
+        )
+    all_z = np.concatenate(depths) if depths else np.zeros(0)
+    manifest = ds.manifest
+    return {
+        "dataset": str(ds.path),
+        "scenario": manifest["scenario"]["name"],
+        "seed": manifest["seeds"]["root"],
+        "checksum": ds.checksum,
+        "noise": ds.noise_config,
+        "n_pairs": len(pairs),
+        "objects_per_view": _stats([p["n1"] for p in pairs] + [p["n2"] for p in pairs]),
+        "covisible": _stats([p["covisible"] for p in pairs]),
+        "non_covisible_per_view": _stats(
+            [p["non_covisible1"] for p in pairs] + [p["non_covisible2"] for p in pairs]
+        ),
+        "class_mix": dict(class_mix.most_common()),
+        "depth": {
+            "min": float(all_z.min()) if all_z.size else None,
+            "median": float(np.median(all_z)) if all_z.size else None,
+            "max": float(all_z.max()) if all_z.size else None,
+        },
+        "pairs": pairs,
+    }
+
+
+def _fmt(stats: dict) -> str:
+    if stats["mean"] is None:
+        return "-"
+    return f"mean {stats['mean']:.1f}  min {stats['min']:.0f}  max {stats['max']:.0f}"
+
+
+def _text(s: dict) -> str:
+    total = sum(s["class_mix"].values()) or 1
+    mix = ", ".join(f"{c} {n} ({100 * n / total:.0f}%)" for c, n in s["class_mix"].items())
+    d = s["depth"]
+    depth = (
+        "-"
+        if d["min"] is None
+        else f"min {d['min']:.1f}  median {d['median']:.1f}  max {d['max']:.1f}"
+    )
+    lines = [
+        f"{s['dataset']}: scenario {s['scenario']}, {s['n_pairs']} pairs, seed {s['seed']}, "
+        f"checksum {s['checksum'][:16]}",
+        f"  objects per view        {_fmt(s['objects_per_view'])}",
+        f"  covisible per pair      {_fmt(s['covisible'])}",
+        f"  non-covisible per view  {_fmt(s['non_covisible_per_view'])}",
+        f"  object depth (m)        {depth}",
+        f"  class mix               {mix}",
+        "",
+        f"  {'pair':>4}  {'name':<12} {'n1':>3} {'n2':>3} {'cov':>3}  {'depth1 (m)':>12}  {'depth2 (m)':>12}",
+    ]
+    for p in s["pairs"]:
+        r1 = "-" if p["depth1"] is None else f"{p['depth1'][0]:.1f}-{p['depth1'][1]:.1f}"
+        r2 = "-" if p["depth2"] is None else f"{p['depth2'][0]:.1f}-{p['depth2'][1]:.1f}"
+        lines.append(
+            f"  {p['index']:>4}  {p['name']:<12} {p['n1']:>3} {p['n2']:>3} {p['covisible']:>3}  "
+            f"{r1:>12}  {r2:>12}"
+        )
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    from cadsim.dataset import Dataset
+
+    try:
+        summary = summarise(Dataset(args.dataset))
+    except ValueError as exc:
+        print(f"cadsim info: error: {exc}", file=sys.stderr)
+        return 2
+    print(json.dumps(summary, indent=1) if args.json else _text(summary))
+    return 0

@@ -1,0 +1,115 @@
+"""One view's detections as stored in a record, and the ground truth between two views.
+
+Positions are in that view's camera frame (OpenCV: x right, y down, z forward, metres), computed
+from the noisy depth; boxes are pixel rectangles (u0, v0, u1, v1); features are the detection
+adapter's appearance vectors; ``object_ids`` are ground truth and never part of a matcher's input.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+_FIELDS = ("positions", "boxes", "features", "object_ids", "classes", "pixels")
+
+
+@dataclass(frozen=True, eq=False)
+class ViewDetections:
+    """k detections of one view.
+
+    positions: (k, 3) float64 metres, camera frame. boxes: (k, 4) float64 pixels (u0, v0, u1, v1).
+    features: (k, d) float32. object_ids, classes: k strings. pixels: (k,) int64 visible pixels.
+    """
+
+    positions: np.ndarray
+    boxes: np.ndarray
+    features: np.ndarray
+    object_ids: list[str]
+    classes: list[str]
+    pixels: np.ndarray
+
+    def __post_init__(self) -> None:
+        k = len(self.object_ids)
+        positions = np.asarray(self.positions, dtype=np.float64).reshape(-1, 3)
+        boxes = np.asarray(self.boxes, dtype=np.float64).reshape(-1, 4)
+        features = np.asarray(self.features, dtype=np.float32)
+        features = features.reshape(k, -1) if features.size or k else features.reshape(0, 0)
+        pixels = np.asarray(self.pixels, dtype=np.int64).reshape(-1)
+        for name, arr in (("positions", positions), ("boxes", boxes), ("features", features),
+                          ("pixels", pixels), ("classes", self.classes)):  # fmt: skip
+            if len(arr) != k:
+                raise ValueError(f"detections.{name}: {len(arr)} rows for {k} object ids")
+        if len(set(self.object_ids)) != k:
+            raise ValueError("detections.object_ids: an object is detected twice in one view")
+        object.__setattr__(self, "positions", positions)
+        object.__setattr__(self, "boxes", boxes)
+        object.__setattr__(self, "features", features)
+        object.__setattr__(self, "pixels", pixels)
+        object.__setattr__(self, "object_ids", [str(v) for v in self.object_ids])
+        object.__setattr__(self, "classes", [str(v) for v in self.classes])
+
+    def __len__(self) -> int:
+        return len(self.object_ids)
+
+    @classmethod
+    def from_detections(cls, det) -> ViewDetections:
+        """From any object with the detection adapter's fields (``cadsim.detection.Detections``)."""
+        return cls(**{f: getattr(det, f) for f in _FIELDS})
+
+    def to_arrays(self, prefix: str) -> dict[str, np.ndarray]:
+        """Arrays for an npz, keys ``PREFIX_FIELD``; strings as fixed-width unicode arrays."""
+        return {
+            f"{prefix}_positions": self.positions,
+            f"{prefix}_boxes": self.boxes,
+            f"{prefix}_features": self.features,
+            f"{prefix}_object_ids": np.array(self.object_ids, dtype=str),
+            f"{prefix}_classes": np.array(self.classes, dtype=str),
+            f"{prefix}_pixels": self.pixels,
+        }
+
+    @classmethod
+    def from_arrays(cls, arrays: dict[str, np.ndarray], prefix: str, what: str) -> ViewDetections:
+        """Inverse of ``to_arrays``; ``what`` names the file in errors."""
+        missing = [f"{prefix}_{f}" for f in _FIELDS if f"{prefix}_{f}" not in arrays]
+        if missing:
+            raise ValueError(f"{what}: missing arrays {missing}")
+        return cls(
+            positions=arrays[f"{prefix}_positions"],
+            boxes=arrays[f"{prefix}_boxes"],
+            features=arrays[f"{prefix}_features"],
+            object_ids=arrays[f"{prefix}_object_ids"].tolist(),
+            classes=arrays[f"{prefix}_classes"].tolist(),
+            pixels=arrays[f"{prefix}_pixels"],
+        )
+
+    def equals(self, other: ViewDetections) -> bool:
+        """Exact equality of every field."""
+        return (
+            self.object_ids == other.object_ids
+            and self.classes == other.classes
+            and all(
+                np.array_equal(getattr(self, f), getattr(other, f))
+                for f in ("positions", "boxes", "features", "pixels")
+            )
+        )
+
+
+def ground_truth_pairs(view1: ViewDetections, view2: ViewDetections) -> np.ndarray:
+    """(k, 2) int64 index pairs (i, j), i ascending, of detections of the same object."""
+    index2 = {oid: j for j, oid in enumerate(view2.object_ids)}
+    pairs = [(i, index2[oid]) for i, oid in enumerate(view1.object_ids) if oid in index2]
+    return np.array(pairs, dtype=np.int64).reshape(-1, 2)
+
+
+def is_acceptable_pair(
+    view1: ViewDetections, view2: ViewDetections, min_covisible: int = 3, min_exclusive: int = 1
+) -> bool:
+    """DESIGN §5: at least ``min_covisible`` objects detected in both views, and at least
+    ``min_exclusive`` objects in each view that the other view does not detect."""
+    covisible = len(ground_truth_pairs(view1, view2))
+    return (
+        covisible >= min_covisible
+        and len(view1) - covisible >= min_exclusive
+        and len(view2) - covisible >= min_exclusive
+    )

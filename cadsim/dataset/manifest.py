@@ -1,0 +1,147 @@
+"""The dataset manifest (``manifest.json``): provenance, configuration, record list, checksums.
+
+Written when generation starts (``"complete": false``, no records) and again, atomically, when it
+ends (``"complete": true``, the first N records in (episode, slot) order with their checksums).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import json
+import platform
+import subprocess
+from importlib import metadata
+from pathlib import Path
+
+from cadsim.dataset import layout
+from cadsim.dataset.atomic_writer import write_file_atomic
+from cadsim.dataset.checksum import dataset_checksum
+from cadsim.dataset.encoding import json_bytes
+from cadsim.dataset.record_format import FORMAT_VERSION, jsonable
+
+FORMAT_NAME = "cadsim-frame-pairs"
+SEED_DERIVATION = (
+    "numpy SeedSequence(root, spawn_key=(0, episode)) -> simulation seed; "
+    "(1, episode, slot, view) -> depth-noise seed (also FramePair.redetect's, with its seed as root)"
+)
+# Distributions whose versions shape the records (metadata only: nothing is imported).
+_PACKAGES = (
+    "numpy", "scipy", "opencv-python-headless", "pyrender-maintained", "pyrender", "PyOpenGL",
+    "trimesh", "libsumo", "eclipse-sumo", "sumolib", "highway-env", "matplotlib", "cadsim",
+)  # fmt: skip
+
+
+class DatasetError(ValueError):
+    """A dataset directory is missing, incomplete, from another generation, or corrupt."""
+
+
+def package_versions() -> dict[str, str | None]:
+    """Installed versions of the packages that shape the records (None if not installed)."""
+    versions: dict[str, str | None] = {"python": platform.python_version()}
+    for name in _PACKAGES:
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            versions[name] = None
+    return versions
+
+
+def git_state() -> dict[str, str | bool | None]:
+    """Commit of the cadsim checkout and whether tracked files differ from it (None: no git)."""
+    repo = Path(__file__).resolve().parents[2]
+
+    def git(*args: str) -> str | None:
+        try:
+            out = subprocess.run(
+                ["git", "-C", str(repo), *args], capture_output=True, text=True, timeout=10
+            )
+        except (OSError, subprocess.SubprocessError):
+            return None
+        return out.stdout.strip() if out.returncode == 0 else None
+
+    commit = git("rev-parse", "HEAD")
+    status = git("status", "--porcelain", "--untracked-files=no") if commit else None
+    return {"commit": commit, "dirty": None if status is None else bool(status)}
+
+
+def _plain(value):
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return jsonable(dataclasses.asdict(value))
+    return jsonable(value)
+
+
+def generation_config(scenario, seed: int, pairs_per_episode: int, criteria: dict) -> dict:
+    """What determines the records: the scenario (contents and tables), the root seed, the
+    episode size and the acceptance criteria. A resumed run must match it exactly."""
+    return {
+        "format_version": FORMAT_VERSION,
+        "scenario_sha256": hashlib.sha256(scenario.text.encode("utf-8")).hexdigest(),
+        "seed": int(seed),
+        "pairs_per_episode": int(pairs_per_episode),
+        "acceptance": dict(criteria),
+        "traffic": _plain(scenario.traffic),
+        "camera": _plain(scenario.camera),
+        "observers": _plain(scenario.observers),
+        "noise": _plain(scenario.noise),
+        "detection": _plain(scenario.detection),
+        "sampling": _plain(scenario.sampling),
+    }
+
+
+def build_manifest(
+    scenario,
+    config: dict,
+    seed_source: str,
+    records: list[dict],
+    episodes: dict[int, int],
+    complete: bool,
+) -> dict:
+    """The manifest. records: [{"name", "episode", "slot", "sim_seed", "checksum"}] in dataset
+    order; episodes: {episode: simulation seed} of every episode run."""
+    return {
+        "format": FORMAT_NAME,
+        "format_version": FORMAT_VERSION,
+        "complete": bool(complete),
+        "scenario": {"path": str(scenario.path), "name": scenario.name, "text": scenario.text},
+        "seeds": {
+            "root": config["seed"],
+            "root_from": seed_source,
+            "derivation": SEED_DERIVATION,
+            "episodes": {str(e): int(s) for e, s in sorted(episodes.items())},
+        },
+        "generation": config,
+        "versions": package_versions(),
+        "git": git_state(),
+        "pairs": len(records),
+        "records": records,
+        "checksum": dataset_checksum(r["checksum"] for r in records),
+    }
+
+
+def write_manifest(dataset_dir: Path, manifest: dict) -> None:
+    write_file_atomic(Path(dataset_dir) / layout.MANIFEST, json_bytes(manifest))
+
+
+def read_manifest(dataset_dir: Path) -> dict:
+    """The manifest of ``dataset_dir``; ``DatasetError`` if absent or not a cadsim manifest."""
+    path = Path(dataset_dir) / layout.MANIFEST
+    if not path.is_file():
+        raise DatasetError(
+            f"{path}: no manifest; not a cadsim dataset (make one with `cadsim generate`)"
+        )
+    try:
+        manifest = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise DatasetError(f"{path}: unreadable manifest ({exc})") from exc
+    if not isinstance(manifest, dict) or manifest.get("format") != FORMAT_NAME:
+        raise DatasetError(f"{path}: 'format' is not {FORMAT_NAME!r}")
+    if manifest.get("format_version") != FORMAT_VERSION:
+        raise DatasetError(
+            f"{path}: format_version {manifest.get('format_version')!r}, this cadsim reads "
+            f"{FORMAT_VERSION}"
+        )
+    for key in ("complete", "records", "checksum", "generation", "scenario", "seeds"):
+        if key not in manifest:
+            raise DatasetError(f"{path}: missing key {key!r}")
+    return manifest

@@ -1,0 +1,117 @@
+"""The frame-pair record: what one accepted observer pair leaves on disk, and its encoding.
+
+Files of ``pairs/eEEEEE_sSS/`` (see docs/dataset.md for every field):
+``view1.png``/``view2.png`` colour (RGB as PNG); ``depth.npz`` clean depth ``depth1``/``depth2``
+(H, W) float32 metres along the optical axis, 0 = no hit; ``instance.npz`` ``instance1``/
+``instance2`` (H, W) int32 index into ``record.json``'s ``objects``, -1 = none; ``detections.npz``
+``view{1,2}_{positions,boxes,features,object_ids,classes,pixels}`` at the scenario's noise
+config; ``record.json`` cameras, observers, seeds, snapshot time and objects, ground truth.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cadsim.camera import Camera
+from cadsim.dataset import layout
+from cadsim.dataset.detections import ViewDetections, ground_truth_pairs
+from cadsim.dataset.encoding import json_bytes, npz_bytes, png_bytes
+from cadsim.world import WorldObject
+
+FORMAT_VERSION = 1
+
+
+@dataclass(frozen=True, eq=False)
+class ViewCapture:
+    """One observer's view: camera, the id of the object carrying it ("" for none), the rendered
+    colour (H, W, 3) uint8 RGB, clean depth (H, W) float32 metres, instance ids (H, W) int32, the
+    detections at the scenario's noise config, and the seed of that noise."""
+
+    camera: Camera
+    observer_id: str
+    color: np.ndarray
+    depth: np.ndarray
+    instance: np.ndarray
+    detections: ViewDetections
+    noise_seed: int
+
+
+@dataclass(frozen=True, eq=False)
+class PairRecord:
+    """One accepted frame pair. Identity: (episode, slot). time: simulation seconds."""
+
+    episode: int
+    slot: int
+    sim_seed: int
+    time: float
+    objects: list[WorldObject]
+    view1: ViewCapture
+    view2: ViewCapture
+    meta: dict = field(default_factory=dict)
+
+
+def jsonable(value):
+    """``value`` with numpy scalars/arrays and tuples turned into plain JSON types."""
+    return json.loads(json.dumps(value, default=_json_default))
+
+
+def _json_default(value):
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, set | frozenset):
+        return sorted(value)
+    raise TypeError(f"record metadata: {type(value).__name__} is not JSON-serialisable")
+
+
+def _check_image(name: str, arr: np.ndarray, shape: tuple[int, int], dtype) -> np.ndarray:
+    arr = np.asarray(arr)
+    if arr.shape[:2] != shape or arr.dtype != dtype:
+        raise ValueError(f"{name}: expected {shape} {np.dtype(dtype)}, got {arr.shape} {arr.dtype}")
+    return arr
+
+
+def encode_record(rec: PairRecord) -> dict[str, bytes]:
+    """{file name: bytes} of a record; deterministic (same record ⇒ same bytes)."""
+    views = (rec.view1, rec.view2)
+    for k, v in enumerate(views, start=1):
+        hw = (v.camera.height, v.camera.width)
+        _check_image(f"view{k} colour", v.color, hw, np.uint8)
+        _check_image(f"view{k} depth", v.depth, hw, np.float32)
+        _check_image(f"view{k} instance", v.instance, hw, np.int32)
+    gt = ground_truth_pairs(rec.view1.detections, rec.view2.detections)
+    ids1 = rec.view1.detections.object_ids
+    record = {
+        "format_version": FORMAT_VERSION,
+        "episode": int(rec.episode),
+        "slot": int(rec.slot),
+        "sim_seed": int(rec.sim_seed),
+        "time": float(rec.time),
+        "observers": [
+            {"id": v.observer_id, "camera": v.camera.as_dict(), "noise_seed": int(v.noise_seed)}
+            for v in views
+        ],
+        "objects": [o.as_dict() for o in rec.objects],
+        "ground_truth": [{"object_id": ids1[i], "i": int(i), "j": int(j)} for i, j in gt],
+        "counts": {
+            "n1": len(rec.view1.detections),
+            "n2": len(rec.view2.detections),
+            "covisible": len(gt),
+        },
+        "meta": jsonable(rec.meta),
+    }
+    detections = rec.view1.detections.to_arrays("view1") | rec.view2.detections.to_arrays("view2")
+    return {
+        layout.VIEW1_PNG: png_bytes(rec.view1.color),
+        layout.VIEW2_PNG: png_bytes(rec.view2.color),
+        layout.DEPTH_NPZ: npz_bytes({"depth1": rec.view1.depth, "depth2": rec.view2.depth}),
+        layout.INSTANCE_NPZ: npz_bytes(
+            {"instance1": rec.view1.instance, "instance2": rec.view2.instance}
+        ),
+        layout.DETECTIONS_NPZ: npz_bytes(detections),
+        layout.RECORD_JSON: json_bytes(record),
+    }

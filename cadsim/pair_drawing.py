@@ -1,0 +1,123 @@
+"""Two views side by side with detection boxes and lines between matched detections.
+
+Used by ``cadsim show`` (ground-truth correspondences) and by the evaluation's qualitative
+figure (paper Fig. 3 style: green correct, red wrong, yellow missed). Pixel coordinates: (u, v),
+u right, v down, as the detection boxes (u0, v0, u1, v1).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+CORRECT, WRONG, MISSED = "#22c55e", "#ef4444", "#facc15"
+
+
+def side_by_side(color1: np.ndarray, color2: np.ndarray, gap: int = 16) -> tuple[np.ndarray, int]:
+    """One (H, W1 + gap + W2, 3) uint8 image (white gap), and view 2's horizontal offset."""
+    h = max(color1.shape[0], color2.shape[0])
+    offset = color1.shape[1] + gap
+    canvas = np.full((h, offset + color2.shape[1], 3), 255, np.uint8)
+    canvas[: color1.shape[0], : color1.shape[1]] = color1
+    canvas[: color2.shape[0], offset:] = color2
+    return canvas, offset
+
+
+def _boxes(boxes: np.ndarray, name: str) -> np.ndarray:
+    arr = np.asarray(boxes, float)
+    if arr.size == 0:
+        return arr.reshape(0, 4)
+    if arr.ndim != 2 or arr.shape[1] != 4:
+        raise ValueError(f"{name}: expected (k, 4) boxes (u0, v0, u1, v1), got {arr.shape}")
+    return arr
+
+
+def draw_pair(
+    ax,
+    color1: np.ndarray,
+    color2: np.ndarray,
+    boxes1: np.ndarray,
+    boxes2: np.ndarray,
+    pairs: np.ndarray,
+    line_colors: str | Sequence[str] = CORRECT,
+    box_color: str = "#38bdf8",
+    labels1: Sequence[str] | None = None,
+    labels2: Sequence[str] | None = None,
+    gap: int = 16,
+    linewidth: float = 1.5,
+) -> None:
+    """Draw on matplotlib ``ax``: both views, every box, and for each row (i, j) of ``pairs`` a
+    line from box i of view 1 to box j of view 2 (one colour, or one per row)."""
+    from matplotlib.collections import LineCollection, PatchCollection
+    from matplotlib.patches import Rectangle
+
+    b1, b2 = _boxes(boxes1, "boxes1"), _boxes(boxes2, "boxes2")
+    pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
+    if len(pairs) and (pairs[:, 0].max() >= len(b1) or pairs[:, 1].max() >= len(b2)):
+        raise ValueError(f"pairs: index out of range for {len(b1)} and {len(b2)} boxes")
+    canvas, offset = side_by_side(color1, color2, gap)
+    ax.imshow(canvas, interpolation="nearest")
+    b2 = b2 + [offset, 0, offset, 0]
+    rects = [Rectangle((u0, v0), u1 - u0, v1 - v0) for u0, v0, u1, v1 in np.vstack([b1, b2])]
+    ax.add_collection(
+        PatchCollection(rects, facecolor="none", edgecolor=box_color, linewidth=linewidth)
+    )
+    centres1 = (b1[:, :2] + b1[:, 2:]) / 2
+    centres2 = (b2[:, :2] + b2[:, 2:]) / 2
+    if len(pairs):
+        segments = np.stack([centres1[pairs[:, 0]], centres2[pairs[:, 1]]], axis=1)
+        colors = [line_colors] * len(pairs) if isinstance(line_colors, str) else list(line_colors)
+        if len(colors) != len(pairs):
+            raise ValueError(f"line_colors: {len(colors)} colours for {len(pairs)} pairs")
+        ax.add_collection(LineCollection(segments, colors=colors, linewidths=linewidth))
+        ax.scatter(*segments.reshape(-1, 2).T, s=8, c=np.repeat(colors, 2), zorder=3)
+    for labels, boxes in ((labels1, b1), (labels2, b2)):
+        for text, (u0, v0, _, _) in zip(labels or (), boxes, strict=False):
+            ax.text(u0, v0 - 2, text, color=box_color, fontsize=6, va="bottom")
+    ax.set_xlim(0, canvas.shape[1])
+    ax.set_ylim(canvas.shape[0], 0)
+    ax.set_axis_off()
+
+
+def pair_figure(color1: np.ndarray, color2: np.ndarray, *args, title: str | None = None, **kwargs):
+    """A matplotlib ``Figure`` holding one ``draw_pair`` (same arguments), sized to the images."""
+    from matplotlib.figure import Figure
+
+    canvas, _ = side_by_side(color1, color2, kwargs.get("gap", 16))
+    dpi = 100
+    fig = Figure(
+        figsize=(canvas.shape[1] / dpi, canvas.shape[0] / dpi + (0.3 if title else 0)), dpi=dpi
+    )
+    ax = fig.add_axes((0, 0, 1, canvas.shape[0] / (canvas.shape[0] + (30 if title else 0))))
+    draw_pair(ax, color1, color2, *args, **kwargs)
+    if title:
+        fig.suptitle(title, fontsize=9, y=0.99)
+    return fig
+
+
+def save_figure(fig, path: str | Path) -> Path:
+    """Write ``fig`` (format from the suffix: .png, .pdf, .svg); creates the folder."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=fig.dpi)
+    return path
+
+
+def draw_pair_from_record(pair, labels: bool = True):
+    """Figure of a dataset ``FramePair``: its boxes and its ground-truth pairs."""
+    title = (
+        f"{pair.name} (pair {pair.index}, t = {pair.time:.1f} s): {len(pair.view1)} | "
+        f"{len(pair.view2)} detections, {len(pair.gt_pairs)} covisible"
+    )
+    return pair_figure(
+        pair.color1,
+        pair.color2,
+        pair.view1.boxes,
+        pair.view2.boxes,
+        pair.gt_pairs,
+        labels1=pair.view1.classes if labels else None,
+        labels2=pair.view2.classes if labels else None,
+        title=title,
+    )

@@ -1,0 +1,27 @@
+"""matchers: object correspondence by (hyper)graph matching, usable on its own.
+
+    from matchers import Problem, get, available
+    matching = get("maximin")(Problem(points1, points2, features1, features2), seed=0)
+    matching.pairs   # (k, 2) int array of (i, j)
+    matching.scores  # (n, m) soft scores in [0, 1]
+
+Index convention (a = i * m + j) in :mod:`matchers.indexing`; algorithms and defaults in
+docs/matchers.md.
+"""
+
+from .matching import Matching
+from .problem import Problem
+from .registry import ENTRY_POINT_GROUP, available, get, register
+from .sparse_tensor import SparseTensor
+from .tensor_build import build_tensor
+
+__all__ = [
+    "ENTRY_POINT_GROUP",
+    "Matching",
+    "Problem",
+    "SparseTensor",
+    "available",
+    "build_tensor",
+    "get",
+    "register",
+]

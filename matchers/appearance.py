@@ -1,0 +1,26 @@
+"""``appearance``: Hungarian assignment on appearance similarity alone (no spatial structure)."""
+
+from __future__ import annotations
+
+import time
+
+from .appearance_similarity import appearance_similarity
+from .matching import Matching
+from .options import check_problem, rng_from_seed
+from .problem import Problem
+from .result import finish
+
+
+def appearance(problem: Problem, seed: int | None = 0, threshold: float | None = None) -> Matching:
+    """Match by appearance only: scores = b, the cosine similarity of the features in [0, 1]
+    (:func:`~matchers.appearance_similarity.appearance_similarity`), used as is — an absolute
+    scale, not divided by its maximum. The reference point that shows what spatial structure
+    adds. Deterministic (``seed`` is accepted for the common signature and unused). Without
+    features every score is 1 and the assignment is arbitrary (identity order)."""
+    started = time.perf_counter()
+    check_problem(problem)
+    rng_from_seed(seed)
+    scores = appearance_similarity(problem)
+    return finish(
+        "appearance", scores, threshold, started, 0, {"features": problem.features1 is not None}
+    )

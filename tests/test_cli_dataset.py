@@ -1,0 +1,103 @@
+"""`cadsim info`, `cadsim show` and `cadsim generate`'s error handling, through the CLI entry point."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_generate_fakes import FAKE_STAGES, FakeScenario
+
+from cadsim.cli import main
+from cadsim.dataset import Dataset
+from cadsim.generate import generate_dataset
+from cadsim.pair_drawing import CORRECT, MISSED, WRONG, pair_figure, save_figure
+
+
+@pytest.fixture(scope="module")
+def dataset(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("cli") / "ds"
+    generate_dataset(FakeScenario(), out, pairs=3, workers=1, stages=FAKE_STAGES, progress=False)
+    return out
+
+
+def test_info_json_structure(dataset, capsys):
+    assert main(["info", str(dataset), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    ds = Dataset(dataset)
+    assert info["n_pairs"] == 3 and info["checksum"] == ds.checksum and info["scenario"] == "fake"
+    assert [p["index"] for p in info["pairs"]] == [0, 1, 2]
+    for p, pair in zip(info["pairs"], ds, strict=True):
+        assert (p["n1"], p["n2"], p["covisible"]) == (
+            len(pair.view1),
+            len(pair.view2),
+            len(pair.gt_pairs),
+        )
+        assert p["non_covisible1"] == p["n1"] - p["covisible"] >= 1
+        assert sum(p["classes1"].values()) == p["n1"]
+        z = pair.view2.positions[:, 2]
+        assert p["depth2"] == [pytest.approx(z.min()), pytest.approx(z.max())]
+    assert sum(info["class_mix"].values()) == sum(p["n1"] + p["n2"] for p in info["pairs"])
+    cov = [p["covisible"] for p in info["pairs"]]
+    assert info["covisible"] == {
+        "mean": pytest.approx(np.mean(cov)),
+        "min": min(cov),
+        "max": max(cov),
+    }
+    assert info["depth"]["min"] <= info["depth"]["median"] <= info["depth"]["max"]
+
+
+def test_info_text_and_errors(dataset, tmp_path, capsys):
+    assert main(["info", str(dataset)]) == 0
+    text = capsys.readouterr().out
+    assert "3 pairs" in text and "covisible per pair" in text and "e00000_s00" in text
+    assert main(["info", str(tmp_path)]) == 2
+    assert "no manifest" in capsys.readouterr().err
+
+
+def test_show_writes_png(dataset, tmp_path, capsys):
+    import cv2
+
+    out = tmp_path / "fig" / "pair1.png"
+    assert main(["show", str(dataset), "--pair", "1", "--out", str(out)]) == 0
+    assert "pair 1" in capsys.readouterr().out
+    img = cv2.imread(str(out))
+    assert img is not None and img.shape[1] >= 2 * 160  # both views side by side
+    assert main(["show", str(dataset), "--pair", "9", "--out", str(out)]) == 2
+    assert "out of range" in capsys.readouterr().err
+
+
+def test_pair_figure_draws_given_lines(tmp_path):
+    """The drawing function the evaluation's Fig. 3 reuses: per-pair line colours."""
+    c1 = np.zeros((40, 50, 3), np.uint8)
+    c2 = np.full((40, 60, 3), 255, np.uint8)
+    boxes1 = np.array([[1, 1, 10, 10], [20, 20, 30, 30]], float)
+    boxes2 = np.array([[5, 5, 15, 15], [40, 10, 50, 20], [0, 30, 8, 39]], float)
+    fig = pair_figure(
+        c1, c2, boxes1, boxes2, [[0, 1], [1, 0], [1, 2]], line_colors=[CORRECT, WRONG, MISSED]
+    )
+    ax = fig.axes[0]
+    lines = [c for c in ax.collections if c.__class__.__name__ == "LineCollection"][0]
+    segs = lines.get_segments()
+    np.testing.assert_allclose(
+        segs[0], [[5.5, 5.5], [50 + 16 + 45, 15]]
+    )  # view 2 shifted by W1+gap
+    assert len(segs) == 3
+    assert save_figure(fig, tmp_path / "f.png").stat().st_size > 0
+    with pytest.raises(ValueError, match="line_colors: 1 colours for 3 pairs"):
+        pair_figure(c1, c2, boxes1, boxes2, [[0, 1], [1, 0], [1, 2]], line_colors=["red"])
+    with pytest.raises(ValueError, match="pairs: index out of range"):
+        pair_figure(c1, c2, boxes1, boxes2, [[2, 0]])
+
+
+def test_generate_reports_bad_input(tmp_path, capsys):
+    missing = tmp_path / "nope.toml"
+    assert main(["generate", str(missing), "--out", str(tmp_path / "o"), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "nope.toml" in err and "does not exist" in err
+    bad = tmp_path / "bad.toml"
+    bad.write_text('pairz = 2\n[traffic]\nsource = "sumo"\n')
+    assert main(["generate", str(bad), "--out", str(tmp_path / "o"), "--no-progress"]) == 2
+    err = capsys.readouterr().err
+    assert "bad.toml" in err and "pairz" in err and "unknown key" in err
