@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import logging
+import os
 import sys
 
 # name -> (module, one-line help)
@@ -44,25 +45,27 @@ def build_parser() -> argparse.ArgumentParser:
     for name, (_, help_text) in COMMANDS.items():
         p = sub.add_parser(name, help=help_text)
         p.set_defaults(_command=name)
-        p.set_defaults(_needs_args=True)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser()
-    # First pass finds the subcommand; its module then adds its own arguments.
-    known, _ = parser.parse_known_args(argv)
-    module = _load(known._command)
-    parser = build_parser()
-    sub_action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
-    module.add_arguments(sub_action.choices[known._command])
+    # The subcommand's module adds its own arguments before parsing, so `cadsim X --help` lists them.
+    name = next((a for a in argv if not a.startswith("-")), None)
+    if name in COMMANDS:
+        sub_action = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+        _load(name).add_arguments(sub_action.choices[name])
     args = parser.parse_args(argv)
     logging.basicConfig(
         level=logging.DEBUG if args.verbose else logging.INFO,
         format="%(levelname)s %(name)s: %(message)s",
     )
-    return int(module.run(args) or 0)
+    try:
+        return int(_load(args._command).run(args) or 0)
+    except BrokenPipeError:  # output piped into `head` and the like
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - keep Python's exit flush quiet
+        return 0
 
 
 if __name__ == "__main__":

@@ -396,7 +396,7 @@ def generate_dataset(
     t0 = time.perf_counter()
     scenario = _load_scenario(scenario)
     stages = stages or Stages()
-    out = Path(out)
+    out = Path(out).resolve()
     n_pairs = int(scenario.pairs if pairs is None else pairs)
     if n_pairs < 1:
         raise GenerationError(f"--pairs: expected >= 1, got {n_pairs}")

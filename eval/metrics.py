@@ -1,0 +1,279 @@
+"""Correspondence-identification metrics (DESIGN §3) — the one canonical implementation.
+
+G = ground-truth covisible pairs, M = predicted pairs, TP = |M ∩ G|; all pairs are (i, j) with i
+indexing view 1 (n objects) and j indexing view 2 (m objects).
+
+- precision = TP / |M|; 1 when |M| = 0 = |G|, 0 when |M| = 0 < |G|.
+- recall = TP / |G|; 1 when |G| = 0 (nothing to retrieve, nothing missed).
+- accuracy = fraction of the n + m objects whose decision is right: a covisible object matched to
+  its true partner, or a non-covisible object left unmatched; 1 when n + m = 0.
+- F1 = 2PR / (P + R), 0 when P + R = 0.
+
+Per frame pair first, then as the paper aggregates: per-run mean over frame pairs, then mean ± std
+over runs (:func:`summarise_runs`).
+
+Threshold sweeps: a matcher's full Hungarian assignment with its scores is ranked once; keeping
+the pairs with score ≥ τ gives the prediction at τ. :func:`metrics_at_thresholds` evaluates every
+frame pair at many τ at once, :func:`pooled_pr_curve` gives the threshold-free view (all frame pairs
+of a run pooled) and :func:`average_precision` its area.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+METRICS = ("accuracy", "precision", "recall", "f1")
+
+
+def _pairs_array(name: str, pairs, n1: int, n2: int) -> np.ndarray:
+    """Validate a (k, 2) one-to-one index array against view sizes n1, n2."""
+    arr = np.asarray(pairs)
+    if arr.size == 0:
+        return np.zeros((0, 2), dtype=np.int64)
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise ValueError(
+            f"{name}: expected a (k, 2) array of (i, j) indices, got shape {arr.shape}"
+        )
+    if not np.issubdtype(arr.dtype, np.integer):
+        if not np.all(np.equal(np.mod(arr, 1), 0)):
+            raise ValueError(f"{name}: indices must be integers")
+    arr = arr.astype(np.int64)
+    if arr.min(initial=0) < 0 or arr[:, 0].max() >= n1 or arr[:, 1].max() >= n2:
+        raise ValueError(f"{name}: index out of range for views of {n1} and {n2} objects")
+    if len(np.unique(arr[:, 0])) != len(arr) or len(np.unique(arr[:, 1])) != len(arr):
+        raise ValueError(f"{name}: not one-to-one (an object index repeats)")
+    return arr
+
+
+def _precision(tp, n_pred, n_gt):
+    """Vectorised precision with the DESIGN §3 conventions for |M| = 0."""
+    tp, n_pred, n_gt = np.broadcast_arrays(
+        *(np.asarray(a, dtype=float) for a in (tp, n_pred, n_gt))
+    )
+    empty = np.where(n_gt == 0, 1.0, 0.0)
+    return np.where(n_pred > 0, tp / np.maximum(n_pred, 1), empty)
+
+
+def _recall(tp, n_gt):
+    tp, n_gt = np.broadcast_arrays(np.asarray(tp, dtype=float), np.asarray(n_gt, dtype=float))
+    return np.where(n_gt > 0, tp / np.maximum(n_gt, 1), 1.0)
+
+
+def _f1(precision, recall):
+    total = precision + recall
+    return np.where(total > 0, 2 * precision * recall / np.where(total > 0, total, 1), 0.0)
+
+
+def _accuracy(correct, n_objects):
+    correct, n_objects = np.broadcast_arrays(
+        np.asarray(correct, dtype=float), np.asarray(n_objects, dtype=float)
+    )
+    return np.where(n_objects > 0, correct / np.maximum(n_objects, 1), 1.0)
+
+
+@dataclass(frozen=True)
+class PairMetrics:
+    """Metrics of one frame pair. Counts: n1, n2 objects per view; n_gt = |G|, n_pred = |M|,
+    tp = |M ∩ G|, correct = objects (of both views) whose decision is right. Rates in [0, 1]."""
+
+    n1: int
+    n2: int
+    n_gt: int
+    n_pred: int
+    tp: int
+    correct: int
+    accuracy: float
+    precision: float
+    recall: float
+    f1: float
+
+
+def pair_metrics(predicted, ground_truth, n1: int, n2: int) -> PairMetrics:
+    """Metrics of predicted pairs M against ground-truth pairs G for views of n1 and n2 objects.
+
+    predicted, ground_truth: (k, 2) integer arrays of (i, j) pairs, each one-to-one.
+    """
+    pred = _pairs_array("predicted", predicted, n1, n2)
+    gt = _pairs_array("ground_truth", ground_truth, n1, n2)
+    stride = max(n2, 1)
+    tp = len(np.intersect1d(pred[:, 0] * stride + pred[:, 1], gt[:, 0] * stride + gt[:, 1]))
+    # Objects decided right: 2 per true positive, plus non-covisible objects left unmatched.
+    unmatched_negative1 = n1 - len(np.union1d(pred[:, 0], gt[:, 0]))
+    unmatched_negative2 = n2 - len(np.union1d(pred[:, 1], gt[:, 1]))
+    correct = 2 * tp + unmatched_negative1 + unmatched_negative2
+    precision = float(_precision(tp, len(pred), len(gt)))
+    recall = float(_recall(tp, len(gt)))
+    return PairMetrics(
+        n1=int(n1),
+        n2=int(n2),
+        n_gt=len(gt),
+        n_pred=len(pred),
+        tp=int(tp),
+        correct=int(correct),
+        accuracy=float(_accuracy(correct, n1 + n2)),
+        precision=precision,
+        recall=recall,
+        f1=float(_f1(precision, recall)),
+    )
+
+
+@dataclass(frozen=True)
+class RankedAssignments:
+    """Hungarian assignments of many frame pairs, flattened for threshold sweeps.
+
+    Per assigned pair e (E in all): frame (index of its frame pair, 0..P-1), score, correct (it is
+    a ground-truth pair), cov1/cov2 (its view-1 / view-2 object is covisible). Per frame pair:
+    n1, n2, n_gt.
+    """
+
+    frame: np.ndarray
+    score: np.ndarray
+    correct: np.ndarray
+    cov1: np.ndarray
+    cov2: np.ndarray
+    n1: np.ndarray
+    n2: np.ndarray
+    n_gt: np.ndarray
+
+    @property
+    def n_frames(self) -> int:
+        return len(self.n1)
+
+    @classmethod
+    def from_frames(cls, frames: Sequence[tuple]) -> RankedAssignments:
+        """frames: (assigned (k, 2), assigned_scores (k,), ground_truth (g, 2), n1, n2) per pair."""
+        parts = {k: [] for k in ("frame", "score", "correct", "cov1", "cov2")}
+        n1s, n2s, n_gts = [], [], []
+        for f, (assigned, scores, gt, n1, n2) in enumerate(frames):
+            a = _pairs_array(f"assigned[{f}]", assigned, n1, n2)
+            g = _pairs_array(f"ground_truth[{f}]", gt, n1, n2)
+            s = np.asarray(scores, dtype=float).reshape(-1)
+            if len(s) != len(a):
+                raise ValueError(f"assigned_scores[{f}]: {len(s)} scores for {len(a)} pairs")
+            stride = max(n2, 1)
+            parts["frame"].append(np.full(len(a), f, dtype=np.int64))
+            parts["score"].append(s)
+            parts["correct"].append(np.isin(a[:, 0] * stride + a[:, 1], g[:, 0] * stride + g[:, 1]))
+            parts["cov1"].append(np.isin(a[:, 0], g[:, 0]))
+            parts["cov2"].append(np.isin(a[:, 1], g[:, 1]))
+            n1s.append(n1)
+            n2s.append(n2)
+            n_gts.append(len(g))
+        empty = {"frame": np.int64, "score": float, "correct": bool, "cov1": bool, "cov2": bool}
+        flat = {
+            k: np.concatenate(v) if v else np.zeros(0, dtype=empty[k]) for k, v in parts.items()
+        }
+        return cls(
+            **flat,
+            n1=np.asarray(n1s, dtype=np.int64),
+            n2=np.asarray(n2s, dtype=np.int64),
+            n_gt=np.asarray(n_gts, dtype=np.int64),
+        )
+
+
+def _kept_counts(ranked: RankedAssignments, weights: np.ndarray, thresholds: np.ndarray):
+    """(P, T) sums of `weights` over the assigned pairs with score ≥ thresholds[t], per frame."""
+    order = np.argsort(thresholds)
+    sorted_t = thresholds[order]
+    n_t = len(sorted_t)
+    # Entry e is kept for every threshold ≤ its score: sorted indices 0 .. last[e].
+    last = np.searchsorted(sorted_t, ranked.score, side="right") - 1
+    hist = np.bincount(
+        ranked.frame[last >= 0] * (n_t + 1) + last[last >= 0],
+        weights=weights[last >= 0].astype(float),
+        minlength=ranked.n_frames * (n_t + 1),
+    ).reshape(ranked.n_frames, n_t + 1)[:, :n_t]
+    counts = np.cumsum(hist[:, ::-1], axis=1)[:, ::-1]
+    out = np.empty_like(counts)
+    out[:, order] = counts
+    return out
+
+
+def metrics_at_thresholds(ranked: RankedAssignments, thresholds) -> dict[str, np.ndarray]:
+    """Every frame pair's metrics when keeping the assigned pairs with score ≥ τ, for each τ.
+
+    Returns (P, T) arrays keyed 'accuracy', 'precision', 'recall', 'f1', 'tp', 'n_pred'.
+    """
+    t = np.asarray(thresholds, dtype=float).reshape(-1)
+    n_pred = _kept_counts(ranked, np.ones_like(ranked.score), t)
+    tp = _kept_counts(ranked, ranked.correct, t)
+    kept_negative1 = _kept_counts(ranked, ~ranked.cov1, t)
+    kept_negative2 = _kept_counts(ranked, ~ranked.cov2, t)
+    n1, n2, n_gt = (a[:, None].astype(float) for a in (ranked.n1, ranked.n2, ranked.n_gt))
+    correct = 2 * tp + (n1 - n_gt - kept_negative1) + (n2 - n_gt - kept_negative2)
+    precision = _precision(tp, n_pred, n_gt)
+    recall = _recall(tp, n_gt)
+    return {
+        "accuracy": _accuracy(correct, n1 + n2),
+        "precision": precision,
+        "recall": recall,
+        "f1": _f1(precision, recall),
+        "tp": tp,
+        "n_pred": n_pred,
+    }
+
+
+def candidate_thresholds(ranked: RankedAssignments) -> np.ndarray:
+    """Every τ at which some prediction changes: the distinct assigned scores, descending, plus
+    one above the maximum (nothing kept)."""
+    scores = np.unique(ranked.score)[::-1]
+    top = scores[0] + 1.0 if len(scores) else 1.0
+    return np.concatenate([[top], scores])
+
+
+@dataclass(frozen=True)
+class PRCurve:
+    """Pooled precision–recall curve: thresholds descending, with precision and recall of the
+    pooled counts (ΣTP/Σ|M|, ΣTP/Σ|G| over the frame pairs) at each."""
+
+    thresholds: np.ndarray
+    precision: np.ndarray
+    recall: np.ndarray
+
+
+def pooled_pr_curve(ranked: RankedAssignments) -> PRCurve:
+    """Precision–recall over τ with all frame pairs pooled; candidates are the Hungarian
+    assignments' pairs, so a ground-truth pair the assignment misses is never retrieved."""
+    thresholds = np.unique(ranked.score)[::-1]
+    # Pairs kept at thresholds[t] are those with score ≥ thresholds[t].
+    rank = np.searchsorted(-thresholds, -ranked.score, side="left")
+    kept = np.cumsum(np.bincount(rank, minlength=len(thresholds)))
+    tp = np.cumsum(
+        np.bincount(rank, weights=ranked.correct.astype(float), minlength=len(thresholds))
+    )
+    total_gt = float(ranked.n_gt.sum())
+    precision = tp / np.maximum(kept, 1)
+    recall = tp / total_gt if total_gt > 0 else np.ones_like(tp)
+    return PRCurve(thresholds=thresholds, precision=precision, recall=recall)
+
+
+def average_precision(curve: PRCurve) -> float:
+    """Area under the pooled PR curve as a step sum, Σ (R_k − R_{k−1}) · P_k (thresholds
+    descending, R_0 = 0) — the definition scikit-learn uses. 0 when nothing can be retrieved."""
+    if len(curve.recall) == 0:
+        return 0.0
+    delta = np.diff(np.concatenate([[0.0], curve.recall]))
+    return float(np.sum(delta * curve.precision))
+
+
+def summarise_runs(per_pair: pd.DataFrame, by: Sequence[str], run: str = "seed") -> pd.DataFrame:
+    """Aggregate as the paper does: per-run mean over frame pairs, then mean and std over runs.
+
+    per_pair: one row per (run, frame pair) with the :data:`METRICS` columns and the `by` and
+    `run` columns. Returns one row per `by` group with `<metric>_mean`, `<metric>_std` (sample
+    std over runs, ddof=1; 0 for a single run) and `runs`.
+    """
+    missing = [c for c in (*by, run, *METRICS) if c not in per_pair.columns]
+    if missing:
+        raise ValueError(f"per_pair: missing columns {missing}")
+    per_run = per_pair.groupby([*by, run], sort=False)[list(METRICS)].mean()
+    grouped = per_run.groupby(level=list(range(len(by))), sort=False)
+    mean = grouped.mean().add_suffix("_mean")
+    std = grouped.std(ddof=1).fillna(0.0).add_suffix("_std")
+    runs = grouped.size().rename("runs")
+    out = pd.concat([mean, std, runs], axis=1).reset_index()
+    return out[[*by, *(f"{m}_{s}" for m in METRICS for s in ("mean", "std")), "runs"]]

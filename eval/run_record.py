@@ -1,0 +1,112 @@
+"""The run record: a JSON file saying how a results directory was produced — scenario files, seeds,
+τ values, matcher options, package versions, git commit, machine and wall time per stage."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from datetime import UTC, datetime
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+PACKAGES = (
+    "cadsim",
+    "numpy",
+    "scipy",
+    "pandas",
+    "matplotlib",
+    "opencv-python-headless",
+    "Pillow",
+    "trimesh",
+    "pyrender-maintained",
+    "PyOpenGL",
+    "libsumo",
+    "eclipse-sumo",
+    "highway-env",
+    "dask",
+)
+
+
+class StageTimer:
+    """Wall time per named stage, seconds (``with timer.stage("evaluate"): ...``)."""
+
+    def __init__(self) -> None:
+        self.seconds: dict[str, float] = {}
+
+    @contextmanager
+    def stage(self, name: str) -> Iterator[None]:
+        start = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.seconds[name] = self.seconds.get(name, 0.0) + time.perf_counter() - start
+
+    @property
+    def total(self) -> float:
+        return sum(self.seconds.values())
+
+
+def package_versions(names=PACKAGES) -> dict[str, str | None]:
+    """Installed version of each distribution (None when not installed)."""
+    out = {}
+    for name in names:
+        try:
+            out[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            out[name] = None
+    return out
+
+
+def git_state(repo: str | Path = ".") -> dict[str, Any]:
+    """{"commit": hash or None, "dirty": bool or None} of the git work tree at `repo`."""
+
+    def git(*args: str) -> str | None:
+        try:
+            done = subprocess.run(
+                ["git", *args], cwd=repo, capture_output=True, text=True, timeout=10, check=True
+            )
+        except (OSError, subprocess.SubprocessError):
+            return None
+        return done.stdout.strip()
+
+    commit = git("rev-parse", "HEAD")
+    status = git("status", "--porcelain", "--untracked-files=no") if commit else None
+    return {"commit": commit, "dirty": None if status is None else bool(status)}
+
+
+def scenario_file(path: str | Path) -> dict[str, str]:
+    """A scenario file's path, SHA-256 and text."""
+    data = Path(path).read_bytes()
+    return {"path": str(path), "sha256": hashlib.sha256(data).hexdigest(), "text": data.decode()}
+
+
+def machine() -> dict[str, Any]:
+    return {
+        "python": sys.version.split()[0],
+        "platform": platform.platform(),
+        "cpus": os.cpu_count(),
+    }
+
+
+def write_run_record(path: str | Path, timer: StageTimer, **content: Any) -> Path:
+    """Write the record (given `content` plus versions, git state, machine and stage times)."""
+    record = {
+        "created": datetime.now(UTC).isoformat(timespec="seconds"),
+        **content,
+        "git": git_state(Path(__file__).resolve().parents[1]),
+        "packages": package_versions(),
+        "machine": machine(),
+        "wall_s": {name: round(s, 2) for name, s in timer.seconds.items()}
+        | {"total": round(timer.total, 2)},
+    }
+    path = Path(path)
+    path.write_text(json.dumps(record, indent=1, default=str) + "\n", encoding="utf-8")
+    return path

@@ -1,0 +1,150 @@
+"""Experiment runner: computes the runs that are not cached yet, in parallel, and stores each as
+it completes, so a re-run computes only what changed and an interrupted sweep resumes.
+
+Missing runs are grouped into :class:`eval.tasks.RunTask` s: with a noise rate, all matchers of
+one (dataset, seed, rate) share a task (they share its re-detection); without, each run is its
+own task (finer load balancing). Tasks go to an :class:`eval.executor.Executor`; results come
+back to this process, which writes the cache — workers need no access to it.
+"""
+
+from __future__ import annotations
+
+import logging
+import traceback
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+from tqdm import tqdm
+
+from eval.cache import ResultCache, code_version
+from eval.executor import Executor
+from eval.tasks import MatcherSpec, RunResult, RunSpec, RunTask, execute
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class RunRequest:
+    """A run asked for: dataset (directory + checksum), matcher, seed, noise rate (None: the
+    dataset's stored detections)."""
+
+    dataset_dir: str
+    dataset_checksum: str
+    matcher: MatcherSpec
+    seed: int
+    noise_rate: float | None = None
+    limit: int | None = None
+
+    def spec(self, version: str) -> RunSpec:
+        return RunSpec(
+            self.dataset_checksum, self.matcher, self.seed, self.noise_rate, version, self.limit
+        )
+
+
+@dataclass
+class RunStats:
+    """What the last :meth:`Runner.run` did: runs found in the cache, computed, failed."""
+
+    cached: int = 0
+    computed: int = 0
+    failed: int = 0
+
+
+class RunFailed(RuntimeError):
+    """Some tasks raised; the other runs completed and are cached."""
+
+
+def requests_for(
+    datasets: Iterable[tuple[str, str]],
+    matchers: Iterable[MatcherSpec],
+    seeds: Iterable[int],
+    noise_rates: Iterable[float | None] = (None,),
+    limit: int | None = None,
+) -> list[RunRequest]:
+    """Every combination of (dataset dir, checksum) × matcher × seed × noise rate (first `limit`
+    frame pairs of each dataset; None: all)."""
+    matchers, seeds, noise_rates = list(matchers), list(seeds), list(noise_rates)
+    return [
+        RunRequest(d, c, m, s, r, limit)
+        for d, c in datasets
+        for r in noise_rates
+        for s in seeds
+        for m in matchers
+    ]
+
+
+def _group(missing: Sequence[RunRequest], version: str) -> list[RunTask]:
+    groups: dict[tuple, list[MatcherSpec]] = {}
+    for req in missing:
+        shared = req.noise_rate is not None
+        key = (req.dataset_dir, req.dataset_checksum, req.seed, req.noise_rate, req.limit)
+        key = key if shared else (*key, req.matcher)
+        groups.setdefault(key, []).append(req.matcher)
+    return [
+        RunTask(k[0], k[1], k[2], k[3], tuple(dict.fromkeys(ms)), version, k[4])
+        for k, ms in groups.items()
+    ]
+
+
+class Runner:
+    """Cache-aware execution of runs through an executor."""
+
+    def __init__(
+        self,
+        cache: ResultCache,
+        executor: Executor,
+        version: str | None = None,
+        progress: bool = True,
+    ) -> None:
+        self.cache = cache
+        self.executor = executor
+        self.version = code_version() if version is None else version
+        self.progress = progress
+        self.stats = RunStats()  # of the last run() call
+        self.totals = RunStats()  # of every call so far
+
+    def run(self, requests: Sequence[RunRequest], desc: str = "runs") -> list[RunResult]:
+        """Results of `requests`, in order; computes the missing ones. Raises :class:`RunFailed`
+        after every other task has finished if some task raised."""
+        try:
+            return self._run(requests, desc)
+        finally:
+            for name in ("cached", "computed", "failed"):
+                setattr(self.totals, name, getattr(self.totals, name) + getattr(self.stats, name))
+
+    def _run(self, requests: Sequence[RunRequest], desc: str) -> list[RunResult]:
+        specs = [req.spec(self.version) for req in requests]
+        missing = list(
+            {s: r for s, r in zip(specs, requests, strict=True) if s not in self.cache}.values()
+        )
+        self.stats = RunStats(cached=len(set(specs)) - len(missing))
+        if missing:
+            tasks = _group(missing, self.version)
+            log.info(
+                "%s: %d cached, %d to compute in %d tasks",
+                desc,
+                self.stats.cached,
+                len(missing),
+                len(tasks),
+            )
+            failures = []
+            bar = tqdm(total=len(missing), desc=desc, unit="run", disable=not self.progress)
+            with bar:
+                for done in self.executor.map_unordered(execute, tasks):
+                    task = tasks[done.index]
+                    if done.error is not None:
+                        self.stats.failed += len(task.matchers)
+                        detail = "".join(traceback.format_exception(done.error)).rstrip()
+                        failures.append(f"{task}: {done.error!r}")
+                        log.error("task failed: %s\n%s", task, detail)
+                    else:
+                        for result in done.value:
+                            self.cache.store(result)
+                        self.stats.computed += len(done.value)
+                    bar.update(len(task.matchers))
+            if failures:
+                raise RunFailed(
+                    f"{len(failures)} of {len(tasks)} tasks failed (the rest are cached; re-run "
+                    "to retry only the failed ones):\n" + "\n".join(failures)
+                )
+        return [self.cache.load(spec) for spec in specs]

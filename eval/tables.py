@@ -1,0 +1,185 @@
+"""Table I: our accuracy, precision, recall (mean ± std over runs), F1, AP, τ and median time per
+pair for every dataset and matcher, beside the paper's numbers; Markdown, CSV and LaTeX.
+
+Inputs are the CSV files ``cadsim evaluate`` writes into its output directory
+(``metrics_per_pair.csv``, ``average_precision.csv``, ``thresholds.csv``); rates are printed in
+percent, like the paper.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from eval.metrics import METRICS, summarise_runs
+
+PAPER_CSV = Path(__file__).parent / "data" / "paper-table1.csv"
+
+# Registry name -> the paper's method name, in the paper's row order.
+PAPER_NAMES = {
+    "sm": "SM",
+    "rrwm": "RRWM",
+    "hgm": "HGM",
+    "tm": "TM",
+    "bcagm": "BCAGM",
+    "rrwhm": "RRWHM",
+    "mos": "MOS",
+    "maximin": "Maximin",
+}
+EXTRA_NAMES = {"appearance": "Appearance only"}
+PAPER_DATASETS = ("MRC", "CAD")
+
+
+def method_name(matcher: str) -> str:
+    """Display name of a matcher label (options kept: ``tm[k=5]`` -> ``TM[k=5]``)."""
+    base, _, rest = matcher.partition("[")
+    name = PAPER_NAMES.get(base) or EXTRA_NAMES.get(base) or base
+    return name + ("[" + rest if rest else "")
+
+
+def matcher_order(matcher: str) -> tuple[int, str]:
+    """Sort key: the paper's row order, then extras, then the rest by name."""
+    base = matcher.partition("[")[0]
+    order = list(PAPER_NAMES) + list(EXTRA_NAMES)
+    return (order.index(base) if base in order else len(order), matcher)
+
+
+def dataset_order(label: str) -> tuple[int, str]:
+    """Sort key: the paper's column order (MRC, CAD), then the rest by name."""
+    return (PAPER_DATASETS.index(label) if label in PAPER_DATASETS else len(PAPER_DATASETS), label)
+
+
+def load_paper(path: str | Path = PAPER_CSV) -> pd.DataFrame:
+    """The paper's Table I: method, dataset, <metric>_mean, <metric>_spread (percent)."""
+    paper = pd.read_csv(path)
+    expected = {"method", "dataset"} | {
+        f"{m}_{s}" for m in ("accuracy", "precision", "recall") for s in ("mean", "spread")
+    }
+    if not expected <= set(paper.columns):
+        raise ValueError(f"{path}: expected columns {sorted(expected)}, got {list(paper.columns)}")
+    return paper
+
+
+def build_table(out_dir: str | Path, paper_csv: str | Path = PAPER_CSV) -> pd.DataFrame:
+    """One row per (dataset, matcher): our numbers (percent), τ, time and the paper's beside."""
+    out_dir = Path(out_dir)
+    per_pair = pd.read_csv(out_dir / "metrics_per_pair.csv")
+    summary = summarise_runs(per_pair, by=["dataset", "matcher"])
+    for col in summary.columns:
+        if col.rsplit("_", 1)[0] in METRICS and col.endswith(("_mean", "_std")):
+            summary[col] = 100 * summary[col]
+    sizes = per_pair.groupby(["dataset", "matcher"]).agg(
+        frames=("pair", "nunique"), time_median_ms=("time_s", lambda t: 1000 * float(np.median(t)))
+    )
+    table = summary.merge(sizes.reset_index(), on=["dataset", "matcher"])
+    ap_path = out_dir / "average_precision.csv"
+    if ap_path.is_file():
+        ap = pd.read_csv(ap_path).groupby(["dataset", "matcher"])["ap"]
+        ap = pd.DataFrame(
+            {"ap_mean": 100 * ap.mean(), "ap_std": 100 * ap.std(ddof=1).fillna(0.0)}
+        ).reset_index()
+        table = table.merge(ap, on=["dataset", "matcher"], how="left")
+    tau_path = out_dir / "thresholds.csv"
+    if tau_path.is_file():
+        taus = pd.read_csv(tau_path)[["dataset", "matcher", "tau"]]
+        table = table.merge(taus, on=["dataset", "matcher"], how="left")
+    table.insert(1, "method", table["matcher"].map(method_name))
+    paper = load_paper(paper_csv).add_prefix("paper_")
+    table = table.merge(
+        paper, left_on=["dataset", "method"], right_on=["paper_dataset", "paper_method"], how="left"
+    ).drop(columns=["paper_dataset", "paper_method"])
+    table["_d"] = table["dataset"].map(dataset_order)
+    table["_m"] = table["matcher"].map(matcher_order)
+    return table.sort_values(["_d", "_m"]).drop(columns=["_d", "_m"]).reset_index(drop=True)
+
+
+def _pm(mean: float, std: float, digits: int = 1) -> str:
+    if pd.isna(mean):
+        return "–"
+    return f"{mean:.{digits}f} ± {std:.{digits}f}"
+
+
+def _cells(row: pd.Series) -> dict[str, str]:
+    cells = {"Method": row["method"]}
+    for metric, title in (
+        ("accuracy", "Accuracy"),
+        ("precision", "Precision"),
+        ("recall", "Recall"),
+    ):
+        cells[f"{title}"] = _pm(row[f"{metric}_mean"], row[f"{metric}_std"])
+        cells[f"{title} (paper)"] = _pm(
+            row.get(f"paper_{metric}_mean"), row.get(f"paper_{metric}_spread"), 2
+        )
+    cells["F1"] = _pm(row["f1_mean"], row["f1_std"])
+    cells["AP"] = _pm(row.get("ap_mean", np.nan), row.get("ap_std", np.nan))
+    tau = row.get("tau", np.nan)
+    cells["τ"] = "–" if pd.isna(tau) else f"{tau:.3f}"
+    cells["ms / pair"] = f"{row['time_median_ms']:.1f}"
+    return cells
+
+
+def to_markdown(table: pd.DataFrame) -> str:
+    """One Markdown table per dataset; ours beside the paper's (percent, mean ± std over runs)."""
+    blocks = []
+    for dataset, rows in table.groupby("dataset", sort=False):
+        cells = [_cells(r) for _, r in rows.iterrows()]
+        header = list(cells[0])
+        runs, frames = int(rows["runs"].max()), int(rows["frames"].max())
+        lines = [
+            f"**{dataset}** — {frames} test frame pairs × {runs} runs; percent, mean ± std over "
+            "runs; paper: mean ± its printed spread",
+            "",
+            "| " + " | ".join(header) + " |",
+            "|" + "|".join(":---" if h == "Method" else "---:" for h in header) + "|",
+        ]
+        lines += ["| " + " | ".join(c[h] for h in header) + " |" for c in cells]
+        blocks.append("\n".join(lines))
+    return "\n\n".join(blocks) + "\n"
+
+
+def _latex_escape(text: str) -> str:
+    return text.replace("_", r"\_").replace("%", r"\%").replace("&", r"\&")
+
+
+def to_latex(table: pd.DataFrame) -> str:
+    """A booktabs table per dataset: ours (paper) for each metric, then F1, AP, τ, ms per pair."""
+    out = []
+    for dataset, rows in table.groupby("dataset", sort=False):
+        out += [
+            r"\begin{table}[t]",
+            r"\centering",
+            rf"\caption{{Correspondence identification on {_latex_escape(dataset)} (\%, mean $\pm$ "
+            r"std over runs; the paper's numbers in parentheses).}",
+            r"\begin{tabular}{lcccccrr}",
+            r"\toprule",
+            r"Method & Accuracy & Precision & Recall & F1 & AP & $\tau$ & ms/pair \\",
+            r"\midrule",
+        ]
+        for _, r in rows.iterrows():
+            cells = [_latex_escape(r["method"])]
+            for metric in ("accuracy", "precision", "recall"):
+                ours = f"{r[f'{metric}_mean']:.1f} $\\pm$ {r[f'{metric}_std']:.1f}"
+                paper = r.get(f"paper_{metric}_mean")
+                cells.append(ours if pd.isna(paper) else f"{ours} ({paper:.1f})")
+            cells.append(f"{r['f1_mean']:.1f} $\\pm$ {r['f1_std']:.1f}")
+            ap = r.get("ap_mean", np.nan)
+            cells.append("--" if pd.isna(ap) else f"{ap:.1f}")
+            tau = r.get("tau", np.nan)
+            cells.append("--" if pd.isna(tau) else f"{tau:.3f}")
+            cells.append(f"{r['time_median_ms']:.1f}")
+            out.append(" & ".join(cells) + r" \\")
+        out += [r"\bottomrule", r"\end{tabular}", r"\end{table}", ""]
+    return "\n".join(out)
+
+
+def write_table1(out_dir: str | Path, paper_csv: str | Path = PAPER_CSV) -> str:
+    """Write ``table1.md``, ``table1.csv`` and ``table1.tex`` into `out_dir`; returns the Markdown."""
+    out_dir = Path(out_dir)
+    table = build_table(out_dir, paper_csv)
+    markdown = to_markdown(table)
+    (out_dir / "table1.md").write_text(markdown, encoding="utf-8")
+    table.round(4).to_csv(out_dir / "table1.csv", index=False)
+    (out_dir / "table1.tex").write_text(to_latex(table), encoding="utf-8")
+    return markdown

@@ -1,0 +1,180 @@
+"""Pure, self-describing experiment tasks and their results.
+
+A *run* is (dataset, matcher with options, run seed, noise rate or None = the stored detections;
+optionally only the dataset's first N frame pairs).
+Its identity, :class:`RunSpec`, holds everything that determines the result — dataset checksum,
+matcher name and options, seed, noise rate, code version — and hashes to the cache key. A
+:class:`RunTask` is the unit of work handed to an executor: one dataset, seed and noise rate and
+one or more matchers, which then share the (costly) re-detection of every frame pair. Tasks carry
+only plain data (paths, names, numbers), so any executor, local or remote, gives the same result.
+
+The run seed is passed to the matcher (random initialisation, triangle sampling) and, with a noise
+rate, to ``FramePair.redetect(rate, seed)`` (which derives per-view noise seeds from it and the
+record's identity), so every matcher of a run sees the same noisy detections.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import time
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class MatcherSpec:
+    """A matcher by registry name plus keyword options (sorted (key, value) pairs, JSON values)."""
+
+    name: str
+    options: tuple[tuple[str, Any], ...] = ()
+
+    @classmethod
+    def of(cls, name: str, **options: Any) -> MatcherSpec:
+        return cls(name, tuple(sorted(options.items())))
+
+    @property
+    def label(self) -> str:
+        """Name, with options appended when there are any: ``tm[k=5]``."""
+        if not self.options:
+            return self.name
+        return self.name + "[" + ",".join(f"{k}={v}" for k, v in self.options) + "]"
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """Everything that determines one run's result; :meth:`key` is its cache key."""
+
+    dataset_checksum: str
+    matcher: MatcherSpec
+    seed: int
+    noise_rate: float | None
+    code_version: str
+    limit: int | None = None  # only the first `limit` frame pairs (None: all)
+
+    def key(self) -> str:
+        """Hex SHA-256 of the canonical JSON of the fields."""
+        text = json.dumps(asdict(self), sort_keys=True, separators=(",", ":"))
+        return hashlib.sha256(text.encode()).hexdigest()
+
+
+@dataclass(frozen=True)
+class RunTask:
+    """One dataset × seed × noise rate, for one or more matchers (one run each)."""
+
+    dataset_dir: str
+    dataset_checksum: str
+    seed: int
+    noise_rate: float | None
+    matchers: tuple[MatcherSpec, ...]
+    code_version: str
+    limit: int | None = None
+
+    def specs(self) -> list[RunSpec]:
+        return [
+            RunSpec(
+                self.dataset_checksum, m, self.seed, self.noise_rate, self.code_version, self.limit
+            )
+            for m in self.matchers
+        ]
+
+
+@dataclass
+class PairOutcome:
+    """A matcher's output on one frame pair, with the ground truth needed to score it.
+
+    index, name, episode, sim_seed, checksum: the frame pair's identity in its dataset. n1, n2:
+    objects per view. gt_pairs (g, 2) and assigned (k, 2): int (i, j) pairs — ground truth and the
+    matcher's full Hungarian assignment (threshold None). scores: (n1, n2) soft scores in [0, 1].
+    time_s: the matcher's wall time on this pair, seconds; iterations: as the matcher reports.
+    """
+
+    index: int
+    name: str
+    episode: int
+    sim_seed: int
+    checksum: str
+    n1: int
+    n2: int
+    gt_pairs: np.ndarray
+    assigned: np.ndarray
+    scores: np.ndarray
+    time_s: float
+    iterations: int
+
+    @property
+    def assigned_scores(self) -> np.ndarray:
+        return self.scores[self.assigned[:, 0], self.assigned[:, 1]]
+
+
+@dataclass
+class RunResult:
+    """One run: its spec, one :class:`PairOutcome` per frame pair (dataset order), wall time."""
+
+    spec: RunSpec
+    dataset_dir: str
+    outcomes: list[PairOutcome] = field(default_factory=list)
+    wall_s: float = 0.0
+
+    def ranking_frames(self) -> list[tuple]:
+        """Input for :meth:`eval.metrics.RankedAssignments.from_frames`."""
+        return [(o.assigned, o.assigned_scores, o.gt_pairs, o.n1, o.n2) for o in self.outcomes]
+
+
+def open_dataset(path: str):
+    """The dataset at `path` (``cadsim.dataset.Dataset``)."""
+    from cadsim.dataset import Dataset
+
+    return Dataset(path)
+
+
+def matcher_function(name: str):
+    """The registered matcher `name` (``matchers.get``)."""
+    from matchers.registry import get
+
+    return get(name)
+
+
+def execute(task: RunTask) -> list[RunResult]:
+    """Run every matcher of `task` on every frame pair of its dataset; one result per matcher."""
+    dataset = open_dataset(task.dataset_dir)
+    if dataset.checksum != task.dataset_checksum:
+        raise ValueError(
+            f"{task.dataset_dir}: dataset checksum {dataset.checksum[:12]} differs from the task's "
+            f"{task.dataset_checksum[:12]} (the dataset changed after the task was made)"
+        )
+    functions = [matcher_function(m.name) for m in task.matchers]
+    results = [RunResult(spec, task.dataset_dir) for spec in task.specs()]
+    started = time.perf_counter()
+    count = len(dataset) if task.limit is None else min(task.limit, len(dataset))
+    for k in range(count):
+        pair = dataset[k]
+        if task.noise_rate is not None:
+            pair = pair.redetect(task.noise_rate, seed=task.seed)
+        problem = pair.problem()
+        gt = np.asarray(pair.gt_pairs, dtype=np.int64).reshape(-1, 2)
+        for spec, fn, result in zip(task.matchers, functions, results, strict=True):
+            matching = fn(problem, seed=task.seed, threshold=None, **dict(spec.options))
+            scores = np.asarray(matching.scores, dtype=float).reshape(problem.n1, problem.n2)
+            result.outcomes.append(
+                PairOutcome(
+                    index=pair.index,
+                    name=pair.name,
+                    episode=pair.episode,
+                    sim_seed=pair.sim_seed,
+                    checksum=pair.checksum,
+                    n1=problem.n1,
+                    n2=problem.n2,
+                    gt_pairs=gt,
+                    assigned=np.asarray(matching.pairs, dtype=np.int64).reshape(-1, 2),
+                    scores=scores,
+                    time_s=float(matching.time_s),
+                    iterations=int(matching.iterations),
+                )
+            )
+    wall = time.perf_counter() - started
+    for result in results:
+        result.wall_s = wall / len(results)
+    return results
