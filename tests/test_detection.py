@@ -2,8 +2,8 @@
 
 import numpy as np
 import pytest
+from render_fixtures import cam
 
-from cadsim.camera import Camera
 from cadsim.depth_noise import NoiseConfig, apply_depth_noise
 from cadsim.detection import DetectionConfig, Detections, detect
 from cadsim.features import FEATURE_DIM, FEATURE_LAYOUT
@@ -11,23 +11,6 @@ from cadsim.render import RenderedView
 from cadsim.world import Snapshot, WorldObject
 
 pytestmark = pytest.mark.render
-
-W, H = 320, 240
-
-
-@pytest.fixture(scope="module")
-def renderer():
-    from cadsim.render import Renderer
-
-    r = Renderer(W, H)
-    yield r
-    r.close()
-
-
-def cam(**kw) -> Camera:
-    kw.setdefault("position", (0.0, 0.0, 1.6))
-    kw.setdefault("yaw", 0.0)
-    return Camera(width=W, height=H, **kw)
 
 
 def car(oid, x, y, color=(0.8, 0.1, 0.1), yaw=np.pi / 2):

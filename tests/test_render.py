@@ -4,29 +4,13 @@ snapshots, no SUMO simulation; the GL backend is chosen by the code."""
 import numpy as np
 import pytest
 import trimesh
+from render_fixtures import H, W, cam
 
 from cadsim.camera import Camera
 from cadsim.render import Part, RenderedView, register_mesh, registered_shapes
 from cadsim.world import Snapshot, WorldObject
 
 pytestmark = pytest.mark.render
-
-W, H = 320, 240
-
-
-@pytest.fixture(scope="module")
-def renderer():
-    from cadsim.render import Renderer
-
-    r = Renderer(W, H)
-    yield r
-    r.close()
-
-
-def cam(**kw) -> Camera:
-    kw.setdefault("position", (0.0, 0.0, 1.6))
-    kw.setdefault("yaw", 0.0)
-    return Camera(width=W, height=H, **kw)
 
 
 def box(oid, center, size, color=(0.8, 0.1, 0.1), yaw=0.0, shape="box", cls="box", target=True):
