@@ -47,6 +47,15 @@ def calibrate(val_runs: Sequence[RunResult]) -> Calibration:
     if not frames:
         raise ValueError("val_runs: the validation runs hold no frame pairs")
     ranked = RankedAssignments.from_frames(frames)
+    tau, best_f1, thresholds, f1 = calibrate_ranked(ranked)
+    return Calibration(tau, best_f1, len(frames), len(val_runs), thresholds, f1)
+
+
+def calibrate_ranked(ranked: RankedAssignments) -> tuple[float, float, np.ndarray, np.ndarray]:
+    """The τ rule on ranked validation assignments: (τ, its mean per-pair F1, candidate
+    thresholds (descending), mean F1 at each). F1 changes only at assigned scores, so τ is the
+    middle of the best interval (between the best candidate and the next lower one, or 0); ties go
+    to the highest τ; when keeping nothing is best, τ is the top candidate."""
     thresholds = candidate_thresholds(ranked)
     f1 = metrics_at_thresholds(ranked, thresholds)["f1"].mean(axis=0)
     best = int(np.argmax(f1))  # thresholds descend: the first maximum is the highest τ
@@ -55,7 +64,7 @@ def calibrate(val_runs: Sequence[RunResult]) -> Calibration:
     else:
         lower = thresholds[best + 1] if best + 1 < len(thresholds) else 0.0
         tau = float((thresholds[best] + lower) / 2)
-    return Calibration(tau, float(f1[best]), len(frames), len(val_runs), thresholds, f1)
+    return tau, float(f1[best]), thresholds, f1
 
 
 def frame_identities(runs: Iterable[RunResult]) -> tuple[set[str], set[int]]:

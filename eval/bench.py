@@ -1,0 +1,266 @@
+"""Benchmarks (``make bench`` = ``python -m eval.bench``): they measure and print; nothing fails.
+
+Sections run in order; ``--only NAME`` picks some. A section is a :class:`Section` in
+:data:`SECTIONS`: a name, a one-line description and ``run(args) -> list[Target]`` that prints its
+own table and returns the speed targets it checked (printed as PASS/FAIL at the end). Other parts
+of the suite add theirs with :func:`register`, e.g. at the end of this module
+``register(lazy_section("generation", "views/s, pairs/s", "cadsim.bench:generation_section"))``.
+
+Problems are random 3-D CoID-like scenes: n = m objects spread over 30 m, view 2 a rigidly moved
+copy with 0.1 m noise, random non-negative features. Times are wall-clock seconds, the best of
+``--repeat`` calls after one warm-up (one call when it takes longer than 2 s). The load average is
+printed first: on a busy machine wall times grow with it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import os
+import resource
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+SIZES = (10, 20, 40, 80)
+SLOW_CALL_S = 2.0  # calls slower than this are not repeated
+
+
+@dataclass(frozen=True)
+class Target:
+    """A speed target: ``measured`` against ``limit`` (same unit), PASS when measured <= limit."""
+
+    name: str
+    measured: float
+    limit: float
+    unit: str = "s"
+
+    @property
+    def passed(self) -> bool:
+        return self.measured <= self.limit
+
+    def line(self) -> str:
+        verdict = "PASS" if self.passed else "FAIL"
+        return f"{verdict}  {self.name}: {self.measured:.4g} {self.unit} (target <= {self.limit:.4g} {self.unit})"
+
+
+@dataclass(frozen=True)
+class Section:
+    name: str
+    description: str
+    run: Callable[[argparse.Namespace], list[Target]]
+
+
+SECTIONS: list[Section] = []
+
+
+def register(section: Section) -> Section:
+    """Add a section (replacing one of the same name)."""
+    SECTIONS[:] = [s for s in SECTIONS if s.name != section.name] + [section]
+    return section
+
+
+def lazy_section(name: str, description: str, target: str) -> Section:
+    """A section whose ``run`` is ``"package.module:function"``, imported only when it runs (so a
+    section with heavy dependencies costs nothing unless selected)."""
+    module_name, _, function = target.partition(":")
+    if not module_name or not function:
+        raise ValueError(f"target: expected 'package.module:function', got {target!r}")
+
+    def run(args: argparse.Namespace) -> list[Target]:
+        return getattr(importlib.import_module(module_name), function)(args)
+
+    return Section(name, description, run)
+
+
+# --------------------------------------------------------------------------- helpers
+
+
+def timed(fn: Callable[[], object], repeat: int) -> tuple[float, object]:
+    """(best wall time in s, last result) of ``fn`` over ``repeat`` calls after a warm-up call.
+    The minimum is the least disturbed by other load on the machine. A call slower than
+    SLOW_CALL_S is timed once (its warm-up is the measurement)."""
+    t0 = time.perf_counter()
+    out = fn()
+    best = time.perf_counter() - t0
+    if best > SLOW_CALL_S or repeat <= 1:
+        return best, out
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def bench_problem(n: int, m: int | None = None, seed: int = 0, dim: int = 3):
+    """A random CoID-like :class:`matchers.Problem`: view 2 = rigid motion of view 1 + noise."""
+    from scipy.spatial.transform import Rotation
+
+    from matchers import Problem
+
+    m = n if m is None else m
+    rng = np.random.default_rng([seed, n, m, dim])
+    world = rng.uniform(0.0, 30.0, (max(n, m), dim))
+    p1 = world[:n]
+    rot = Rotation.random(random_state=rng).as_matrix()[:dim, :dim]
+    if dim == 2:
+        angle = rng.uniform(0, 2 * np.pi)
+        rot = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+    p2 = world[rng.permutation(max(n, m))[:m]] @ rot.T + 0.1 * rng.standard_normal((m, dim))
+    f = rng.gamma(1.0, 1.0, (max(n, m), 8))
+    return Problem(p1, p2, f[:n], f[:m])
+
+
+def _peak_rss_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def _row(cells: list[str]) -> str:
+    return "| " + " | ".join(cells) + " |"
+
+
+# --------------------------------------------------------------------------- sections
+
+
+def _tensor_section(args: argparse.Namespace) -> list[Target]:
+    from matchers.tensor_build import build_tensor
+
+    print(_row(["n = m", "recipe", "entries", "MB stored", "build s", "peak RSS MB"]))
+    print("|---|---|---|---|---|---|")
+    for n in args.sizes:
+        problem = bench_problem(n)
+        for recipe in ("paper", "duchenne"):
+            secs, tensor = timed(lambda p=problem, r=recipe: build_tensor(p, r, 0), args.repeat)
+            mb = (tensor.indices.nbytes + tensor.values.nbytes) / 2**20
+            print(
+                _row(
+                    [
+                        str(n),
+                        recipe,
+                        f"{tensor.nnz:,}",
+                        f"{mb:.1f}",
+                        f"{secs:.4f}",
+                        f"{_peak_rss_mb():.0f}",
+                    ]
+                ),
+                flush=True,
+            )
+    return []
+
+
+def _matchers_section(args: argparse.Namespace) -> list[Target]:
+    from eval.synthetic import HYPERGRAPH_MATCHERS
+    from matchers import available, get
+    from matchers.tensor_build import build_tensor
+
+    names = args.matchers or available()
+    print(_row(["n = m", "tensor build s", *[f"{name} s" for name in names]]))
+    print("|" + "---|" * (2 + len(names)))
+    for n in args.sizes:
+        problem = bench_problem(n)
+        build_s, tensor = timed(lambda p=problem: build_tensor(p, "paper", 0), 1)
+        cells = [str(n), f"{build_s:.4f}"]
+        for name in names:
+            opts = {"tensor": tensor} if name in HYPERGRAPH_MATCHERS else {}
+            matcher = get(name)
+            secs, _ = timed(lambda f=matcher, p=problem, o=opts: f(p, seed=0, **o), args.repeat)
+            cells.append(f"{secs:.4f}")
+        print(_row(cells), flush=True)
+        del tensor
+    print("\n(hypergraph matchers timed on the prebuilt 'paper' tensor; add the build column)")
+    return []
+
+
+def _targets_section(args: argparse.Namespace) -> list[Target]:
+    import pygmtools as pygm
+
+    from matchers import get
+    from matchers.indexing import to_column_major
+    from matchers.pairwise import pairwise_affinity
+
+    targets = []
+    problem = bench_problem(20)
+    secs, _ = timed(lambda: get("maximin")(problem, seed=0), max(args.repeat, 5))
+    targets.append(Target("tensor build + maximin, 20 vs 20 (default tensor)", secs, 0.050))
+
+    big = bench_problem(100)
+    secs, m = timed(lambda: get("rrwhm")(big, seed=0, neighbours=300), 1)
+    targets.append(Target("tensor build + RRWHM, 100 vs 100, 300 neighbours/triangle", secs, 5.0))
+
+    pygm.set_backend("numpy")
+    for n in (20, 40):
+        p = bench_problem(n)
+        k_ours = pairwise_affinity(p)
+        k_pygm = to_column_major(k_ours, n, n)
+        ours_s, _ = timed(
+            lambda k=k_ours, p=p: get("rrwm")(p, seed=0, affinity=k, **PYGM_RRWM), args.repeat
+        )
+        pygm_s, _ = timed(lambda k=k_pygm, n=n: pygm.rrwm(k, n, n, **PYGM_RRWM_NATIVE), args.repeat)
+        targets.append(
+            Target(
+                f"our rrwm / pygmtools rrwm, same {n}x{n} matrix and settings",
+                ours_s / pygm_s,
+                1.0,
+                "x",
+            )
+        )
+        print(f"rrwm {n} vs {n}: ours {ours_s * 1e3:.1f} ms, pygmtools {pygm_s * 1e3:.1f} ms")
+    return targets
+
+
+# pygmtools' RRWM defaults, in its own names and in ours (jump = its alpha: the weight of the
+# reweighted jump). Our Sinkhorn runs to tolerance 1e-3 (cap 1000 sweeps) instead of 20 half-steps.
+PYGM_RRWM_NATIVE = {"max_iter": 50, "sk_iter": 20, "alpha": 0.2, "beta": 30}
+PYGM_RRWM = {"jump": 0.2, "beta": 30.0, "max_iter": 50}
+
+register(Section("tensor", "third-order tensor build time and size per n", _tensor_section))
+register(Section("matchers", "time per matcher call per n", _matchers_section))
+register(Section("targets", "the speed targets of issue 2, PASS/FAIL", _targets_section))
+
+
+# --------------------------------------------------------------------------- CLI
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m eval.bench", description=__doc__.split("\n")[0]
+    )
+    parser.add_argument(
+        "--only", nargs="+", metavar="NAME", help=f"sections to run: {[s.name for s in SECTIONS]}"
+    )
+    parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES), help="n = m values")
+    parser.add_argument("--repeat", type=int, default=3, help="timed calls per measurement")
+    parser.add_argument("--matchers", nargs="+", default=None, help="matchers (default: all)")
+    args = parser.parse_args(argv)
+    chosen = SECTIONS
+    if args.only:
+        unknown = set(args.only) - {s.name for s in SECTIONS}
+        if unknown:
+            parser.error(
+                f"--only: unknown section(s) {sorted(unknown)}; have {[s.name for s in SECTIONS]}"
+            )
+        chosen = [s for s in SECTIONS if s.name in args.only]
+    load = os.getloadavg()[0]
+    cores = os.cpu_count() or 1
+    print(
+        f"load average {load:.1f} on {cores} cores"
+        + (" (busy: timings inflated)" if load > cores else "")
+    )
+    targets: list[Target] = []
+    for section in chosen:
+        print(f"\n## {section.name}: {section.description}\n", flush=True)
+        t0 = time.perf_counter()
+        targets += section.run(args)
+        print(f"\n({section.name}: {time.perf_counter() - t0:.1f} s)", flush=True)
+    if targets:
+        print("\n## targets\n")
+        for t in targets:
+            print(t.line())
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
