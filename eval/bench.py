@@ -219,6 +219,13 @@ PYGM_RRWM = {"jump": 0.2, "beta": 30.0, "max_iter": 50}
 register(Section("tensor", "third-order tensor build time and size per n", _tensor_section))
 register(Section("matchers", "time per matcher call per n", _matchers_section))
 register(Section("targets", "the speed targets of issue 2, PASS/FAIL", _targets_section))
+register(
+    lazy_section(
+        "pipeline",
+        "render views/s and 50-pair CAD generation",
+        "eval.bench_pipeline:pipeline_section",
+    )
+)
 
 
 # --------------------------------------------------------------------------- CLI
