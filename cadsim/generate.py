@@ -8,23 +8,29 @@ slot-th pair episode ``episode`` accepted; the dataset is the first N records in
 order. Records therefore do not depend on the number of workers, the order episodes finish in,
 or interruptions: an interrupted run is resumed by running the same command again.
 
-Episodes run in worker processes (multiprocessing ``spawn``: libsumo allows one simulation per
-process, and a GL context must not be forked); with one worker they run in this process.
+Episodes are tasks of a :class:`cadsim.executor.Executor`: local worker processes
+(multiprocessing ``spawn``: libsumo allows one simulation per process, and a GL context must not
+be forked), this process (one worker), or a Dask cluster (``scheduler``; docs/scale-out.md). In a
+process whose tasks run on threads (a Dask worker), every episode runs on one dedicated thread,
+one at a time: never two simulations in one process, and the renderers' GL contexts stay on the
+thread that made them.
 """
 
 from __future__ import annotations
 
+import concurrent.futures as cf
+import contextvars
 import importlib
 import json
 import logging
 import math
-import multiprocessing
 import os
-import queue as queue_module
 import shutil
 import signal
+import socket
+import threading
 import time
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, wait
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -50,6 +56,7 @@ from cadsim.dataset.manifest import (
 )
 from cadsim.dataset.record_format import PairRecord, ViewCapture, encode_record
 from cadsim.dataset.seeds import noise_seed, simulation_seed
+from cadsim.executor import Executor, make_executor, report_progress
 
 log = logging.getLogger(__name__)
 
@@ -166,7 +173,8 @@ class GenerationResult:
 # --------------------------------------------------------------------------- one episode
 
 _renderers: dict[tuple[str, int, int], Any] = {}  # per process: scenes are built once, reused
-_progress_queue = None  # set in worker processes
+_simulation_thread: cf.ThreadPoolExecutor | None = None  # per process, made on first use
+_simulation_thread_lock = threading.Lock()
 
 
 def _renderer(stages: Stages, width: int, height: int):
@@ -311,15 +319,27 @@ def _try_pair(
     )  # fmt: skip
 
 
-def _worker_init(progress_queue) -> None:
-    global _progress_queue
-    _progress_queue = progress_queue
-    progress_queue.put(("pid", os.getpid()))
+def _in_simulation_thread(fn, *args):
+    """Run ``fn(*args)`` on this process's one simulation thread and wait for it (so episodes
+    of a multi-threaded worker run one at a time, always on the same thread)."""
+    global _simulation_thread
+    with _simulation_thread_lock:
+        if _simulation_thread is None:
+            _simulation_thread = cf.ThreadPoolExecutor(1, thread_name_prefix="cadsim-simulation")
+    return _simulation_thread.submit(contextvars.copy_context().run, fn, *args).result()
 
 
 def _worker_run(task: EpisodeTask) -> EpisodeResult:
-    q = _progress_queue
-    return run_episode(task, on_record=lambda: q.put(("record", task.episode)))
+    """The executor task: one episode; reports ("record", episode) after each record written."""
+    if not (Path(task.out) / layout.MANIFEST).is_file():
+        raise GenerationError(
+            f"{task.out}: not visible on worker host {socket.gethostname()} (no {layout.MANIFEST}); "
+            "the dataset folder must be on storage every worker mounts at the same path"
+        )
+    args = (task, lambda: report_progress(("record", task.episode)))
+    if threading.current_thread() is threading.main_thread():  # a pool process, or this one
+        return run_episode(*args)
+    return _in_simulation_thread(run_episode, *args)
 
 
 # --------------------------------------------------------------------------- orchestration
@@ -365,18 +385,6 @@ def _episode_done_on_disk(out: Path, episode: int, need: int) -> int | None:
     return None
 
 
-class _InProcess:
-    """A one-worker executor that runs each task when submitted, in this process."""
-
-    def __init__(self, on_record) -> None:
-        self.on_record = on_record
-
-    def submit(self, fn, task) -> Future:
-        fut: Future = Future()
-        fut.set_result(run_episode(task, on_record=self.on_record))
-        return fut
-
-
 def generate_dataset(
     scenario,
     out: str | Path,
@@ -386,12 +394,17 @@ def generate_dataset(
     stages: Stages | None = None,
     progress: bool = True,
     max_episodes: int | None = None,
+    scheduler: str | None = None,
+    executor: Executor | None = None,
 ) -> GenerationResult:
     """Generate (or resume) the dataset of ``scenario`` (a path or a loaded scenario) in ``out``.
 
     pairs: N (default: the scenario's). seed: root seed (default: the scenario's). workers:
-    processes (default: CPU count). max_episodes: give up after this many episodes without N
-    pairs (default 10·⌈N / pairs_per_episode⌉ + 10).
+    processes (default: one per core; 1: this process). scheduler: a Dask scheduler address
+    (default: ``$CADSIM_SCHEDULER``, else local processes); ``out`` must then be on storage every
+    worker mounts at the same path. executor: run episodes there instead (not closed here).
+    max_episodes: give up after this many episodes without N pairs (default
+    10·⌈N / pairs_per_episode⌉ + 10).
     """
     t0 = time.perf_counter()
     scenario = _load_scenario(scenario)
@@ -401,8 +414,7 @@ def generate_dataset(
     if n_pairs < 1:
         raise GenerationError(f"--pairs: expected >= 1, got {n_pairs}")
     root_seed = int(scenario.seed if seed is None else seed)
-    workers = int(workers or os.cpu_count() or 1)
-    if workers < 1:
+    if workers is not None and workers < 1:
         raise GenerationError(f"--workers: expected >= 1, got {workers}")
     crit = Criteria.from_sampling(scenario.sampling)
     acceptance = {k: v for k, v in asdict(crit).items() if k != "pairs_per_episode"}
@@ -431,21 +443,10 @@ def generate_dataset(
     def bump(k: int = 1) -> None:
         bar.update(max(0, min(k, n_pairs - bar.n)))
 
-    progress_queue = None
-    pool = None
-    worker_pids: set[int] = set()
-    if workers == 1:
-        executor = _InProcess(bump)
-    else:
-        ctx = multiprocessing.get_context("spawn")
-        progress_queue = ctx.Queue()
-        pool = ProcessPoolExecutor(
-            max_workers=workers,
-            mp_context=ctx,
-            initializer=_worker_init,
-            initargs=(progress_queue,),
-        )
-        executor = pool
+    own_executor = executor is None
+    if executor is None:
+        executor = make_executor(workers, scheduler)
+    workers = executor.workers
     in_flight: dict[Future, tuple[int, int]] = {}
     next_episode = 0
     previous_sigterm = signal.getsignal(signal.SIGTERM)
@@ -474,7 +475,8 @@ def generate_dataset(
                     task = EpisodeTask(
                         scenario, str(out), root_seed, next_episode, need, crit, stages
                     )
-                    in_flight[executor.submit(_worker_run, task)] = (next_episode, need)
+                    future = executor.submit(_worker_run, task, resources={"simulation": 1})
+                    in_flight[future] = (next_episode, need)
                 next_episode += 1
             if not in_flight:
                 if next_episode >= max_episodes:
@@ -486,8 +488,7 @@ def generate_dataset(
                     )
                 continue
             finished, _ = wait(list(in_flight), timeout=0.2, return_when=FIRST_COMPLETED)
-            if progress_queue is not None:
-                _drain(progress_queue, bump, worker_pids)
+            bump(sum(1 for message in executor.progress() if message[0] == "record"))
             for fut in finished:
                 e_done, _ = in_flight.pop(fut)
                 res = fut.result()
@@ -495,17 +496,18 @@ def generate_dataset(
                 results.append(res)
                 bump(res.accepted - res.new_records)
         # Nothing is in flight here: an episode starts only if the ones before it cannot fill N.
-        if pool is not None:
-            pool.shutdown(wait=True)
+        if own_executor:
+            executor.close()
     except BaseException:
-        if pool is not None:
-            _stop_workers(pool, progress_queue, worker_pids)
+        for future in in_flight:
+            future.cancel()
+        if own_executor:
+            executor.terminate()  # running episodes' partial records: removed on resume
         raise
     finally:
         signal.signal(signal.SIGTERM, previous_sigterm)
         bar.close()
-        if pool is None:
-            release_renderers()
+        release_renderers()  # those episodes run in this process made (one worker)
 
     records = _finalise_records(out, n_pairs)
     shutil.rmtree(out / layout.WORK_DIR, ignore_errors=True)
@@ -534,32 +536,6 @@ def generate_dataset(
 
 def _raise_interrupt(signum, frame) -> None:
     raise KeyboardInterrupt(f"signal {signum}")
-
-
-def _stop_workers(pool: ProcessPoolExecutor, progress_queue, worker_pids: set[int]) -> None:
-    """Cancel queued episodes and terminate the worker processes (their partial records are
-    temp folders, removed by ``remove_stale_temp``)."""
-    _drain(progress_queue, lambda k=1: None, worker_pids)
-    pool.shutdown(wait=False, cancel_futures=True)
-    for pid in worker_pids:
-        try:
-            os.kill(pid, signal.SIGTERM)
-        except (ProcessLookupError, PermissionError):
-            pass
-    pool.shutdown(wait=True)
-
-
-def _drain(q, bump, worker_pids: set[int]) -> None:
-    """Handle the workers' messages: ("pid", pid) when one starts, ("record", episode) per record."""
-    while True:
-        try:
-            kind, value = q.get_nowait()
-        except queue_module.Empty:
-            return
-        if kind == "pid":
-            worker_pids.add(value)
-        else:
-            bump(1)
 
 
 def _finalise_records(out: Path, n_pairs: int) -> list[dict]:

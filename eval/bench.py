@@ -226,6 +226,13 @@ register(
         "eval.bench_pipeline:pipeline_section",
     )
 )
+register(
+    lazy_section(
+        "scaleout",
+        "noise sweep on the local pool vs a 2-worker Dask LocalCluster",
+        "eval.bench_scaleout:scaleout_section",
+    )
+)
 
 
 # --------------------------------------------------------------------------- CLI

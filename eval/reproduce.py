@@ -29,8 +29,9 @@ from eval.commands.evaluate import (
     parse_matchers,
 )
 from eval.commands.sweep_noise import DEFAULT_RATES, parse_rates, sweep
-from eval.executor import make_executor
+from eval.executor import add_scheduler_argument, make_executor
 from eval.figures import render_all
+from eval.readme_results import update_readme
 from eval.run_record import StageTimer, scenario_file, write_run_record
 from eval.runner import Runner
 from eval.tables import PAPER_CSV, write_table1
@@ -93,6 +94,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--cache", default=DEFAULT_CACHE, help=f"result cache (default: {DEFAULT_CACHE})"
     )
     p.add_argument("--workers", type=int, default=None, help="processes (default: one per core)")
+    add_scheduler_argument(p)
     p.add_argument("--quiet", action="store_true", help="no progress bars")
     return p
 
@@ -106,12 +108,18 @@ def _shown(path: Path) -> str:
 
 
 def _generate(
-    scenario: Path, out: Path, pairs: int | None, seed: int | None, workers, progress: bool
+    scenario: Path, out: Path, pairs: int | None, seed: int | None, args: argparse.Namespace
 ):
     from cadsim.generate import generate_dataset
 
     result = generate_dataset(
-        scenario, out.resolve(), pairs=pairs, seed=seed, workers=workers, progress=progress
+        scenario,
+        out.resolve(),
+        pairs=pairs,
+        seed=seed,
+        workers=args.workers,
+        progress=not args.quiet,
+        scheduler=args.scheduler,
     )
     log.info(
         "%s: %d pairs (%d new) in %.1f s", out, result.pairs, result.new_records, result.seconds
@@ -161,8 +169,8 @@ def main(argv: list[str] | None = None) -> int:
                 val_pairs,
                 val_seed,
             )
-            made = _generate(path, test_dir, pairs, None, args.workers, progress)
-            made_val = _generate(path, val_dir, val_pairs, val_seed, args.workers, progress)
+            made = _generate(path, test_dir, pairs, None, args)
+            made_val = _generate(path, val_dir, val_pairs, val_seed, args)
             entries.append(open_entry(test_dir, val_dir))
             datasets_record.append(
                 {"label": label, "scenario": scenario_file(path) | {"path": _shown(path)}}
@@ -173,7 +181,7 @@ def main(argv: list[str] | None = None) -> int:
                 | {"new_records": made.new_records + made_val.new_records}
             )
 
-    with make_executor(args.workers) as executor:
+    with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(ResultCache(args.cache), executor, progress=progress)
         with timer.stage("evaluate"):
             log.info(
@@ -220,6 +228,8 @@ def main(argv: list[str] | None = None) -> int:
         cache=str(args.cache),
     )
     log.info("run record: %s", record)
+    if out.resolve() == (ROOT / "results").resolve() and update_readme(ROOT / "README.md", out):
+        log.info("README.md results section rewritten from %s", out)
     print()
     print("Table I — ours beside the paper's (results/table1.md)")
     print()

@@ -4,14 +4,15 @@ it completes, so a re-run computes only what changed and an interrupted sweep re
 Missing runs are grouped into :class:`eval.tasks.RunTask` s: with a noise rate, all matchers of
 one (dataset, seed, rate) share a task (they share its re-detection); without, each run is its
 own task (finer load balancing). Tasks go to an :class:`eval.executor.Executor`; results come
-back to this process, which writes the cache — workers need no access to it.
+back to this process, which writes the cache — workers need no access to it (only to the
+datasets), whichever executor runs them (local processes or a Dask cluster, docs/scale-out.md).
 """
 
 from __future__ import annotations
 
 import logging
 import traceback
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 
 from tqdm import tqdm
@@ -87,7 +88,8 @@ def _group(missing: Sequence[RunRequest], version: str) -> list[RunTask]:
 
 
 class Runner:
-    """Cache-aware execution of runs through an executor."""
+    """Cache-aware execution of runs through an executor. `task_fn` computes one task (a
+    picklable module-level function; default :func:`eval.tasks.execute`)."""
 
     def __init__(
         self,
@@ -95,9 +97,11 @@ class Runner:
         executor: Executor,
         version: str | None = None,
         progress: bool = True,
+        task_fn: Callable[[RunTask], list[RunResult]] = execute,
     ) -> None:
         self.cache = cache
         self.executor = executor
+        self.task_fn = task_fn
         self.version = code_version() if version is None else version
         self.progress = progress
         self.stats = RunStats()  # of the last run() call
@@ -130,7 +134,7 @@ class Runner:
             failures = []
             bar = tqdm(total=len(missing), desc=desc, unit="run", disable=not self.progress)
             with bar:
-                for done in self.executor.map_unordered(execute, tasks):
+                for done in self.executor.map_unordered(self.task_fn, tasks):
                     task = tasks[done.index]
                     if done.error is not None:
                         self.stats.failed += len(task.matchers)

@@ -1,4 +1,5 @@
-"""`cadsim generate SCENARIO.toml --out DIR [--pairs N] [--seed S] [--workers W]`."""
+"""`cadsim generate SCENARIO.toml --out DIR [--pairs N] [--seed S] [--workers W]
+[--scheduler ADDRESS]`."""
 
 from __future__ import annotations
 
@@ -6,6 +7,8 @@ import argparse
 import logging
 import os
 import sys
+
+from cadsim.executor import add_scheduler_argument
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -19,6 +22,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=os.cpu_count() or 1,
         help="worker processes, one simulation each (default: CPU count)",
     )
+    add_scheduler_argument(parser)
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -37,6 +41,7 @@ def run(args: argparse.Namespace) -> int:
             seed=args.seed,
             workers=args.workers,
             progress=not args.no_progress,
+            scheduler=args.scheduler,
         )
     except KeyboardInterrupt:
         print(
@@ -45,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 130
-    except (GenerationError, ValueError, FileNotFoundError) as exc:
+    except (GenerationError, ValueError, FileNotFoundError, ConnectionError) as exc:
         print(f"cadsim generate: error: {exc}", file=sys.stderr)
         return 2
     print(

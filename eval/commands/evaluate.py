@@ -21,7 +21,7 @@ import pandas as pd
 
 from eval import calibration, tasks
 from eval.cache import ResultCache
-from eval.executor import make_executor
+from eval.executor import add_scheduler_argument, make_executor
 from eval.metrics import RankedAssignments, average_precision, pair_metrics, pooled_pr_curve
 from eval.runner import Runner, requests_for
 from eval.tables import PAPER_CSV, write_table1
@@ -272,6 +272,7 @@ def add_runner_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--workers", type=int, default=None, help="processes (default: one per core)"
     )
+    add_scheduler_argument(parser)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -300,7 +301,7 @@ def run(args: argparse.Namespace) -> int:
     vals = [None] * len(args.datasets) if args.no_calibration else val_dirs(args.datasets, args.val)
     entries = [open_entry(d, v) for d, v in zip(args.datasets, vals, strict=True)]
     matchers = parse_matchers(args.matchers)
-    with make_executor(args.workers) as executor:
+    with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(ResultCache(args.cache), executor)
         evaluate(entries, matchers, range(args.runs), runner, args.out, not args.no_calibration)
     markdown = write_table1(args.out, args.paper)

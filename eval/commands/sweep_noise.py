@@ -107,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
     (val,) = val_dirs([args.dataset], [args.val] if args.val else None)
     entry = open_entry(args.dataset, val)
     matchers = parse_matchers(args.matchers)
-    with make_executor(args.workers) as executor:
+    with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(ResultCache(args.cache), executor)
         rates = parse_rates(args.rates)
         sweep(entry, matchers, range(args.runs), rates, runner, args.out, args.pairs)
