@@ -66,6 +66,11 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into `head` and the like
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - keep Python's exit flush quiet
         return 0
+    except (ValueError, OSError) as exc:  # bad input: scenario, dataset, option, path
+        if args.verbose:
+            raise
+        print(f"cadsim {args._command}: error: {exc}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

@@ -63,8 +63,11 @@ TRAFFIC = Table(
     {
         "env_id": Field(
             str, "intersection-v2", "a registered highway-env intersection environment",
-            check=lambda v: v.startswith("intersection-") and "multi-agent" not in v,
-            expect="a single-agent intersection environment id such as 'intersection-v2'",
+            check=lambda v: (
+                v.startswith("intersection-") and "multi-agent" not in v and v != "intersection-v0"
+            ),
+            expect="a single-agent intersection environment id such as 'intersection-v2' "
+            "(not the deprecated intersection-v0)",
         ),
         "env": Field(dict, {}, "overrides of the environment's config (checked against it at start)"),
         "policy_weights": Field(

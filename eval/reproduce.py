@@ -41,7 +41,7 @@ log = logging.getLogger("eval.reproduce")
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = ("scenarios/cad-intersection.toml", "scenarios/mrc-arena.toml")
 VAL_SEED_OFFSET = 1000
-DEFAULT_VAL_PAIRS = 10
+DEFAULT_VAL_PAIRS = 25
 # The noise sweep is lighter than Table I to keep a cold `make reproduce` within ~15 minutes on two
 # cores: the first SWEEP_PAIRS test pairs, SWEEP_RUNS seeds (docs/evaluation.md).
 SWEEP_PAIRS = 25

@@ -7,15 +7,15 @@ import hashlib
 import json
 import os
 import platform
-import subprocess
 import sys
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from datetime import UTC, datetime
-from importlib import metadata
 from pathlib import Path
 from typing import Any
+
+from cadsim.provenance import git_state, package_versions
 
 PACKAGES = (
     "cadsim",
@@ -54,34 +54,6 @@ class StageTimer:
         return sum(self.seconds.values())
 
 
-def package_versions(names=PACKAGES) -> dict[str, str | None]:
-    """Installed version of each distribution (None when not installed)."""
-    out = {}
-    for name in names:
-        try:
-            out[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            out[name] = None
-    return out
-
-
-def git_state(repo: str | Path = ".") -> dict[str, Any]:
-    """{"commit": hash or None, "dirty": bool or None} of the git work tree at `repo`."""
-
-    def git(*args: str) -> str | None:
-        try:
-            done = subprocess.run(
-                ["git", *args], cwd=repo, capture_output=True, text=True, timeout=10, check=True
-            )
-        except (OSError, subprocess.SubprocessError):
-            return None
-        return done.stdout.strip()
-
-    commit = git("rev-parse", "HEAD")
-    status = git("status", "--porcelain", "--untracked-files=no") if commit else None
-    return {"commit": commit, "dirty": None if status is None else bool(status)}
-
-
 def scenario_file(path: str | Path) -> dict[str, str]:
     """A scenario file's path, SHA-256 and text."""
     data = Path(path).read_bytes()
@@ -101,8 +73,8 @@ def write_run_record(path: str | Path, timer: StageTimer, **content: Any) -> Pat
     record = {
         "created": datetime.now(UTC).isoformat(timespec="seconds"),
         **content,
-        "git": git_state(Path(__file__).resolve().parents[1]),
-        "packages": package_versions(),
+        "git": git_state(),
+        "packages": package_versions(PACKAGES),
         "machine": machine(),
         "wall_s": {name: round(s, 2) for name, s in timer.seconds.items()}
         | {"total": round(timer.total, 2)},

@@ -184,6 +184,11 @@ def _write(tmp_path: Path, old: str, new: str) -> Path:
             r"traffic.env_id: .*single-agent",
         ),  # noqa: E501
         (
+            'env_id = "intersection-v2"',
+            'env_id = "intersection-v0"',
+            r"traffic.env_id: .*not the deprecated intersection-v0",
+        ),
+        (
             "size = [4.5, 1.8, 1.5]",
             "size = [4.5, 1.8]",
             r"traffic.kinds\[0\].size: is \[4.5, 1.8\]",

@@ -55,7 +55,7 @@ def test_default_scenario_loads_with_its_values():
     # Relative paths resolve against the scenario's folder, to absolute paths.
     assert t["demand"]["vtypes"] == str(ROOT / "scenarios" / "cad-vtypes.add.xml")
     assert s.observers["classes"] == ["car", "van", "bus", "truck"]
-    assert s.sampling["warm_up"] == 60.0 and s.sampling["max_time"] is None
+    assert s.sampling["warm_up"] == 150.0 and s.sampling["max_time"] is None
     assert s.noise["noise_rate"] == 0.001 and s.detection["min_pixels"] == 40
 
 

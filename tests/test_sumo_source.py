@@ -130,7 +130,9 @@ def test_net_and_routes_are_built_once_and_cached_per_seed(runs):
 
 
 def test_snapshots_follow_the_sampling_schedule(runs):
-    assert [s["time"] for s in runs["first"]["snapshots"]] == pytest.approx([60, 62, 64, 66, 68])
+    assert [s["time"] for s in runs["first"]["snapshots"]] == pytest.approx(
+        [150, 152, 154, 156, 158]
+    )
 
 
 def test_snapshots_hold_every_kind_of_object(runs):
@@ -158,6 +160,14 @@ def test_snapshots_hold_every_kind_of_object(runs):
         assert light.state in "GgyYurRsoO" and light.color == SIGNAL_COLORS[light.state]
     assert len([o for o in snap if o.cls == "sign"]) == 8
     assert len([o for o in snap if o.cls == "building"]) >= 16
+
+
+def test_pedestrians_are_near_the_junction_when_sampling_starts(runs):
+    # The warm-up must let walkers reach the junction, or the cameras never see one (DESIGN §5).
+    snap = objects_of(runs["first"]["snapshots"][0])
+    centre = np.mean([o.center[:2] for o in snap if o.cls == "traffic_light"], axis=0)
+    near = [o for o in snap if o.cls == "person" and np.hypot(*(o.center[:2] - centre)) < 40.0]
+    assert len(near) >= 5
 
 
 def test_identical_looking_vehicles_occur(runs):

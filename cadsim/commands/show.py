@@ -20,6 +20,8 @@ def run(args: argparse.Namespace) -> int:
 
     try:
         ds = Dataset(args.dataset)
+        if args.pair < 0:
+            raise IndexError(f"--pair: expected a pair index 0..{len(ds) - 1}, got {args.pair}")
         pair = ds[args.pair]
         fig = draw_pair_from_record(pair, labels=not args.no_labels)
     except (ValueError, IndexError) as exc:

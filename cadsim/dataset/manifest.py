@@ -9,9 +9,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
-import platform
-import subprocess
-from importlib import metadata
+import os
 from pathlib import Path
 
 from cadsim.dataset import layout
@@ -19,6 +17,7 @@ from cadsim.dataset.atomic_writer import write_file_atomic
 from cadsim.dataset.checksum import dataset_checksum
 from cadsim.dataset.encoding import json_bytes
 from cadsim.dataset.record_format import FORMAT_VERSION, jsonable
+from cadsim.provenance import git_state, package_versions
 
 FORMAT_NAME = "cadsim-frame-pairs"
 SEED_DERIVATION = (
@@ -36,39 +35,27 @@ class DatasetError(ValueError):
     """A dataset directory is missing, incomplete, from another generation, or corrupt."""
 
 
-def package_versions() -> dict[str, str | None]:
-    """Installed versions of the packages that shape the records (None if not installed)."""
-    versions: dict[str, str | None] = {"python": platform.python_version()}
-    for name in _PACKAGES:
-        try:
-            versions[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            versions[name] = None
-    return versions
-
-
-def git_state() -> dict[str, str | bool | None]:
-    """Commit of the cadsim checkout and whether tracked files differ from it (None: no git)."""
-    repo = Path(__file__).resolve().parents[2]
-
-    def git(*args: str) -> str | None:
-        try:
-            out = subprocess.run(
-                ["git", "-C", str(repo), *args], capture_output=True, text=True, timeout=10
-            )
-        except (OSError, subprocess.SubprocessError):
-            return None
-        return out.stdout.strip() if out.returncode == 0 else None
-
-    commit = git("rev-parse", "HEAD")
-    status = git("status", "--porcelain", "--untracked-files=no") if commit else None
-    return {"commit": commit, "dirty": None if status is None else bool(status)}
-
-
 def _plain(value):
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         return jsonable(dataclasses.asdict(value))
     return jsonable(value)
+
+
+def _portable_paths(value, base: Path):
+    """``value`` with absolute paths under ``base`` (the scenario's folder) or under SUMO's
+    install made relative ("$SUMO_HOME/..."), so a dataset resumes from another checkout."""
+    if isinstance(value, dict):
+        return {k: _portable_paths(v, base) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_portable_paths(v, base) for v in value]
+    if isinstance(value, str) and value.startswith("/"):
+        path = Path(value)
+        if path.is_relative_to(base):
+            return path.relative_to(base).as_posix()
+        sumo_home = os.environ.get("SUMO_HOME")
+        if sumo_home and path.is_relative_to(sumo_home):
+            return "$SUMO_HOME/" + path.relative_to(sumo_home).as_posix()
+    return value
 
 
 def generation_config(scenario, seed: int, pairs_per_episode: int, criteria: dict) -> dict:
@@ -80,7 +67,7 @@ def generation_config(scenario, seed: int, pairs_per_episode: int, criteria: dic
         "seed": int(seed),
         "pairs_per_episode": int(pairs_per_episode),
         "acceptance": dict(criteria),
-        "traffic": _plain(scenario.traffic),
+        "traffic": _portable_paths(_plain(scenario.traffic), Path(scenario.path).parent),
         "camera": _plain(scenario.camera),
         "observers": _plain(scenario.observers),
         "noise": _plain(scenario.noise),
@@ -111,7 +98,7 @@ def build_manifest(
             "episodes": {str(e): int(s) for e, s in sorted(episodes.items())},
         },
         "generation": config,
-        "versions": package_versions(),
+        "versions": package_versions(_PACKAGES),
         "git": git_state(),
         "pairs": len(records),
         "records": records,

@@ -1,0 +1,41 @@
+"""Provenance recorded in dataset manifests and run records: package versions and git state."""
+
+from __future__ import annotations
+
+import platform
+import subprocess
+from collections.abc import Iterable
+from importlib import metadata
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+
+
+def package_versions(names: Iterable[str]) -> dict[str, str | None]:
+    """{"python": version} plus the installed version of each distribution (None if absent).
+    Reads package metadata only; nothing is imported."""
+    versions: dict[str, str | None] = {"python": platform.python_version()}
+    for name in names:
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            versions[name] = None
+    return versions
+
+
+def git_state(repo: str | Path = REPO) -> dict[str, str | bool | None]:
+    """{"commit": HEAD hash, "dirty": whether any file — tracked or untracked, not ignored —
+    differs from it} for the checkout at ``repo``; both None when git or the checkout is absent."""
+
+    def git(*args: str) -> str | None:
+        try:
+            out = subprocess.run(
+                ["git", "-C", str(repo), *args], capture_output=True, text=True, timeout=10
+            )
+        except (OSError, subprocess.SubprocessError):
+            return None
+        return out.stdout.strip() if out.returncode == 0 else None
+
+    commit = git("rev-parse", "HEAD")
+    status = git("status", "--porcelain") if commit else None
+    return {"commit": commit, "dirty": None if status is None else bool(status)}
