@@ -9,6 +9,8 @@ from importlib import metadata
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[1]
+# What `make reproduce` itself rewrites: not counted as a dirty checkout.
+GENERATED = ("results", "README.md")
 
 
 def package_versions(names: Iterable[str]) -> dict[str, str | None]:
@@ -24,8 +26,9 @@ def package_versions(names: Iterable[str]) -> dict[str, str | None]:
 
 
 def git_state(repo: str | Path = REPO) -> dict[str, str | bool | None]:
-    """{"commit": HEAD hash, "dirty": whether any file — tracked or untracked, not ignored —
-    differs from it} for the checkout at ``repo``; both None when git or the checkout is absent."""
+    """{"commit": HEAD hash, "dirty": whether any file — tracked or untracked, not ignored, other
+    than the outputs in GENERATED — differs from it} for the checkout at ``repo``; both None when
+    git or the checkout is absent."""
 
     def git(*args: str) -> str | None:
         try:
@@ -37,5 +40,6 @@ def git_state(repo: str | Path = REPO) -> dict[str, str | bool | None]:
         return out.stdout.strip() if out.returncode == 0 else None
 
     commit = git("rev-parse", "HEAD")
-    status = git("status", "--porcelain") if commit else None
+    excluded = [f":(exclude){p}" for p in GENERATED]
+    status = git("status", "--porcelain", "--", ".", *excluded) if commit else None
     return {"commit": commit, "dirty": None if status is None else bool(status)}
