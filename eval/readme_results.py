@@ -21,13 +21,17 @@ def results_section(results: Path, readme_dir: Path) -> str:
     wall = record.get("wall_s", {})
     git = record.get("git", {})
     times = ", ".join(f"{k.replace('_', ' ')} {v:.0f} s" for k, v in wall.items() if k != "total")
+    runs = record.get("runs", {}).values()
+    computed = sum(r.get("computed", 0) for r in runs)
+    cached = sum(r.get("cached", 0) for r in runs)
     rates = ", ".join(f"{r:g}" for r in sweep.get("rates", []))
     return "\n".join(
         [
             f"Produced by `{record.get('command', 'make reproduce')}` on {record.get('created', '?')}"
             f" at commit `{str(git.get('commit', '?'))[:10]}`"
             + (" (with uncommitted changes)" if git.get("dirty") else "")
-            + f"; wall time {wall.get('total', float('nan')):.0f} s ({times}).",
+            + f"; wall time {wall.get('total', float('nan')):.0f} s ({times}; "
+            f"{computed} matcher runs computed, {cached} taken from the result cache).",
             "",
             "### Table I",
             "",
