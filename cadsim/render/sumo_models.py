@@ -24,7 +24,7 @@ _FACING_PLUS_Z = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
 _FACING_MINUS_X = np.array([[-1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, 1.0, 0.0]])
 FACING = {"+z": _FACING_PLUS_Z, "-x": _FACING_MINUS_X}
 
-BODY = "__body__"  # placeholder colour, replaced by the object's colour
+BODY = "__body__"  # marks parts painted in the object's own colour at build time
 
 
 def models_dir() -> str | None:
