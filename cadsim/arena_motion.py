@@ -21,10 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-
-def wrap_angle(a: np.ndarray) -> np.ndarray:
-    """Angles (radians) wrapped to [-pi, pi)."""
-    return (np.asarray(a, float) + np.pi) % (2.0 * np.pi) - np.pi
+from cadsim.world import wrap_angle
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from cadsim.world import wrap_angle  # re-exported: part of this module's API
+
 
 def highway_to_world(xy: np.ndarray, heading: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     """Convert highway-env positions (k, 2) [m] and headings (k,) [rad, clockwise on screen] into
@@ -33,8 +35,3 @@ def highway_to_world(xy: np.ndarray, heading: np.ndarray | float) -> tuple[np.nd
 def highway_direction_to_world(direction: np.ndarray) -> np.ndarray:
     """A highway-env direction vector (k, 2) or (2,) -> the same direction in the world frame."""
     return np.asarray(direction, dtype=float) * np.array([1.0, -1.0])
-
-
-def wrap_angle(angle: np.ndarray | float) -> np.ndarray:
-    """Angles [rad] wrapped into [-pi, pi)."""
-    return (np.asarray(angle, dtype=float) + np.pi) % (2.0 * np.pi) - np.pi

@@ -7,11 +7,9 @@ that needs highway-env imported (``cadsim.highway_config.check_env_overrides``).
 
 from __future__ import annotations
 
-import re
-
+from cadsim.field_checks import hex_color_list, positive_range
 from cadsim.scenario import Field, ScenarioContext, Table, register_source_schema
 
-_HEX = re.compile(r"^#[0-9a-fA-F]{6}$")
 HEX_COLORS = "a non-empty list of colours written '#rrggbb'"
 KIND_KEYS = {"cls": str, "shape": str, "weight": (int, float), "size": list}
 
@@ -21,14 +19,6 @@ DEFAULT_KINDS = [
     {"cls": "bus", "weight": 0.1, "size": [10.0, 2.5, 3.2]},
     {"cls": "truck", "weight": 0.1, "size": [8.5, 2.5, 3.4]},
 ]
-
-
-def _hex_list(values: list) -> bool:
-    return bool(values) and all(_HEX.match(v) for v in values)
-
-
-def _range(values: list) -> bool:
-    return len(values) == 2 and 0 < values[0] <= values[1]
 
 
 def _weights(values: list) -> bool:
@@ -43,16 +33,16 @@ SCENE = Table(
     {
         "building_depth": Field(
             list, [14.0, 26.0], "building footprint side, metres, drawn per side", item=float,
-            check=_range, expect="[min, max] with 0 < min <= max (metres)",
+            check=positive_range, expect="[min, max] with 0 < min <= max (metres)",
         ),
         "building_heights": Field(
             list, [6.0, 16.0], "building height, metres, drawn per building", item=float,
-            check=_range, expect="[min, max] with 0 < min <= max (metres)",
+            check=positive_range, expect="[min, max] with 0 < min <= max (metres)",
         ),
         "building_setback": Field(float, 4.0, "gap between the curb and a building, metres", ge=0),
         "building_colors": Field(
             list, ["#9e9484", "#8c8c94", "#b3a38c"], "facade colours", item=str,
-            check=_hex_list, expect=HEX_COLORS,
+            check=hex_color_list, expect=HEX_COLORS,
         ),
         "curb_offset": Field(float, 1.0, "lights and signs stand this far beyond the curb, metres", ge=0),
         "sign_distance": Field(float, 12.0, "a sign stands this far before the stop line, metres", ge=0),
@@ -78,7 +68,7 @@ TRAFFIC = Table(
         "max_candidates": Field(int, 4, "observer pairs proposed per snapshot, best first", ge=1),
         "vehicle_colors": Field(
             list, ["#f0f0f0", "#b4b4b8", "#1e1e1e", "#a01e1e", "#1e3c8c"], "vehicle body colours",
-            item=str, check=_hex_list, expect=HEX_COLORS,
+            item=str, check=hex_color_list, expect=HEX_COLORS,
         ),
         "kinds": Field(
             list, DEFAULT_KINDS, "vehicle kinds: cls, shape (default: cls), weight, size [l, w, h]",

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cadsim.highway_geometry import Approach, JunctionLayout
-from cadsim.static_scene import LIGHT_SIZE, ROAD_COLOR, SIGN_COLORS, SIGN_SIZE, SIGNAL_COLORS
+from cadsim.static_scene import ROAD_COLOR, light_object, sign_object
 from cadsim.world import WorldObject
 
 ROAD_TOP = -0.02  # metres: road slabs sit just below z = 0, where vehicles stand
@@ -132,18 +132,7 @@ def traffic_lights(layout: JunctionLayout, config: StaticSceneConfig) -> list[Wo
     for a in layout.approaches:
         state = "G" if _is_major(layout, a) else "y"
         pos = a.stop_line + a.right * (a.lane_width / 2.0 + config.curb_offset)
-        objects.append(
-            WorldObject(
-                id=f"tl_arm{a.arm}",
-                cls="traffic_light",
-                shape="traffic_light",
-                center=(float(pos[0]), float(pos[1]), LIGHT_SIZE[2] / 2.0),
-                yaw=_yaw_of(a.outward),
-                size=LIGHT_SIZE,
-                color=SIGNAL_COLORS[state],
-                state=state,
-            )
-        )
+        objects.append(light_object(f"tl_arm{a.arm}", pos, _yaw_of(a.outward), state))
     return objects
 
 
@@ -158,18 +147,7 @@ def road_signs(layout: JunctionLayout, config: StaticSceneConfig) -> list[WorldO
             - a.direction * config.sign_distance
             + a.right * (a.lane_width / 2.0 + config.curb_offset)
         )
-        objects.append(
-            WorldObject(
-                id=f"sign_arm{a.arm}",
-                cls="sign",
-                shape="sign",
-                center=(float(pos[0]), float(pos[1]), SIGN_SIZE[2] / 2.0),
-                yaw=_yaw_of(a.outward),
-                size=SIGN_SIZE,
-                color=SIGN_COLORS[variant],
-                variant=variant,
-            )
-        )
+        objects.append(sign_object(f"sign_arm{a.arm}", variant, pos, _yaw_of(a.outward)))
     return objects
 
 

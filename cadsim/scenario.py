@@ -68,6 +68,13 @@ class ScenarioContext:
         if "SUMO_HOME" in value and "SUMO_HOME" not in os.environ:
             _set_sumo_home()
         p = Path(os.path.expandvars(value)).expanduser()
+        if "SUMO_HOME" in value and not p.exists():
+            # SUMO_HOME may point at a SUMO without tools/ (libsumo's sumo_data, another
+            # install): fall back to the eclipse-sumo wheel the project installs.
+            wheel = _wheel_sumo_home()
+            if wheel is not None:
+                alt = Path(value.replace("${SUMO_HOME}", wheel).replace("$SUMO_HOME", wheel))
+                p = alt if alt.exists() else p
         return (p if p.is_absolute() else self.base_dir / p).resolve()
 
 
@@ -168,6 +175,15 @@ def _set_sumo_home() -> None:
         import sumo  # noqa: F401
     except ImportError:
         pass
+
+
+def _wheel_sumo_home() -> str | None:
+    """SUMO_HOME of the eclipse-sumo wheel (bin/, tools/, data/), or None if it is not installed."""
+    try:
+        import sumo
+    except ImportError:
+        return None
+    return str(sumo.SUMO_HOME)
 
 
 # --------------------------------------------------------------------------------------------

@@ -437,16 +437,38 @@ def _approach_sign(junction_type: str, is_major: bool) -> str:
 
 
 def _sign(oid: str, kind: str, value: str, xy: np.ndarray, yaw: float) -> WorldObject:
+    return sign_object(oid, kind, xy, float(np.arctan2(np.sin(yaw), np.cos(yaw))), value)
+
+
+def sign_object(oid: str, kind: str, xy, yaw: float, value: str = "") -> WorldObject:
+    """A road sign of ``kind`` (a SIGN_COLORS key, also its ``variant``) standing on the ground at
+    ``xy`` (world frame, metres), facing ``yaw`` (radians CCW from +x); ``value`` (e.g. a speed
+    limit) is its ``state``. Shared by every source's static scene."""
     return WorldObject(
         id=oid,
         cls="sign",
         shape="sign",
         center=(float(xy[0]), float(xy[1]), SIGN_SIZE[2] / 2.0),
-        yaw=float(np.arctan2(np.sin(yaw), np.cos(yaw))),
+        yaw=float(yaw),
         size=SIGN_SIZE,
         color=SIGN_COLORS[kind],
         variant=kind,
         state=value,
+    )
+
+
+def light_object(oid: str, xy, yaw: float, state: str) -> WorldObject:
+    """A traffic-light pole + head standing on the ground at ``xy`` (world frame, metres), facing
+    ``yaw`` (radians CCW from +x), showing the SUMO signal character ``state``."""
+    return WorldObject(
+        id=oid,
+        cls="traffic_light",
+        shape="traffic_light",
+        center=(float(xy[0]), float(xy[1]), LIGHT_SIZE[2] / 2.0),
+        yaw=float(yaw),
+        size=LIGHT_SIZE,
+        color=SIGNAL_COLORS[state],
+        state=state,
     )
 
 
@@ -465,15 +487,6 @@ def traffic_lights(network: RoadNetwork, region: Region) -> list[SignalHead]:
             if not region.contains(xy)[0]:
                 continue
             yaw = float(np.arctan2(np.sin(heading + np.pi), np.cos(heading + np.pi)))
-            obj = WorldObject(
-                id=f"tls:{tls.getID()}:{edge_id}",
-                cls="traffic_light",
-                shape="traffic_light",
-                center=(float(xy[0]), float(xy[1]), LIGHT_SIZE[2] / 2.0),
-                yaw=yaw,
-                size=LIGHT_SIZE,
-                color=SIGNAL_COLORS["o"],
-                state="o",
-            )
+            obj = light_object(f"tls:{tls.getID()}:{edge_id}", xy, yaw, "o")
             out.append(SignalHead(obj, tls.getID(), tuple(sorted(links[edge_id]))))
     return out

@@ -9,23 +9,14 @@ Exactly one of three ways to get a road network:
 
 from __future__ import annotations
 
-import re
 import xml.etree.ElementTree as ET
 
+from cadsim.field_checks import hex_color_list, positive_range
 from cadsim.scenario import Field, ScenarioContext, Table, register_source_schema
 from cadsim.sumo_build import BUILTIN_TYPES
 from cadsim.sumo_config import SumoConfigError, read_sumocfg
 
-_HEX = re.compile(r"^#[0-9a-fA-F]{6}$")
 HEX_COLOR = "a list of colours written '#rrggbb'"
-
-
-def _hex_list(values: list) -> bool:
-    return bool(values) and all(_HEX.match(v) for v in values)
-
-
-def _height_range(values: list) -> bool:
-    return len(values) == 2 and 0 < values[0] <= values[1]
 
 
 NETWORK = Table(
@@ -84,7 +75,7 @@ SCENE = Table(
             [6.0, 20.0],
             "minimum and maximum building height, metres",
             item=float,
-            check=_height_range,
+            check=positive_range,
             expect="[min, max] with 0 < min <= max (metres)",
         ),
         "building_colors": Field(
@@ -92,7 +83,7 @@ SCENE = Table(
             ["#b8a58c", "#9e9e9e", "#c9c2b2", "#8c5a46", "#d8d8d0", "#6f7a80"],
             "facade colours",
             item=str,
-            check=_hex_list,
+            check=hex_color_list,
             expect=HEX_COLOR,
         ),
         "signs": Field(bool, True, "road signs on the approaches and exits of observed junctions"),
@@ -207,7 +198,7 @@ TRAFFIC = Table(
             ["#f0f0f0", "#b4b4b8", "#1e1e1e", "#a01e1e", "#1e3c8c", "#5a5a5a"],
             "colours of vehicles whose route files give none",
             item=str,
-            check=_hex_list,
+            check=hex_color_list,
             expect=HEX_COLOR,
         ),
         "person_colors": Field(
@@ -215,7 +206,7 @@ TRAFFIC = Table(
             ["#303c96", "#963028", "#2d2d2d", "#d2c8b4", "#2d6e3c"],
             "colours of pedestrians whose route files give none",
             item=str,
-            check=_hex_list,
+            check=hex_color_list,
             expect=HEX_COLOR,
         ),
         "network": NETWORK,

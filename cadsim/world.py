@@ -12,6 +12,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
+def wrap_angle(angle: np.ndarray | float) -> np.ndarray:
+    """Angles [rad] wrapped into [-pi, pi)."""
+    return (np.asarray(angle, dtype=float) + np.pi) % (2.0 * np.pi) - np.pi
+
+
 @dataclass(frozen=True)
 class WorldObject:
     """One object in the world.

@@ -283,3 +283,11 @@ def test_environment_variables_expand_in_paths(tmp_path, monkeypatch):
     assert ctx.resolve("$CADSIM_TEST_DIR/t.xml") == (tmp_path / "sub" / "t.xml").resolve()
     assert ctx.resolve("sub/t.xml") == (tmp_path / "sub" / "t.xml").resolve()
     assert os.path.isabs(ctx.resolve("x"))
+
+
+def test_sumo_home_paths_fall_back_to_the_installed_wheel(monkeypatch, tmp_path):
+    # libsumo sets SUMO_HOME to its data-only package; a user's SUMO_HOME may lack tools/ too.
+    monkeypatch.setenv("SUMO_HOME", str(tmp_path))
+    s = load_scenario(ROOT / "scenarios" / "sumo-game-cross.toml")
+    cfg = Path(s.traffic["sumocfg"])
+    assert cfg.is_file() and cfg.name == "cross.sumocfg" and tmp_path not in cfg.parents

@@ -131,12 +131,7 @@ def fit_to_box(parts: list[Part], size: tuple[float, float, float] = (1.0, 1.0, 
     extent = np.where(hi - lo > 1e-9, hi - lo, 1.0)
     T = np.diag(np.append(np.asarray(size, float) / extent, 1.0))
     T[:3, 3] = -(lo + hi) / 2.0 * T.diagonal()[:3]
-    out = []
-    for p in parts:
-        m = p.mesh.copy()
-        m.apply_transform(T)
-        out.append(Part(m, p.color))
-    return out
+    return transformed(parts, T)
 
 
 def transformed(parts: list[Part], matrix: np.ndarray) -> list[Part]:
