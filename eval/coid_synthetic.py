@@ -19,16 +19,15 @@ from __future__ import annotations
 import argparse
 import logging
 import time
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from scipy.spatial.transform import Rotation
-from tqdm import tqdm
 
 from eval.calibration import calibrate_ranked
+from eval.executor import map_in_order
 from eval.metrics import (
     METRICS,
     RankedAssignments,
@@ -199,18 +198,8 @@ def run_benchmark(
         for r in range(runs)
         for k in range(test_frames)
     ]
-    results: list[dict] = []
-    bar = tqdm(total=len(work), desc="coid", unit="frame", disable=not progress, leave=False)
-    if jobs > 1:
-        with ProcessPoolExecutor(max_workers=jobs) as pool:
-            for out in pool.map(_solve, work, chunksize=max(1, len(work) // (jobs * 8))):
-                results.extend(out)
-                bar.update()
-    else:
-        for job in work:
-            results.extend(_solve(job))
-            bar.update()
-    bar.close()
+    outputs = map_in_order(_solve, work, jobs, desc="coid", unit="frame", progress=progress)
+    results = [result for out in outputs for result in out]
 
     val_frames = {k: _frame(seed, "validation", k, cfg) for k in range(validation_frames)}
     test_frames_ = {k: _frame(seed, "test", k, cfg) for k in range(test_frames)}

@@ -23,16 +23,15 @@ import os
 import sys
 import time
 from collections.abc import Callable, Iterable, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from tqdm import tqdm
 
 from eval import published
+from eval.executor import map_in_order
 from eval.house import BASELINES, house_pairs, load_house_landmarks
 from eval.point_sets import make_point_sets
 
@@ -268,12 +267,6 @@ def _run_job(job: _Job) -> list[dict]:
     return rows
 
 
-def _limit_threads() -> None:
-    """Worker initialiser: one BLAS thread per process (the pool already uses every core)."""
-    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ.setdefault(var, "1")
-
-
 def run_protocol(
     protocol: str,
     args: argparse.Namespace,
@@ -287,19 +280,10 @@ def run_protocol(
         for s in proto.settings(args)
         for t, extra in proto.trials(s, args)
     ]
-    rows: list[dict] = []
-    bar = tqdm(total=len(jobs), desc=protocol, unit="trial", disable=not progress, leave=False)
-    if args.jobs > 1 and len(jobs) > 1:
-        with ProcessPoolExecutor(max_workers=args.jobs, initializer=_limit_threads) as pool:
-            chunk = max(1, len(jobs) // (args.jobs * 16))
-            for out in pool.map(_run_job, jobs, chunksize=chunk):
-                rows.extend(out)
-                bar.update()
-    else:
-        for job in jobs:
-            rows.extend(_run_job(job))
-            bar.update()
-    bar.close()
+    outputs = map_in_order(
+        _run_job, jobs, args.jobs, desc=protocol, unit="trial", progress=progress
+    )
+    rows = [row for out in outputs for row in out]
     return pd.DataFrame(rows)
 
 
