@@ -29,7 +29,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "re-detect at several depth-noise rates and evaluate",
     ),
     "table": ("eval.commands.table", "re-render tables and figures from cached results"),
-    "synthetic": ("eval.synthetic", "published synthetic benchmarks (BCAGM protocols)"),
+    "synthetic": ("eval.validation.synthetic", "published synthetic benchmarks (BCAGM protocols)"),
 }
 
 

@@ -8,7 +8,7 @@ documented in docs/scenarios.md.
 
 Each traffic source kind registers the schema of its ``[traffic]`` table with
 :func:`register_source_schema`; the ``[noise]`` and ``[detection]`` tables are checked against
-the fields of ``cadsim.depth_noise.NoiseConfig`` and ``cadsim.detection.DetectionConfig``.
+the fields of ``cadsim.sensing.depth_noise.NoiseConfig`` and ``cadsim.sensing.detection.DetectionConfig``.
 """
 
 from __future__ import annotations
@@ -255,15 +255,15 @@ TABLES = ("traffic", "camera", "observers", "noise", "detection", "sampling")
 # kind -> schema of its [traffic] table; kinds listed in _SCHEMA_MODULES register on first use.
 _SOURCE_SCHEMAS: dict[str, Table] = {}
 _SCHEMA_MODULES: dict[str, str] = {
-    "sumo": "cadsim.sumo_schema",
-    "arena": "cadsim.arena_config",
-    "highway-env": "cadsim.highway_schema",
+    "sumo": "cadsim.sources.sumo.schema",
+    "arena": "cadsim.sources.arena.config",
+    "highway-env": "cadsim.sources.highway.schema",
 }
 
 # [noise] / [detection] -> the dataclass whose fields they set.
 _CONFIG_CLASSES: dict[str, tuple[str, str]] = {
-    "noise": ("cadsim.depth_noise", "NoiseConfig"),
-    "detection": ("cadsim.detection", "DetectionConfig"),
+    "noise": ("cadsim.sensing.depth_noise", "NoiseConfig"),
+    "detection": ("cadsim.sensing.detection", "DetectionConfig"),
 }
 
 

@@ -2,7 +2,7 @@
 
 World frame: right-handed, x east, y north, z up, metres (SUMO's network x/y). Headings (``yaw``)
 are radians counter-clockwise from +x. Sources convert their own conventions into this frame once,
-at the boundary (SUMO: ``cadsim.sumo_frames``).
+at the boundary (SUMO: ``cadsim.sources.sumo.frames``).
 """
 
 from __future__ import annotations

@@ -30,13 +30,14 @@ _FORMAT = 1
 # left out of the code version so editing them does not invalidate the cache. Everything else
 # under matchers/ and cadsim/ counts (erring towards re-computation).
 _NOT_RESULT_SHAPING = (
-    "cadsim/executor.py",
-    "cadsim/dask_executor.py",
+    "cadsim/generation/executor.py",
+    "cadsim/generation/executors.py",
+    "cadsim/generation/local_executor.py",
+    "cadsim/generation/dask_executor.py",
+    "cadsim/__main__.py",
     "cadsim/cli.py",
     "cadsim/commands/",
-    "cadsim/generation_bench.py",
     "cadsim/pair_drawing.py",
-    "cadsim/render/bench.py",
 )
 
 

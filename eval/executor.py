@@ -1,5 +1,5 @@
-"""Where runs execute: the runner-facing name of :mod:`cadsim.executor` (one implementation, shared
-with dataset generation; the Dask backend is :mod:`cadsim.dask_executor`), plus
+"""Where runs execute: the runner-facing name of :mod:`cadsim.generation.executor` and its
+backends (one implementation, shared with dataset generation; the Dask backend is :mod:`cadsim.generation.dask_executor`), plus
 :func:`map_in_order` for the benchmarks that just need a parallel map."""
 
 from __future__ import annotations
@@ -9,18 +9,14 @@ from typing import Any
 
 from tqdm import tqdm
 
-from cadsim.executor import (
+from cadsim.generation.executor import Completed, Executor, report_progress
+from cadsim.generation.executors import (
     SCHEDULER_ENV,
-    Completed,
-    Executor,
-    LocalProcessExecutor,
-    SerialExecutor,
     add_scheduler_argument,
-    default_workers,
     make_executor,
-    report_progress,
     scheduler_address,
 )
+from cadsim.generation.local_executor import LocalProcessExecutor, SerialExecutor, default_workers
 
 __all__ = [
     "SCHEDULER_ENV",

@@ -110,7 +110,7 @@ def _shown(path: Path) -> str:
 def _generate(
     scenario: Path, out: Path, pairs: int | None, seed: int | None, args: argparse.Namespace
 ):
-    from cadsim.generate import generate_dataset
+    from cadsim.generation.pipeline import generate_dataset
 
     result = generate_dataset(
         scenario,

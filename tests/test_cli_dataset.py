@@ -11,7 +11,7 @@ from test_generate_fakes import FAKE_STAGES, FakeScenario
 
 from cadsim.cli import main
 from cadsim.dataset import Dataset
-from cadsim.generate import generate_dataset
+from cadsim.generation.pipeline import generate_dataset
 from cadsim.pair_drawing import CORRECT, MISSED, WRONG, pair_figure, save_figure
 
 

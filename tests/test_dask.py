@@ -15,10 +15,12 @@ import pytest
 
 distributed = pytest.importorskip("distributed")
 
-from cadsim.dask_executor import DaskExecutor  # noqa: E402
 from cadsim.dataset import Dataset  # noqa: E402
-from cadsim.executor import SCHEDULER_ENV, SerialExecutor, make_executor, report_progress  # noqa: E402
-from cadsim.generate import generate_dataset  # noqa: E402
+from cadsim.generation.dask_executor import DaskExecutor  # noqa: E402
+from cadsim.generation.executor import report_progress  # noqa: E402
+from cadsim.generation.executors import SCHEDULER_ENV, make_executor  # noqa: E402
+from cadsim.generation.local_executor import SerialExecutor  # noqa: E402
+from cadsim.generation.pipeline import generate_dataset  # noqa: E402
 from eval.cache import ResultCache  # noqa: E402
 from eval.commands.evaluate import open_entry  # noqa: E402
 from eval.commands.sweep_noise import sweep  # noqa: E402

@@ -21,7 +21,7 @@ from cadsim.dataset.checksum import dataset_checksum, record_checksum
 from cadsim.dataset.detections import is_acceptable_pair
 from cadsim.dataset.encoding import decode_png, json_bytes, load_npz, npz_bytes, png_bytes
 from cadsim.dataset.seeds import noise_seed, simulation_seed
-from cadsim.generate import generate_dataset
+from cadsim.generation.pipeline import generate_dataset
 
 REPO = Path(__file__).resolve().parents[1]
 

@@ -9,7 +9,7 @@ import pytest
 from test_generate_fakes import FakeScenario
 
 from cadsim.dataset import Dataset
-from cadsim.generate import Stages, generate_dataset
+from cadsim.generation.pipeline import Stages, generate_dataset
 
 pytestmark = pytest.mark.render
 
@@ -45,9 +45,9 @@ def test_redetect_is_deterministic_and_seeded(dataset):
 
 
 def test_zero_noise_gives_the_clean_depth_detections(dataset):
-    from cadsim.depth_noise import NoiseConfig  # noqa: F401  (the real stage is in use)
-    from cadsim.detection import DetectionConfig, detect
     from cadsim.render.view import RenderedView
+    from cadsim.sensing.depth_noise import NoiseConfig  # noqa: F401  (the real stage is in use)
+    from cadsim.sensing.detection import DetectionConfig, detect
 
     pair = dataset[1]
     clean = pair.redetect(0.0, seed=3)

@@ -3,7 +3,12 @@
 import numpy as np
 import pytest
 
-from cadsim.depth_noise import MIN_NOISY_DEPTH_M, NoiseConfig, apply_depth_noise, correlated_field
+from cadsim.sensing.depth_noise import (
+    MIN_NOISY_DEPTH_M,
+    NoiseConfig,
+    apply_depth_noise,
+    correlated_field,
+)
 
 
 def flat(d: float, shape=(240, 320)) -> np.ndarray:

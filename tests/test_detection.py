@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 from render_fixtures import cam
 
-from cadsim.depth_noise import NoiseConfig, apply_depth_noise
-from cadsim.detection import DetectionConfig, Detections, detect
-from cadsim.features import FEATURE_DIM, FEATURE_LAYOUT
 from cadsim.render import RenderedView
+from cadsim.sensing.depth_noise import NoiseConfig, apply_depth_noise
+from cadsim.sensing.detection import DetectionConfig, Detections, detect
+from cadsim.sensing.features import FEATURE_DIM, FEATURE_LAYOUT
 from cadsim.world import Snapshot, WorldObject
 
 pytestmark = pytest.mark.render

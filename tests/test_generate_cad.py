@@ -12,7 +12,7 @@ import pytest
 
 from cadsim.cli import main
 from cadsim.dataset import Dataset
-from cadsim.generate import generate_dataset
+from cadsim.generation.pipeline import generate_dataset
 
 pytestmark = [pytest.mark.slow, pytest.mark.render]
 

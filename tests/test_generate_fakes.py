@@ -2,7 +2,7 @@
 
 A seeded random world (no SUMO), a z-buffered box "renderer" (no OpenGL), additive d² depth
 noise and an instance-mask detector. They implement the same interfaces as the real stages so
-``cadsim.generate`` runs unchanged; they are importable by name, so spawn workers load them too.
+``cadsim.generation.pipeline`` runs unchanged; they are importable by name, so spawn workers load them too.
 """
 
 from __future__ import annotations
@@ -16,9 +16,9 @@ from types import SimpleNamespace
 import numpy as np
 
 from cadsim.camera import Camera
-from cadsim.generate import Stages
+from cadsim.generation.pipeline import Stages
 from cadsim.render.view import RenderedView
-from cadsim.traffic_source import ObserverPair, TrafficSource
+from cadsim.sources.base import ObserverPair, TrafficSource
 from cadsim.world import Snapshot, WorldObject
 
 FAKE_STAGES = Stages(

@@ -15,7 +15,7 @@ import test_generate_fakes as fakes
 from test_generate_fakes import FAKE_STAGES, FakeScenario
 
 from cadsim.dataset import Dataset, layout
-from cadsim.generate import GenerationError, generate_dataset
+from cadsim.generation.pipeline import GenerationError, generate_dataset
 
 TESTS = Path(__file__).resolve().parent
 # Two candidate pairs can be kept per snapshot, so resumes also start in the middle of one.
@@ -97,7 +97,7 @@ def test_resume_after_killing_generate(reference, tmp_path):
     out = tmp_path / "killed"
     slow = "FakeScenario(sampling={'pairs_per_episode': 3, 'pairs_per_snapshot': 2})"
     code = (
-        "from test_generate_fakes import *; from cadsim.generate import generate_dataset; "
+        "from test_generate_fakes import *; from cadsim.generation.pipeline import generate_dataset; "
         f"generate_dataset({slow}, {str(out)!r}, pairs=7, workers=2, stages=FAKE_STAGES, progress=False)"
     )
     path = f"{TESTS}{os.pathsep}{os.environ.get('PYTHONPATH', '')}"

@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from cadsim.highway_frames import highway_direction_to_world, highway_to_world, wrap_angle
+from cadsim.sources.highway.frames import highway_direction_to_world, highway_to_world, wrap_angle
 
 
 def test_hand_built_vehicles():
@@ -53,8 +53,8 @@ def test_wrap_angle():
 
 
 def test_real_intersection_layout_in_world_frame():
-    from cadsim.highway_geometry import read_layout
-    from cadsim.highway_source import import_highway_env
+    from cadsim.sources.highway.geometry import read_layout
+    from cadsim.sources.highway.source import import_highway_env
 
     gym = import_highway_env()
     env = gym.make("intersection-v2", disable_env_checker=True)

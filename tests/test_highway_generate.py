@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from cadsim.dataset import Dataset
-from cadsim.generate import generate_dataset
+from cadsim.generation.pipeline import generate_dataset
 
 pytestmark = pytest.mark.render
 

@@ -6,10 +6,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import cadsim.highway_schema  # noqa: F401 - registers [traffic] source = "highway-env"
-from cadsim.highway_config import highway_config
-from cadsim.highway_source import HighwaySource
+import cadsim.sources.highway.schema  # noqa: F401 - registers [traffic] source = "highway-env"
 from cadsim.scenario import ScenarioError, load_scenario
+from cadsim.sources.highway.config import highway_config
+from cadsim.sources.highway.source import HighwaySource
 
 SCENARIO = Path(__file__).resolve().parents[1] / "scenarios" / "highway-intersection.toml"
 # Short env episodes (10 s) so that a run of 30 snapshots (0.5 s apart) crosses env resets.

@@ -4,7 +4,7 @@ import gc
 
 import pytest
 
-from cadsim.highway_tracker import VehicleTracker
+from cadsim.sources.highway.tracker import VehicleTracker
 
 
 class Thing:

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from cadsim.render.meshes import MeshSpec, build_parts, mesh_spec, registered_shapes
-from cadsim.robot_meshes import marker_rgb
+from cadsim.sources.arena.robot_meshes import marker_rgb
 from cadsim.world import WorldObject
 
 SIZE = (0.45, 0.38, 0.32)

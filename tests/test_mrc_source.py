@@ -11,11 +11,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cadsim.arena_config import parse_arena
-from cadsim.arena_motion import ArenaMotion, MotionParams, sample_free_positions
-from cadsim.arena_source import GROUND_ID, ArenaSource, Schedule
 from cadsim.scenario import ScenarioError, load_scenario
 from cadsim.sources import make_source
+from cadsim.sources.arena.config import parse_arena
+from cadsim.sources.arena.motion import ArenaMotion, MotionParams, sample_free_positions
+from cadsim.sources.arena.source import GROUND_ID, ArenaSource, Schedule
 
 SCENARIO = Path(__file__).resolve().parents[1] / "scenarios" / "mrc-arena.toml"
 

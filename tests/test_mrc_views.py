@@ -11,10 +11,10 @@ import pytest
 
 from cadsim.cli import main as cadsim_main
 from cadsim.dataset import Dataset
-from cadsim.depth_noise import NoiseConfig, apply_depth_noise
-from cadsim.detection import DetectionConfig, detect
-from cadsim.generate import generate_dataset
+from cadsim.generation.pipeline import generate_dataset
 from cadsim.scenario import load_scenario
+from cadsim.sensing.depth_noise import NoiseConfig, apply_depth_noise
+from cadsim.sensing.detection import DetectionConfig, detect
 from cadsim.sources import make_source
 
 pytestmark = pytest.mark.render

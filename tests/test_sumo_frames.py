@@ -13,7 +13,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from cadsim.sumo_frames import (
+from cadsim.sources.sumo.frames import (
     center_to_front,
     compass_to_yaw,
     front_to_center,
@@ -97,7 +97,7 @@ def _live_vehicle(folder: str) -> dict:
     """Run in a fresh process: step until the vehicle is well inside edge ab, read its pose."""
     import libsumo
 
-    from cadsim.sumo_frames import front_to_center
+    from cadsim.sources.sumo.frames import front_to_center
 
     libsumo.start(
         [
@@ -134,7 +134,7 @@ def _live_vehicle(folder: str) -> dict:
 
 
 def test_live_libsumo_vehicle_centre_lies_half_a_length_back_on_its_lane(tmp_path: Path):
-    from cadsim.sumo_build import sumo_home
+    from cadsim.sources.sumo.build import sumo_home
 
     (tmp_path / "line.nod.xml").write_text(NODES)
     (tmp_path / "line.edg.xml").write_text(EDGES)

@@ -10,17 +10,17 @@ import numpy as np
 import pytest
 import sumo
 
-from cadsim.static_scene import (
+from cadsim.sources.sumo.build import write_person_types
+from cadsim.sources.sumo.command import sumo_run
+from cadsim.sources.sumo.config import read_sumocfg
+from cadsim.sources.sumo.network import RoadNetwork
+from cadsim.sources.sumo.static_scene import (
     SIGNAL_COLORS,
     SignalHead,
     non_overlapping,
     rectangles_clear_of_points,
     representative_signal,
 )
-from cadsim.sumo_build import write_person_types
-from cadsim.sumo_command import sumo_run
-from cadsim.sumo_config import read_sumocfg
-from cadsim.sumo_network import RoadNetwork
 from cadsim.world import WorldObject
 
 GAME = Path(sumo.SUMO_HOME) / "tools" / "game"

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from cadsim.camera import Camera
-from cadsim.static_scene import SIGNAL_COLORS
-from cadsim.sumo_network import RoadNetwork
+from cadsim.sources.sumo.network import RoadNetwork
+from cadsim.sources.sumo.static_scene import SIGNAL_COLORS
 from cadsim.world import WorldObject
 
 ROOT = Path(__file__).resolve().parents[1]

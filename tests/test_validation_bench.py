@@ -27,7 +27,7 @@ def test_registered_section_runs_alone_and_reports_targets(capsys):
 
 
 def test_lazy_section_imports_on_run():
-    section = bench.lazy_section("house", "loader", "eval.house:load_house_landmarks")
+    section = bench.lazy_section("house", "loader", "eval.validation.house:load_house_landmarks")
     with pytest.raises(TypeError):  # imported and called with the args namespace
         section.run(object())
     with pytest.raises(ValueError, match="package.module:function"):

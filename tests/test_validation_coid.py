@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from eval.coid_synthetic import ALL_MATCHERS, SceneConfig, format_summary, run_benchmark
+from eval.validation.coid_synthetic import ALL_MATCHERS, SceneConfig, format_summary, run_benchmark
 from matchers import available
 
 

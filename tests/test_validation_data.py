@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from scipy.spatial.distance import pdist
 
-from eval import published
-from eval.coid_synthetic import SceneConfig, make_frame_pair
-from eval.house import BASELINES, house_pairs, load_house_landmarks
-from eval.point_sets import make_point_sets
+from eval.validation import published
+from eval.validation.coid_synthetic import SceneConfig, make_frame_pair
+from eval.validation.house import BASELINES, house_pairs, load_house_landmarks
+from eval.validation.point_sets import make_point_sets
 
 
 def test_published_synthetic_known_numbers():

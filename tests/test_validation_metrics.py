@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from eval.coid_synthetic import FramePair, calibrate_threshold, ranked
 from eval.metrics import metrics_at_thresholds
-from eval.synthetic import accuracy
+from eval.validation.coid_synthetic import FramePair, calibrate_threshold, ranked
+from eval.validation.synthetic import accuracy
 
 
 def _frame(n1: int, n2: int, truth: list[tuple[int, int]]) -> FramePair:

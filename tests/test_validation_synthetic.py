@@ -1,4 +1,4 @@
-"""The published-benchmark harness (eval.synthetic) on small but real runs."""
+"""The published-benchmark harness (eval.validation.synthetic) on small but real runs."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from cadsim.cli import main as cadsim_main
-from eval import synthetic
+from eval.validation import synthetic
 
 
 def _args(**overrides) -> argparse.Namespace:

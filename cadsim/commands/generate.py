@@ -8,7 +8,7 @@ import logging
 import os
 import sys
 
-from cadsim.executor import add_scheduler_argument
+from cadsim.generation.executors import add_scheduler_argument
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -27,7 +27,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cadsim.generate import GenerationError, generate_dataset
+    from cadsim.generation.pipeline import GenerationError, generate_dataset
 
     if not getattr(args, "verbose", False):
         for noisy in ("OpenGL", "trimesh"):  # their INFO lines say nothing a user can act on

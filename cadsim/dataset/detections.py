@@ -54,7 +54,7 @@ class ViewDetections:
 
     @classmethod
     def from_detections(cls, det) -> ViewDetections:
-        """From any object with the detection adapter's fields (``cadsim.detection.Detections``)."""
+        """From any object with the detection adapter's fields (``cadsim.sensing.detection.Detections``)."""
         return cls(**{f: getattr(det, f) for f in _FIELDS})
 
     def to_arrays(self, prefix: str) -> dict[str, np.ndarray]:

@@ -166,9 +166,9 @@ class FramePair:
         seeded by (seed, episode, slot, view) applied to the stored clean depth, then detection;
         nothing is re-rendered. Same arguments ⇒ identical detections; rate 0 ⇒ clean-depth
         detections; the dataset's root seed and noise rate ⇒ the stored detections."""
-        from cadsim.depth_noise import NoiseConfig, apply_depth_noise
-        from cadsim.detection import DetectionConfig, detect
         from cadsim.render.view import RenderedView
+        from cadsim.sensing.depth_noise import NoiseConfig, apply_depth_noise
+        from cadsim.sensing.detection import DetectionConfig, detect
 
         if not np.isfinite(noise_rate) or noise_rate < 0:
             raise ValueError(f"noise_rate: expected a finite value >= 0, got {noise_rate!r}")

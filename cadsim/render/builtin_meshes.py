@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
-from cadsim.render.meshes import RGB, MeshBuilder, MeshSpec, Part, fit_to_box, transformed
+from cadsim.render.mesh_parts import RGB, MeshBuilder, MeshSpec, Part, fit_to_box, transformed
 from cadsim.render.sumo_models import sumo_model
 
 GLASS: RGB = (0.16, 0.22, 0.30)

@@ -15,39 +15,25 @@ Add a shape with ``register_mesh("robot", build_robot)``; see ``cadsim.render.bu
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-import trimesh
 
+from cadsim.render.builtin_meshes import BUILTIN_BUILDERS
+from cadsim.render.mesh_parts import RGB, MeshBuilder, MeshSpec, Part
 from cadsim.world import WorldObject
 
-RGB = tuple[float, float, float]
+__all__ = [
+    "RGB",
+    "MeshBuilder",
+    "MeshSpec",
+    "Part",
+    "mesh_spec",
+    "register_mesh",
+    "registered_shapes",
+]
+
 MIN_SIZE_M = 1e-3
-
-
-@dataclass(frozen=True)
-class MeshSpec:
-    """What a builder may look at. color: the object's sRGB colour in [0, 1]. size: (length, width,
-    height) metres, or (1, 1, 1) for scalable builders."""
-
-    shape: str
-    variant: str
-    state: str
-    color: RGB
-    size: tuple[float, float, float]
-
-
-@dataclass(frozen=True)
-class Part:
-    """A piece of a mesh with one flat sRGB colour in [0, 1]."""
-
-    mesh: trimesh.Trimesh
-    color: RGB
-
-
-MeshBuilder = Callable[[MeshSpec], list[Part]]
 
 
 @dataclass(frozen=True)
@@ -81,8 +67,6 @@ def _load_builtins() -> None:
     if _builtins_loaded:
         return
     _builtins_loaded = True
-    from cadsim.render.builtin_meshes import BUILTIN_BUILDERS
-
     for shape, (builder, size_dependent) in BUILTIN_BUILDERS.items():
         _REGISTRY.setdefault(shape, _Entry(builder, size_dependent))
 
@@ -121,24 +105,3 @@ def build_parts(spec: MeshSpec) -> list[Part]:
     if not parts or any(len(p.mesh.faces) == 0 for p in parts):
         raise ValueError(f"mesh builder for shape {spec.shape!r} returned an empty part list/mesh")
     return parts
-
-
-def fit_to_box(parts: list[Part], size: tuple[float, float, float] = (1.0, 1.0, 1.0)) -> list[Part]:
-    """Translate and scale (per axis) ``parts`` together so that their joint bounding box is centred
-    at the origin with extents ``size`` (object frame, metres)."""
-    bounds = np.array([p.mesh.bounds for p in parts])
-    lo, hi = bounds[:, 0].min(axis=0), bounds[:, 1].max(axis=0)
-    extent = np.where(hi - lo > 1e-9, hi - lo, 1.0)
-    T = np.diag(np.append(np.asarray(size, float) / extent, 1.0))
-    T[:3, 3] = -(lo + hi) / 2.0 * T.diagonal()[:3]
-    return transformed(parts, T)
-
-
-def transformed(parts: list[Part], matrix: np.ndarray) -> list[Part]:
-    """Copies of ``parts`` with the 4x4 ``matrix`` applied."""
-    out = []
-    for p in parts:
-        m = p.mesh.copy()
-        m.apply_transform(matrix)
-        out.append(Part(m, p.color))
-    return out

@@ -15,7 +15,7 @@ from functools import cache
 import numpy as np
 import trimesh
 
-from cadsim.render.meshes import RGB, Part
+from cadsim.render.mesh_parts import RGB, Part
 
 log = logging.getLogger(__name__)
 

@@ -1,0 +1,565 @@
+"""Generation: scenario → episodes of simulation → rendered, noised, detected pairs → dataset.
+
+Work is split into *episodes*: one simulation each, seeded by (root seed, episode index). An
+episode walks its snapshots in time order, tries the source's candidate observer pairs of each
+snapshot, and keeps at most one pair per snapshot (the first that passes DESIGN §5's acceptance)
+until it has ``pairs_per_episode`` pairs or the simulation ends. Record (episode, slot) is the
+slot-th pair episode ``episode`` accepted; the dataset is the first N records in (episode, slot)
+order. Records therefore do not depend on the number of workers, the order episodes finish in,
+or interruptions: an interrupted run is resumed by running the same command again.
+
+Episodes are tasks of a :class:`cadsim.generation.executor.Executor`: local worker processes
+(multiprocessing ``spawn``: libsumo allows one simulation per process, and a GL context must not
+be forked), this process (one worker), or a Dask cluster (``scheduler``; docs/scale-out.md). In a
+process whose tasks run on threads (a Dask worker), every episode runs on one dedicated thread,
+one at a time: never two simulations in one process, and the renderers' GL contexts stay on the
+thread that made them.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import contextvars
+import importlib
+import json
+import logging
+import math
+import os
+import shutil
+import signal
+import socket
+import threading
+import time
+from concurrent.futures import FIRST_COMPLETED, Future, wait
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cadsim.dataset import layout
+from cadsim.dataset.atomic_writer import (
+    remove_record,
+    remove_stale_temp,
+    write_file_atomic,
+    write_record,
+)
+from cadsim.dataset.checksum import record_dir_checksum
+from cadsim.dataset.detections import ViewDetections, is_acceptable_pair
+from cadsim.dataset.encoding import json_bytes
+from cadsim.dataset.manifest import (
+    DatasetError,
+    build_manifest,
+    generation_config,
+    read_manifest,
+    write_manifest,
+)
+from cadsim.dataset.record_format import PairRecord, ViewCapture, encode_record
+from cadsim.dataset.seeds import noise_seed, simulation_seed
+from cadsim.generation.executor import Executor, report_progress
+from cadsim.generation.executors import make_executor
+
+log = logging.getLogger(__name__)
+
+DEFAULT_PAIRS_PER_EPISODE = 5
+MIN_COVISIBLE = 3  # DESIGN §5: objects detected in both views
+MIN_EXCLUSIVE = 1  # DESIGN §5: objects each view detects that the other does not
+
+
+class GenerationError(RuntimeError):
+    """Generation cannot produce the requested dataset (bad output folder, too few pairs)."""
+
+
+@dataclass(frozen=True)
+class Stages:
+    """The pipeline's parts as ``"module:attribute"`` paths, resolved inside each worker (so the
+    main process imports neither SUMO nor pyrender, and tests can substitute fakes).
+
+    source(scenario, seed, workdir) -> TrafficSource; renderer(width, height) -> object with
+    ``render(snapshot, camera, exclude_ids) -> RenderedView``; noise_config(**scenario.noise);
+    apply_noise(depth, config, rng) -> noisy depth; detection_config(**scenario.detection);
+    detect(view, noisy_depth, objects, camera, config) -> Detections.
+    """
+
+    source: str = "cadsim.sources:make_source"
+    renderer: str = "cadsim.render:Renderer"
+    noise_config: str = "cadsim.sensing.depth_noise:NoiseConfig"
+    apply_noise: str = "cadsim.sensing.depth_noise:apply_depth_noise"
+    detection_config: str = "cadsim.sensing.detection:DetectionConfig"
+    detect: str = "cadsim.sensing.detection:detect"
+
+    def resolve(self, name: str):
+        module, _, attr = getattr(self, name).partition(":")
+        return getattr(importlib.import_module(module), attr)
+
+
+@dataclass(frozen=True)
+class Criteria:
+    """Episode size and acceptance. pairs_per_episode, pairs_per_snapshot: from the scenario's
+    ``[sampling]`` table; min_covisible, min_exclusive: DESIGN §5."""
+
+    pairs_per_episode: int = DEFAULT_PAIRS_PER_EPISODE
+    pairs_per_snapshot: int = 1
+    min_covisible: int = MIN_COVISIBLE
+    min_exclusive: int = MIN_EXCLUSIVE
+
+    @classmethod
+    def from_sampling(cls, sampling: dict | None) -> Criteria:
+        s = sampling or {}
+        crit = cls(
+            pairs_per_episode=int(s.get("pairs_per_episode", DEFAULT_PAIRS_PER_EPISODE)),
+            pairs_per_snapshot=int(s.get("pairs_per_snapshot", 1)),
+        )
+        for key in ("pairs_per_episode", "pairs_per_snapshot"):
+            if getattr(crit, key) < 1:
+                raise GenerationError(f"sampling.{key}: expected >= 1, got {getattr(crit, key)}")
+        return crit
+
+
+@dataclass(frozen=True)
+class EpisodeTask:
+    """Everything a worker needs to run one episode (picklable)."""
+
+    scenario: Any
+    out: str
+    root_seed: int
+    episode: int
+    max_slots: int
+    criteria: Criteria
+    stages: Stages
+
+
+@dataclass
+class EpisodeResult:
+    """What one episode did. accepted: records of this episode now on disk (a prefix of slots);
+    exhausted: the simulation ended before ``max_slots`` pairs were found."""
+
+    episode: int
+    sim_seed: int
+    max_slots: int
+    accepted: int
+    exhausted: bool
+    new_records: int = 0
+    snapshots: int = 0
+    candidates: int = 0
+    views: int = 0
+    seconds: float = 0.0
+    render_seconds: float = 0.0
+
+
+@dataclass
+class GenerationResult:
+    """Outcome of ``generate_dataset``. views/candidates/seconds count this run's work only."""
+
+    out: Path
+    pairs: int
+    checksum: str
+    episodes: int
+    new_records: int
+    views: int
+    candidates: int
+    seconds: float
+    render_seconds: float
+    episode_results: list[EpisodeResult] = field(default_factory=list)
+
+    @property
+    def views_per_s(self) -> float:
+        return self.views / self.render_seconds if self.render_seconds > 0 else 0.0
+
+    @property
+    def pairs_per_s(self) -> float:
+        return self.new_records / self.seconds if self.seconds > 0 else 0.0
+
+
+# --------------------------------------------------------------------------- one episode
+
+_renderers: dict[tuple[str, int, int], Any] = {}  # per process: scenes are built once, reused
+_simulation_thread: cf.ThreadPoolExecutor | None = None  # per process, made on first use
+_simulation_thread_lock = threading.Lock()
+
+
+def _renderer(stages: Stages, width: int, height: int):
+    key = (stages.renderer, width, height)
+    if key not in _renderers:
+        _renderers[key] = stages.resolve("renderer")(width, height)
+    return _renderers[key]
+
+
+def release_renderers() -> None:
+    """Close this process's cached renderers (frees their GL contexts before interpreter exit)."""
+    while _renderers:
+        _, renderer = _renderers.popitem()
+        close = getattr(renderer, "close", None)
+        if close is not None:
+            close()
+
+
+def _existing_prefix(out: Path, episode: int) -> tuple[int, tuple[float, int] | None]:
+    """Number of consecutive slots 0.. of ``episode`` on disk, and where the last one was found:
+    (snapshot time, index of the candidate pair in that snapshot), or None."""
+    records = layout.existing_records(out)
+    count = 0
+    while (episode, count) in records:
+        count += 1
+    if count == 0:
+        return 0, None
+    record = json.loads((records[(episode, count - 1)] / layout.RECORD_JSON).read_text())
+    return count, (float(record["time"]), int(record["meta"]["candidate"]))
+
+
+def _observe(stages, noise_cfg, det_cfg, renderer, snapshot, camera, exclude_id, seed):
+    """Render one camera, add depth noise with ``seed``, detect."""
+    rendered = renderer.render(snapshot, camera, [exclude_id] if exclude_id else [])
+    noisy = stages["apply_noise"](rendered.depth, noise_cfg, np.random.default_rng(seed))
+    det = stages["detect"](rendered, noisy, snapshot.objects, camera, det_cfg)
+    return rendered, ViewDetections.from_detections(det)
+
+
+def run_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
+    """Run one episode: write its records ``(episode, slot)`` for slots not yet on disk, up to
+    ``task.max_slots``. ``on_record()`` is called after each record written."""
+    t0 = time.perf_counter()
+    out = Path(task.out)
+    e = task.episode
+    sim_seed = simulation_seed(task.root_seed, e)
+    result = EpisodeResult(e, sim_seed, task.max_slots, accepted=0, exhausted=False)
+    slot, resume_after = _existing_prefix(out, e)
+    result.accepted = slot
+    if slot >= task.max_slots:
+        return result
+    crit = task.criteria
+    scenario = task.scenario
+    stages = {
+        name: task.stages.resolve(name)
+        for name in ("source", "noise_config", "apply_noise", "detection_config", "detect")
+    }
+    noise_cfg = stages["noise_config"](**(scenario.noise or {}))
+    det_cfg = stages["detection_config"](**(scenario.detection or {}))
+    # The work folder is shared by all episodes: sources cache networks there (atomically).
+    with stages["source"](scenario, sim_seed, out / layout.WORK_DIR) as source:
+        for snapshot in source.snapshots():
+            result.snapshots += 1
+            # Always asked, even when skipping, so a source's internal state evolves the same.
+            candidates = source.observer_pairs(snapshot)
+            first, taken = 0, 0
+            if resume_after is not None:  # fast-forward past what an earlier run wrote
+                if snapshot.time < resume_after[0]:
+                    continue
+                if snapshot.time == resume_after[0]:
+                    first = resume_after[1] + 1
+                    taken = _taken_at(out, e, slot, snapshot.time)
+                resume_after = None
+            for index in range(first, len(candidates)):
+                if taken >= crit.pairs_per_snapshot or slot >= task.max_slots:
+                    break
+                result.candidates += 1
+                pair = candidates[index]
+                record = _try_pair(
+                    task, stages, noise_cfg, det_cfg, snapshot, pair, index, slot, result
+                )
+                if record is None:
+                    continue
+                if write_record(out, layout.record_name(e, slot), encode_record(record)):
+                    result.new_records += 1
+                slot += 1
+                taken += 1
+                if on_record is not None:
+                    on_record()
+            if slot >= task.max_slots:
+                break
+        else:
+            result.exhausted = True
+    result.accepted = slot
+    result.seconds = time.perf_counter() - t0
+    summary = asdict(result)
+    write_file_atomic(
+        out / layout.EPISODES_DIR / layout.episode_summary_name(e), json_bytes(summary)
+    )
+    return result
+
+
+def _taken_at(out: Path, episode: int, slots: int, time_s: float) -> int:
+    """How many of the first ``slots`` records of ``episode`` come from the snapshot at time_s."""
+    records = layout.existing_records(out)
+    times = [
+        json.loads((records[(episode, s)] / layout.RECORD_JSON).read_text())["time"]
+        for s in range(slots)
+    ]
+    return sum(t == time_s for t in times)
+
+
+def _try_pair(
+    task, stages, noise_cfg, det_cfg, snapshot, pair, candidate, slot, result
+) -> PairRecord | None:
+    """Render, noise and detect both views of a candidate; the record if it is acceptable."""
+    crit = task.criteria
+    views = []
+    for v, camera, observer in ((1, pair.camera1, pair.observer1_id), (2, pair.camera2, pair.observer2_id)):  # fmt: skip
+        renderer = _renderer(task.stages, camera.width, camera.height)
+        seed = noise_seed(task.root_seed, task.episode, slot, v)
+        t = time.perf_counter()
+        rendered, det = _observe(
+            stages, noise_cfg, det_cfg, renderer, snapshot, camera, observer, seed
+        )
+        result.render_seconds += time.perf_counter() - t
+        result.views += 1
+        if len(det) < crit.min_covisible + crit.min_exclusive:
+            return None  # cannot pass, whatever the other view sees
+        capture = ViewCapture(
+            camera, observer, rendered.color, rendered.depth, rendered.instance, det, seed
+        )
+        views.append(capture)
+    if not is_acceptable_pair(
+        views[0].detections, views[1].detections, crit.min_covisible, crit.min_exclusive
+    ):
+        return None
+    meta = {"candidate": candidate, "pair": dict(pair.meta), "snapshot": dict(snapshot.meta)}
+    return PairRecord(
+        task.episode, slot, simulation_seed(task.root_seed, task.episode), float(snapshot.time),
+        list(snapshot.objects), views[0], views[1], meta,
+    )  # fmt: skip
+
+
+def _in_simulation_thread(fn, *args):
+    """Run ``fn(*args)`` on this process's one simulation thread and wait for it (so episodes
+    of a multi-threaded worker run one at a time, always on the same thread)."""
+    global _simulation_thread
+    with _simulation_thread_lock:
+        if _simulation_thread is None:
+            _simulation_thread = cf.ThreadPoolExecutor(1, thread_name_prefix="cadsim-simulation")
+    return _simulation_thread.submit(contextvars.copy_context().run, fn, *args).result()
+
+
+def _worker_run(task: EpisodeTask) -> EpisodeResult:
+    """The executor task: one episode; reports ("record", episode) after each record written."""
+    if not (Path(task.out) / layout.MANIFEST).is_file():
+        raise GenerationError(
+            f"{task.out}: not visible on worker host {socket.gethostname()} (no {layout.MANIFEST}); "
+            "the dataset folder must be on storage every worker mounts at the same path"
+        )
+    args = (task, lambda: report_progress(("record", task.episode)))
+    if threading.current_thread() is threading.main_thread():  # a pool process, or this one
+        return run_episode(*args)
+    return _in_simulation_thread(run_episode, *args)
+
+
+# --------------------------------------------------------------------------- orchestration
+
+
+def _load_scenario(scenario):
+    if isinstance(scenario, str | os.PathLike):
+        from cadsim.scenario import load_scenario
+
+        return load_scenario(scenario)
+    return scenario
+
+
+def _check_resume(out: Path, config: dict) -> None:
+    """Refuse to mix records of another scenario/seed/configuration into ``out``."""
+    if not (out / layout.MANIFEST).exists():
+        if any(layout.existing_records(out)):
+            raise GenerationError(f"{out}: has frame-pair records but no manifest; use a new --out")
+        return
+    try:
+        previous = read_manifest(out)["generation"]
+    except DatasetError as exc:
+        raise GenerationError(f"{out}: not resumable ({exc})") from exc
+    differing = sorted(k for k in set(config) | set(previous) if config.get(k) != previous.get(k))
+    if differing:
+        raise GenerationError(
+            f"{out}: holds a dataset generated with different {', '.join(differing)}; "
+            "use a new --out (or delete it) to generate this one"
+        )
+
+
+def _episode_done_on_disk(out: Path, episode: int, need: int) -> int | None:
+    """Records episode ``episode`` already provides if no simulation is needed for ``need``
+    records, else None."""
+    count, _ = _existing_prefix(out, episode)
+    if count >= need:
+        return count
+    path = out / layout.EPISODES_DIR / layout.episode_summary_name(episode)
+    if path.is_file():
+        summary = json.loads(path.read_text())
+        if summary.get("exhausted") and summary.get("accepted") == count:
+            return count
+    return None
+
+
+def generate_dataset(
+    scenario,
+    out: str | Path,
+    pairs: int | None = None,
+    seed: int | None = None,
+    workers: int | None = None,
+    stages: Stages | None = None,
+    progress: bool = True,
+    max_episodes: int | None = None,
+    scheduler: str | None = None,
+    executor: Executor | None = None,
+) -> GenerationResult:
+    """Generate (or resume) the dataset of ``scenario`` (a path or a loaded scenario) in ``out``.
+
+    pairs: N (default: the scenario's). seed: root seed (default: the scenario's). workers:
+    processes (default: one per core; 1: this process). scheduler: a Dask scheduler address
+    (default: ``$CADSIM_SCHEDULER``, else local processes); ``out`` must then be on storage every
+    worker mounts at the same path. executor: run episodes there instead (not closed here).
+    max_episodes: give up after this many episodes without N pairs (default
+    10·⌈N / pairs_per_episode⌉ + 10).
+    """
+    t0 = time.perf_counter()
+    scenario = _load_scenario(scenario)
+    stages = stages or Stages()
+    out = Path(out).resolve()
+    n_pairs = int(scenario.pairs if pairs is None else pairs)
+    if n_pairs < 1:
+        raise GenerationError(f"--pairs: expected >= 1, got {n_pairs}")
+    root_seed = int(scenario.seed if seed is None else seed)
+    if workers is not None and workers < 1:
+        raise GenerationError(f"--workers: expected >= 1, got {workers}")
+    crit = Criteria.from_sampling(scenario.sampling)
+    acceptance = {k: v for k, v in asdict(crit).items() if k != "pairs_per_episode"}
+    config = generation_config(scenario, root_seed, crit.pairs_per_episode, acceptance)
+    seed_source = "scenario" if seed is None else "--seed"
+    if max_episodes is None:
+        max_episodes = 10 * math.ceil(n_pairs / crit.pairs_per_episode) + 10
+
+    out.mkdir(parents=True, exist_ok=True)
+    _check_resume(out, config)
+    stale = remove_stale_temp(out)
+    if stale:
+        log.info("removed %d unfinished record(s) of an interrupted run", len(stale))
+    write_manifest(out, build_manifest(scenario, config, seed_source, [], {}, complete=False))
+
+    from tqdm import tqdm
+
+    bar = tqdm(total=n_pairs, unit="pair", desc="generate", disable=not progress or None)
+    done: dict[int, EpisodeResult | int] = {}  # episode -> result, or records found on disk
+    results: list[EpisodeResult] = []
+
+    def accepted(e: int) -> int:
+        d = done[e]
+        return d.accepted if isinstance(d, EpisodeResult) else d
+
+    def bump(k: int = 1) -> None:
+        bar.update(max(0, min(k, n_pairs - bar.n)))
+
+    own_executor = executor is None
+    if executor is None:
+        executor = make_executor(workers, scheduler)
+    workers = executor.workers
+    in_flight: dict[Future, tuple[int, int]] = {}
+    next_episode = 0
+    previous_sigterm = signal.getsignal(signal.SIGTERM)
+    if previous_sigterm in (signal.SIG_DFL, None):
+        signal.signal(signal.SIGTERM, _raise_interrupt)
+    try:
+        while True:
+            prefix_total, e = 0, 0
+            while e in done:
+                prefix_total += accepted(e)
+                e += 1
+            if prefix_total >= n_pairs:
+                break
+            while len(in_flight) < workers and next_episode < max_episodes:
+                before = range(next_episode)
+                known = sum(accepted(i) for i in before if i in done)
+                optimistic = known + sum(m for i, m in in_flight.values() if i < next_episode)
+                if optimistic >= n_pairs:
+                    break
+                need = min(crit.pairs_per_episode, n_pairs - known)
+                on_disk = _episode_done_on_disk(out, next_episode, need)
+                if on_disk is not None:
+                    done[next_episode] = on_disk
+                    bump(min(on_disk, need))
+                else:
+                    task = EpisodeTask(
+                        scenario, str(out), root_seed, next_episode, need, crit, stages
+                    )
+                    future = executor.submit(_worker_run, task, resources={"simulation": 1})
+                    in_flight[future] = (next_episode, need)
+                next_episode += 1
+            if not in_flight:
+                if next_episode >= max_episodes:
+                    raise GenerationError(
+                        f"{scenario.path}: only {prefix_total} of {n_pairs} acceptable pairs in "
+                        f"{max_episodes} episodes (each needs >= {crit.min_covisible} covisible "
+                        f"and >= {crit.min_exclusive} non-covisible objects per view); "
+                        "check the scenario's traffic and observer settings"
+                    )
+                continue
+            finished, _ = wait(list(in_flight), timeout=0.2, return_when=FIRST_COMPLETED)
+            bump(sum(1 for message in executor.progress() if message[0] == "record"))
+            for fut in finished:
+                e_done, _ = in_flight.pop(fut)
+                res = fut.result()
+                done[e_done] = res
+                results.append(res)
+                bump(res.accepted - res.new_records)
+        # Nothing is in flight here: an episode starts only if the ones before it cannot fill N.
+        if own_executor:
+            executor.close()
+    except BaseException:
+        for future in in_flight:
+            future.cancel()
+        if own_executor:
+            executor.terminate()  # running episodes' partial records: removed on resume
+        raise
+    finally:
+        signal.signal(signal.SIGTERM, previous_sigterm)
+        bar.close()
+        release_renderers()  # those episodes run in this process made (one worker)
+
+    records = _finalise_records(out, n_pairs)
+    shutil.rmtree(out / layout.WORK_DIR, ignore_errors=True)
+    # The episodes that define the dataset: 0 .. the last one contributing a record.
+    episodes = {e: simulation_seed(root_seed, e) for e in range(records[-1]["episode"] + 1)}
+    manifest = build_manifest(scenario, config, seed_source, records, episodes, complete=True)
+    write_manifest(out, manifest)
+    res = GenerationResult(
+        out=out,
+        pairs=len(records),
+        checksum=manifest["checksum"],
+        episodes=len(results),
+        new_records=sum(r.new_records for r in results),
+        views=sum(r.views for r in results),
+        candidates=sum(r.candidates for r in results),
+        seconds=time.perf_counter() - t0,
+        render_seconds=sum(r.render_seconds for r in results),
+        episode_results=sorted(results, key=lambda r: r.episode),
+    )
+    log.info(
+        "%s: %d pairs (%d new) from %d episode(s) in %.1f s; checksum %s",
+        out, res.pairs, res.new_records, res.episodes, res.seconds, res.checksum[:12],
+    )  # fmt: skip
+    return res
+
+
+def _raise_interrupt(signum, frame) -> None:
+    raise KeyboardInterrupt(f"signal {signum}")
+
+
+def _finalise_records(out: Path, n_pairs: int) -> list[dict]:
+    """The first ``n_pairs`` records in (episode, slot) order, with checksums. Records beyond
+    them (an episode asked for more pairs than turned out to be missing, or an earlier run with
+    a larger N) are removed so that the folder holds exactly the dataset."""
+    on_disk = layout.existing_records(out)
+    keep = list(on_disk)[:n_pairs]
+    if len(keep) < n_pairs:
+        raise GenerationError(f"{out}: expected {n_pairs} records on disk, found {len(keep)}")
+    for ident in list(on_disk)[n_pairs:]:
+        remove_record(out, layout.record_name(*ident))
+    entries = []
+    for episode, slot in keep:
+        path = on_disk[(episode, slot)]
+        record = json.loads((path / layout.RECORD_JSON).read_text())
+        entries.append(
+            {
+                "name": path.name,
+                "episode": episode,
+                "slot": slot,
+                "sim_seed": int(record["sim_seed"]),
+                "checksum": record_dir_checksum(path, layout.RECORD_FILES),
+            }
+        )
+    return entries

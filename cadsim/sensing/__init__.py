@@ -1,0 +1,1 @@
+"""Sensing: depth noise, the detection adapter, appearance features and box projection (pixels -> nodes)."""

@@ -1,0 +1,182 @@
+"""Detection adapter (DESIGN §6): rendered view + noisy depth -> detections a matcher can use.
+
+Oracle instance masks with realistic filtering. For each ``target`` object in the instance map:
+
+1. visible pixels ≥ ``min_pixels``;
+2. median *clean* depth of its mask ≤ ``max_depth_m`` (filters use clean depth so that the set of
+   detections does not change with the noise rate; only positions do);
+3. truncation: if its mask's box comes within ``border_margin_px`` of the image border, the part
+   of its projected 3-D bounding box inside the image must be ≥ 1 - ``max_truncation``;
+4. occlusion: visible pixels / in-image area of the projected 3-D bounding box (an upper bound of
+   the unoccluded silhouette, so this ratio is conservative) must be ≥ ``min_visible_fraction``.
+
+Position: the ray through the mask's centroid pixel at the median *noisy* depth of the mask, in the
+camera frame (OpenCV, metres). That point lies on the visible surface, in front of the object's
+centre; with ``surface_to_center`` it is pushed along the ray by ``centre_offset_along`` (the mean
+depth of a box's visible surface in front of its centre, from the object's 3-D box: an oracle box
+size and heading, as a 3-D detector would estimate them). Features:
+``cadsim.sensing.features``. The ground-truth object id is kept beside the features, never in them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import ndimage
+
+from cadsim.camera import Camera
+from cadsim.config_tables import check_number, config_from_table
+from cadsim.render.view import RenderedView
+from cadsim.sensing.box_projection import projected_box_areas
+from cadsim.sensing.features import FEATURE_DIM, object_features
+from cadsim.world import WorldObject
+
+
+@dataclass(frozen=True)
+class DetectionConfig:
+    """The ``[detection]`` table of a scenario file (see the module docstring for each filter)."""
+
+    min_pixels: int = 40
+    border_margin_px: int = 2
+    max_truncation: float = 0.5
+    min_visible_fraction: float = 0.15
+    max_depth_m: float = 80.0
+    surface_to_center: bool = True
+
+    def __post_init__(self) -> None:
+        check_number("[detection]", "min_pixels", self.min_pixels, minimum=1, integer=True)
+        check_number(
+            "[detection]", "border_margin_px", self.border_margin_px, minimum=0, integer=True
+        )
+        check_number("[detection]", "max_truncation", self.max_truncation, minimum=0.0, maximum=1.0)
+        check_number(
+            "[detection]",
+            "min_visible_fraction",
+            self.min_visible_fraction,
+            minimum=0.0,
+            maximum=1.0,
+        )
+        check_number("[detection]", "max_depth_m", self.max_depth_m, minimum=0.0)
+        if not isinstance(self.surface_to_center, bool):
+            raise TypeError(
+                f"[detection] surface_to_center must be true or false, got {self.surface_to_center!r}"
+            )
+
+    @classmethod
+    def from_table(cls, table: Mapping, where: str = "[detection]") -> DetectionConfig:
+        """Build from a scenario-file table; unknown keys/bad values raise naming ``where``."""
+        return config_from_table(cls, table, where, "[detection]")
+
+
+@dataclass
+class Detections:
+    """k detections of one view. positions: (k, 3) camera frame (OpenCV: x right, y down, z
+    forward), metres, from the noisy depth. boxes: (k, 4) pixel box x0, y0, x1, y1 (pixel edges).
+    features: (k, FEATURE_DIM) float32, non-negative. object_ids, classes: ground truth, k each
+    (never part of the features). pixels: (k,) visible pixel counts."""
+
+    positions: np.ndarray
+    boxes: np.ndarray
+    features: np.ndarray
+    object_ids: list[str] = field(default_factory=list)
+    classes: list[str] = field(default_factory=list)
+    pixels: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+
+    def __len__(self) -> int:
+        return len(self.object_ids)
+
+    @classmethod
+    def empty(cls) -> Detections:
+        return cls(
+            positions=np.zeros((0, 3)),
+            boxes=np.zeros((0, 4)),
+            features=np.zeros((0, FEATURE_DIM), dtype=np.float32),
+        )
+
+
+def centre_offset_along(obj: WorldObject, ray_world: np.ndarray) -> float:
+    """How far (metres) the centre of the object's 3-D box lies behind its visible surface along a
+    unit viewing direction: the area-weighted mean over the visible faces, which for a box is
+    volume / (2 · area projected along the ray), i.e. L·W·H / (2 (W·H|r_x| + L·H|r_y| + L·W|r_z|))
+    with r in the object's axes (L/2 seen end-on, W/2 seen side-on)."""
+    r = np.abs(ray_world @ obj.pose()[:3, :3])  # |components| in the object's x, y, z axes
+    L, W, Hh = (max(float(v), 1e-6) for v in obj.size)
+    projected = W * Hh * r[0] + L * Hh * r[1] + L * W * r[2]
+    return 0.5 * L * W * Hh / projected
+
+
+def detect(
+    view: RenderedView,
+    noisy_depth: np.ndarray,
+    objects: Sequence[WorldObject],
+    camera: Camera,
+    config: DetectionConfig,
+) -> Detections:
+    """Detections of the ``target`` objects visible in ``view`` (see the module docstring).
+
+    objects: the snapshot's object list, which ``view.instance`` indexes. noisy_depth: (H, W)
+    metres, the view's depth after ``apply_depth_noise``."""
+    h, w = view.shape
+    noisy = np.asarray(noisy_depth)
+    if noisy.shape != (h, w):
+        raise ValueError(f"noisy_depth must have the view's shape {(h, w)}, got {noisy.shape}")
+    if (camera.width, camera.height) != (w, h):
+        raise ValueError(f"camera is {camera.width}x{camera.height} but the view is {w}x{h}")
+    n = len(objects)
+    inst = view.instance.ravel()
+    if inst.size and int(inst.max()) >= n:
+        raise ValueError(
+            f"view.instance refers to object index {int(inst.max())} but only {n} objects were given"
+        )
+    counts = np.bincount(inst + 1, minlength=n + 1)  # [0] = background
+    candidates = [i for i in range(n) if objects[i].target and counts[i + 1] >= config.min_pixels]
+    if not candidates:
+        return Detections.empty()
+    # Pixels of every object, grouped: a stable sort by label, split at the cumulative counts.
+    order = np.argsort(inst, kind="stable")
+    starts = np.concatenate([[0], np.cumsum(counts)])
+    boxes_px = ndimage.find_objects(view.instance + 1, max_label=n)
+    clean = view.depth.ravel()
+    noisy = noisy.ravel()
+    R = camera.rotation_cam_to_world()
+    m = config.border_margin_px
+    out_pos, out_box, out_feat, out_ids, out_cls, out_pix = [], [], [], [], [], []
+    for i in candidates:
+        obj = objects[i]
+        pix = order[starts[i + 1] : starts[i + 2]]
+        if np.median(clean[pix]) > config.max_depth_m:
+            continue
+        rows, cols = boxes_px[i]
+        x0, y0, x1, y1 = cols.start, rows.start, cols.stop, rows.stop
+        full_area, in_image = projected_box_areas(obj, camera)
+        touches_border = x0 <= m or y0 <= m or x1 >= w - m or y1 >= h - m
+        if touches_border and full_area > 0 and in_image / full_area < 1.0 - config.max_truncation:
+            continue
+        if in_image > 0 and len(pix) / in_image < config.min_visible_fraction:
+            continue
+        v, u = np.divmod(pix, w)
+        z = float(np.median(noisy[pix]))
+        p = camera.back_project(np.array([[u.mean() + 0.5, v.mean() + 0.5]]), np.array([z]))[0]
+        if config.surface_to_center:
+            ray = p / np.linalg.norm(p)
+            p = p + centre_offset_along(obj, R @ ray) * ray
+        mask_crop = np.zeros((y1 - y0, x1 - x0), dtype=np.uint8)
+        mask_crop[v - y0, u - x0] = 255
+        out_feat.append(object_features(view.color, (x0, y0, x1, y1), mask_crop, obj.cls, obj.size))
+        out_pos.append(p)
+        out_box.append((x0, y0, x1, y1))
+        out_ids.append(obj.id)
+        out_cls.append(obj.cls)
+        out_pix.append(len(pix))
+    if not out_ids:
+        return Detections.empty()
+    return Detections(
+        positions=np.array(out_pos, dtype=float),
+        boxes=np.array(out_box, dtype=float),
+        features=np.array(out_feat, dtype=np.float32),
+        object_ids=out_ids,
+        classes=out_cls,
+        pixels=np.array(out_pix, dtype=np.int64),
+    )

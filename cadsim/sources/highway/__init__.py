@@ -1,0 +1,1 @@
+"""highway-env's intersection as a traffic source. Imports no other source."""

@@ -1,0 +1,90 @@
+"""Reading a SUMO configuration file (``.sumocfg``) without running SUMO.
+
+SUMO resolves a relative path in a config against the config's folder, and a relative output path
+in an additional file against that additional file's folder. To run an externally written
+scenario unedited without writing into its folder, the source keeps the config's inputs and
+redirects every output (see :mod:`cadsim.sources.sumo.command`).
+"""
+
+from __future__ import annotations
+
+import re
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+
+# SUMO's option names and their synonyms for the inputs the source needs to know.
+NET_OPTIONS = ("net-file", "n", "net")
+ROUTE_OPTIONS = ("route-files", "r", "routes")
+ADDITIONAL_OPTIONS = ("additional-files", "a", "additional")
+# Output options whose names do not end in "-output".
+_OTHER_OUTPUTS = {
+    "netstate-dump",
+    "netstate",
+    "ndump",
+    "log",
+    "l",
+    "log-file",
+    "message-log",
+    "error-log",
+}
+
+
+class SumoConfigError(ValueError):
+    """A .sumocfg file cannot be read or lacks a network."""
+
+
+@dataclass(frozen=True)
+class SumoConfig:
+    """Options of a .sumocfg. options: name -> value as written. net/routes/additional: absolute
+    paths of the input files. outputs: output option name -> value as written."""
+
+    path: Path
+    options: dict[str, str]
+    net: Path | None
+    routes: list[Path] = field(default_factory=list)
+    additional: list[Path] = field(default_factory=list)
+    outputs: dict[str, str] = field(default_factory=dict)
+
+
+def read_sumocfg(path: str | Path) -> SumoConfig:
+    """Parse ``path``; raise :class:`SumoConfigError` if it is not XML or names no network."""
+    path = Path(path).resolve()
+    try:
+        root = ET.parse(path).getroot()
+    except (ET.ParseError, OSError) as exc:
+        raise SumoConfigError(f"{path}: not a readable SUMO config ({exc})") from None
+    options: dict[str, str] = {}
+    for element in root.iter():
+        if element is not root and "value" in element.attrib:
+            options[element.tag] = element.attrib["value"]
+
+    def files(names: tuple[str, ...]) -> list[Path]:
+        value = next((options[n] for n in names if n in options), "")
+        return [_resolve(path.parent, v) for v in split_file_list(value)]
+
+    nets = files(NET_OPTIONS)
+    outputs = {
+        name: value
+        for name, value in options.items()
+        if (name.endswith("-output") or name in _OTHER_OUTPUTS)
+        and value.strip().lower() not in ("", "true", "false")
+    }
+    return SumoConfig(
+        path=path,
+        options=options,
+        net=nets[0] if nets else None,
+        routes=files(ROUTE_OPTIONS),
+        additional=files(ADDITIONAL_OPTIONS),
+        outputs=outputs,
+    )
+
+
+def split_file_list(value: str) -> list[str]:
+    """SUMO file lists are separated by commas (and tolerate spaces)."""
+    return [v for v in re.split(r"[,\s]+", value.strip()) if v]
+
+
+def _resolve(base: Path, value: str) -> Path:
+    p = Path(value).expanduser()
+    return (p if p.is_absolute() else base / p).resolve()

@@ -1,0 +1,220 @@
+"""The ``[traffic]`` table of ``source = "sumo"`` (documented key by key in docs/scenarios.md).
+
+Exactly one of three ways to get a road network:
+  * ``sumocfg``: an existing SUMO scenario (its net, routes and additional files, unedited);
+  * ``net`` (+ ``routes``): an existing network and route files, or random demand (``[traffic.demand]``);
+  * ``[traffic.network]``: a grid of signalised junctions built with netgenerate at run time
+    (one junction = a four-arm intersection), with random demand from ``[traffic.demand]``.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+
+from cadsim.field_checks import hex_color_list, positive_range
+from cadsim.scenario import Field, ScenarioContext, Table, register_source_schema
+from cadsim.sources.sumo.build import BUILTIN_TYPES
+from cadsim.sources.sumo.config import SumoConfigError, read_sumocfg
+
+HEX_COLOR = "a list of colours written '#rrggbb'"
+
+
+NETWORK = Table(
+    {
+        "junctions": Field(
+            int, 1, "junctions per side of the grid (1: one four-arm intersection)", ge=1
+        ),
+        "block_length": Field(
+            float, 200.0, "distance between neighbouring junctions, metres", gt=0
+        ),
+        "arm_length": Field(float, 150.0, "length of the roads leaving the grid, metres", gt=0),
+        "lanes": Field(int, 2, "lanes per direction", ge=1, le=6),
+        "speed": Field(float, 13.89, "speed limit, m/s", gt=0),
+        "traffic_lights": Field(bool, True, "signalise the junctions (else priority junctions)"),
+        "sidewalks": Field(bool, True, "sidewalks along every road"),
+        "sidewalk_width": Field(float, 2.0, "sidewalk width, metres", gt=0),
+        "crossings": Field(bool, True, "pedestrian crossings at the junctions"),
+        "extra_args": Field(list, [], "further netgenerate options, passed as given", item=str),
+    },
+    when_absent="omit",
+)
+
+DEMAND = Table(
+    {
+        "vtypes": Field(str, doc="vType / vTypeDistribution file", path="file"),
+        "vehicle_type": Field(str, "vehicles", "vType or distribution id of motor vehicles"),
+        "vehicle_period": Field(float, 1.0, "mean seconds between vehicle departures", gt=0),
+        "bicycle_type": Field(str, "bicycles", "vType or distribution id of bicycles"),
+        "bicycle_period": Field(
+            float, 8.0, "mean seconds between bicycle departures (0: no bicycles)", ge=0
+        ),
+        "person_type": Field(str, "persons", "vType or distribution id of pedestrians"),
+        "person_period": Field(
+            float, 3.0, "mean seconds between pedestrian departures (0: no pedestrians)", ge=0
+        ),
+        "end": Field(float, 900.0, "last departure time, seconds", gt=0),
+    },
+    when_absent="omit",
+)
+
+SCENE = Table(
+    {
+        "radius": Field(
+            float, 200.0, "objects within this distance (m) of an observed junction are kept", gt=0
+        ),
+        "road": Field(bool, True, "road surface boxes and a ground plane"),
+        "buildings": Field(bool, True, "building blocks between the roads"),
+        "building_frontage": Field(float, 18.0, "building length along the street, metres", gt=0),
+        "building_depth": Field(float, 14.0, "building depth away from the street, metres", gt=0),
+        "building_gap": Field(float, 4.0, "gap between neighbouring buildings, metres", ge=0),
+        "building_setback": Field(
+            float, 4.0, "clearance between a building and any lane or sidewalk, metres", ge=0
+        ),
+        "building_heights": Field(
+            list,
+            [6.0, 20.0],
+            "minimum and maximum building height, metres",
+            item=float,
+            check=positive_range,
+            expect="[min, max] with 0 < min <= max (metres)",
+        ),
+        "building_colors": Field(
+            list,
+            ["#b8a58c", "#9e9e9e", "#c9c2b2", "#8c5a46", "#d8d8d0", "#6f7a80"],
+            "facade colours",
+            item=str,
+            check=hex_color_list,
+            expect=HEX_COLOR,
+        ),
+        "signs": Field(bool, True, "road signs on the approaches and exits of observed junctions"),
+        "sign_distance": Field(float, 20.0, "distance of a sign from the junction, metres", gt=0),
+        "traffic_lights": Field(bool, True, "a pole with a signal head per signalised approach"),
+    }
+)
+
+
+def check_traffic(t: dict, ctx: ScenarioContext, prefix: str) -> None:
+    """Cross-key rules: one network source; demand where needed; files inside a sumocfg exist;
+    vType ids exist; an existing net has a junction that two vehicles can approach."""
+    given = [k for k in ("sumocfg", "net", "network") if t[k] is not None]
+    if len(given) != 1:
+        problem = "none given" if not given else "several given (" + ", ".join(given) + ")"
+        raise ctx.error(
+            prefix + ".sumocfg",
+            problem,
+            "exactly one of traffic.sumocfg, traffic.net or a [traffic.network] table",
+        )
+    if t["network"] is not None and t["demand"] is None:
+        raise ctx.error(
+            prefix + ".demand", "missing", "a [traffic.demand] table for a generated network"
+        )
+    if t["sumocfg"] is not None and t["demand"] is not None:
+        raise ctx.error(
+            prefix + ".demand", "not allowed with traffic.sumocfg", "demand from the sumocfg itself"
+        )
+    if t["net"] is not None and t["demand"] is None and not t["routes"]:
+        raise ctx.error(
+            prefix + ".routes",
+            "no routes for traffic.net",
+            "route files or a [traffic.demand] table",
+        )
+    if t["demand"] is not None:
+        _check_vtypes(t["demand"], ctx, prefix + ".demand")
+    if t["sumocfg"] is not None:
+        net = _check_sumocfg(t["sumocfg"], ctx, prefix + ".sumocfg")
+        require_usable_junction(net, ctx, prefix + ".sumocfg")
+    elif t["net"] is not None:
+        require_usable_junction(t["net"], ctx, prefix + ".net")
+
+
+def _check_sumocfg(path: str, ctx: ScenarioContext, key: str) -> str:
+    try:
+        cfg = read_sumocfg(path)
+    except SumoConfigError as exc:
+        raise ctx.error(key, str(exc), "a SUMO configuration (XML)") from None
+    if cfg.net is None:
+        raise ctx.error(key, f"{path} names no net-file", "a sumocfg with a net-file")
+    for p in [cfg.net, *cfg.routes, *cfg.additional]:
+        if not p.is_file():
+            raise ctx.error(
+                key, f"{path} refers to {str(p)!r}, which does not exist", "its input files"
+            )
+    return str(cfg.net)
+
+
+def _check_vtypes(demand: dict, ctx: ScenarioContext, key: str) -> None:
+    try:
+        root = ET.parse(demand["vtypes"]).getroot()
+    except ET.ParseError as exc:
+        raise ctx.error(
+            key + ".vtypes", f"not XML ({exc})", "a SUMO additional file with vTypes"
+        ) from None
+    ids = {e.get("id") for e in root.iter() if e.tag in ("vType", "vTypeDistribution")}
+    ids |= BUILTIN_TYPES
+    for name in ("vehicle", "bicycle", "person"):
+        type_id = demand[f"{name}_type"]
+        if (name == "vehicle" or demand[f"{name}_period"] > 0) and type_id not in ids:
+            raise ctx.error(
+                f"{key}.{name}_type",
+                f"{type_id!r} is not defined in {demand['vtypes']}",
+                "one of " + ", ".join(sorted(i for i in ids if i)),
+            )
+
+
+def require_usable_junction(net_path: str, ctx: ScenarioContext, key: str) -> None:
+    """Raise unless the net has a junction that two vehicles can approach on different arms."""
+    from cadsim.sources.sumo.network import RoadNetwork
+
+    try:
+        network = RoadNetwork(net_path)
+    except Exception as exc:  # sumolib raises assorted errors on a broken net
+        raise ctx.error(
+            key, f"cannot read the network {net_path} ({exc})", "a SUMO .net.xml"
+        ) from None
+    if not network.junction_arms:
+        raise ctx.error(
+            key,
+            f"the network {net_path} has no junction that vehicles can approach on two different arms "
+            f"({len(network.net.getNodes())} nodes)",
+            "a net with at least one junction joining three or more roads",
+        )
+
+
+TRAFFIC = Table(
+    {
+        "sumocfg": Field(str, None, "an existing SUMO configuration", path="file"),
+        "net": Field(str, None, "an existing .net.xml", path="file"),
+        "routes": Field(
+            list, [], "route files (with net; added to a sumocfg's)", item=str, path="files"
+        ),
+        "additional": Field(
+            list, [], "additional files (with net; added to a sumocfg's)", item=str, path="files"
+        ),
+        "step_length": Field(
+            float, None, "simulation step, seconds (default 0.1; a sumocfg's own)", gt=0
+        ),
+        "vehicle_colors": Field(
+            list,
+            ["#f0f0f0", "#b4b4b8", "#1e1e1e", "#a01e1e", "#1e3c8c", "#5a5a5a"],
+            "colours of vehicles whose route files give none",
+            item=str,
+            check=hex_color_list,
+            expect=HEX_COLOR,
+        ),
+        "person_colors": Field(
+            list,
+            ["#303c96", "#963028", "#2d2d2d", "#d2c8b4", "#2d6e3c"],
+            "colours of pedestrians whose route files give none",
+            item=str,
+            check=hex_color_list,
+            expect=HEX_COLOR,
+        ),
+        "network": NETWORK,
+        "demand": DEMAND,
+        "scene": SCENE,
+    },
+    check=check_traffic,
+)
+
+
+register_source_schema("sumo", TRAFFIC)

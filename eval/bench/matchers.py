@@ -1,0 +1,100 @@
+"""`make bench` sections "tensor", "matchers" and "targets": matcher speed on random CoID-like
+problems (see :func:`eval.bench.bench_problem`)."""
+
+from __future__ import annotations
+
+import argparse
+
+from eval.bench import Target, _peak_rss_mb, _row, bench_problem, timed
+
+
+def tensor_section(args: argparse.Namespace) -> list[Target]:
+    from matchers.tensor_build import build_tensor
+
+    print(_row(["n = m", "recipe", "entries", "MB stored", "build s", "peak RSS MB"]))
+    print("|---|---|---|---|---|---|")
+    for n in args.sizes:
+        problem = bench_problem(n)
+        for recipe in ("paper", "duchenne"):
+            secs, tensor = timed(lambda p=problem, r=recipe: build_tensor(p, r, 0), args.repeat)
+            mb = (tensor.indices.nbytes + tensor.values.nbytes) / 2**20
+            print(
+                _row(
+                    [
+                        str(n),
+                        recipe,
+                        f"{tensor.nnz:,}",
+                        f"{mb:.1f}",
+                        f"{secs:.4f}",
+                        f"{_peak_rss_mb():.0f}",
+                    ]
+                ),
+                flush=True,
+            )
+    return []
+
+
+def matchers_section(args: argparse.Namespace) -> list[Target]:
+    from eval.validation.matcher_options import HYPERGRAPH_MATCHERS
+    from matchers import available, get
+    from matchers.tensor_build import build_tensor
+
+    names = args.matchers or available()
+    print(_row(["n = m", "tensor build s", *[f"{name} s" for name in names]]))
+    print("|" + "---|" * (2 + len(names)))
+    for n in args.sizes:
+        problem = bench_problem(n)
+        build_s, tensor = timed(lambda p=problem: build_tensor(p, "paper", 0), 1)
+        cells = [str(n), f"{build_s:.4f}"]
+        for name in names:
+            opts = {"tensor": tensor} if name in HYPERGRAPH_MATCHERS else {}
+            matcher = get(name)
+            secs, _ = timed(lambda f=matcher, p=problem, o=opts: f(p, seed=0, **o), args.repeat)
+            cells.append(f"{secs:.4f}")
+        print(_row(cells), flush=True)
+        del tensor
+    print("\n(hypergraph matchers timed on the prebuilt 'paper' tensor; add the build column)")
+    return []
+
+
+def targets_section(args: argparse.Namespace) -> list[Target]:
+    import pygmtools as pygm
+
+    from matchers import get
+    from matchers.indexing import to_column_major
+    from matchers.pairwise import pairwise_affinity
+
+    targets = []
+    problem = bench_problem(20)
+    secs, _ = timed(lambda: get("maximin")(problem, seed=0), max(args.repeat, 5))
+    targets.append(Target("tensor build + maximin, 20 vs 20 (default tensor)", secs, 0.050))
+
+    big = bench_problem(100)
+    secs, m = timed(lambda: get("rrwhm")(big, seed=0, neighbours=300), 1)
+    targets.append(Target("tensor build + RRWHM, 100 vs 100, 300 neighbours/triangle", secs, 5.0))
+
+    pygm.set_backend("numpy")
+    for n in (20, 40):
+        p = bench_problem(n)
+        k_ours = pairwise_affinity(p)
+        k_pygm = to_column_major(k_ours, n, n)
+        ours_s, _ = timed(
+            lambda k=k_ours, p=p: get("rrwm")(p, seed=0, affinity=k, **PYGM_RRWM), args.repeat
+        )
+        pygm_s, _ = timed(lambda k=k_pygm, n=n: pygm.rrwm(k, n, n, **PYGM_RRWM_NATIVE), args.repeat)
+        targets.append(
+            Target(
+                f"our rrwm / pygmtools rrwm, same {n}x{n} matrix and settings",
+                ours_s / pygm_s,
+                1.0,
+                "x",
+            )
+        )
+        print(f"rrwm {n} vs {n}: ours {ours_s * 1e3:.1f} ms, pygmtools {pygm_s * 1e3:.1f} ms")
+    return targets
+
+
+# pygmtools' RRWM defaults, in its own names and in ours (jump = its alpha: the weight of the
+# reweighted jump). Our Sinkhorn runs to tolerance 1e-3 (cap 1000 sweeps) instead of 20 half-steps.
+PYGM_RRWM_NATIVE = {"max_iter": 50, "sk_iter": 20, "alpha": 0.2, "beta": 30}
+PYGM_RRWM = {"jump": 0.2, "beta": 30.0, "max_iter": 50}
