@@ -78,3 +78,21 @@ def test_redetect_keeps_loaded_images_and_identity(dataset):
     other = pair.redetect(0.01, seed=2)
     assert other.color1 is pair.color1 and other.name == pair.name and other.index == pair.index
     assert Path(other.path) == Path(pair.path)
+
+
+def test_redetect_reuses_stored_features_instead_of_recomputing(dataset, monkeypatch):
+    from cadsim.render.view import RenderedView
+    from cadsim.sensing import detection
+    from cadsim.sensing.detection import DetectionConfig
+
+    pair = dataset[0]
+    cfg = DetectionConfig(**SCENARIO.detection)
+    view = RenderedView(pair.color1, pair.depth1, pair.instance1)
+    recomputed = detection.detect(view, pair.depth1, pair.objects, pair.cameras[0], cfg)
+    calls = []
+    real = detection.object_features
+    monkeypatch.setattr(detection, "object_features", lambda *a: calls.append(a) or real(*a))
+    again = pair.redetect(0.03, seed=9)
+    assert calls == []  # every detected object already had stored features
+    np.testing.assert_array_equal(again.view1.features, recomputed.features)
+    np.testing.assert_array_equal(again.view1.features, pair.view1.features)

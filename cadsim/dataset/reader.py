@@ -165,7 +165,9 @@ class FramePair:
         """This pair re-detected at depth-noise rate ``noise_rate`` (σ = noise_rate · d²): noise
         seeded by (seed, episode, slot, view) applied to the stored clean depth, then detection;
         nothing is re-rendered. Same arguments ⇒ identical detections; rate 0 ⇒ clean-depth
-        detections; the dataset's root seed and noise rate ⇒ the stored detections."""
+        detections; the dataset's root seed and noise rate ⇒ the stored detections. Features are
+        the stored ones (they depend on colour and instance map only), so only positions are
+        re-estimated."""
         from cadsim.render.view import RenderedView
         from cadsim.sensing.depth_noise import NoiseConfig, apply_depth_noise
         from cadsim.sensing.detection import DetectionConfig, detect
@@ -175,13 +177,17 @@ class FramePair:
         noise_cfg = dataclasses.replace(NoiseConfig(**self._noise), noise_rate=float(noise_rate))
         det_cfg = DetectionConfig(**self._detection)
         views = []
-        for v, color, depth, instance, camera in (
-            (1, self.color1, self.depth1, self.instance1, self.cameras[0]),
-            (2, self.color2, self.depth2, self.instance2, self.cameras[1]),
+        for v, color, depth, instance, camera, stored in (
+            (1, self.color1, self.depth1, self.instance1, self.cameras[0], self.view1),
+            (2, self.color2, self.depth2, self.instance2, self.cameras[1], self.view2),
         ):
             rng = np.random.default_rng(noise_seed(seed, self.episode, self.slot, v))
             noisy = apply_depth_noise(depth, noise_cfg, rng)
-            det = detect(RenderedView(color, depth, instance), noisy, self.objects, camera, det_cfg)
+            # Appearance does not depend on depth: reuse the stored features, re-estimate positions.
+            known = dict(zip(stored.object_ids, stored.features, strict=True))
+            det = detect(
+                RenderedView(color, depth, instance), noisy, self.objects, camera, det_cfg, known
+            )
             views.append(ViewDetections.from_detections(det))
         pair = FramePair(
             self.path,

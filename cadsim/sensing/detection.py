@@ -113,11 +113,16 @@ def detect(
     objects: Sequence[WorldObject],
     camera: Camera,
     config: DetectionConfig,
+    known_features: Mapping[str, np.ndarray] | None = None,
 ) -> Detections:
     """Detections of the ``target`` objects visible in ``view`` (see the module docstring).
 
     objects: the snapshot's object list, which ``view.instance`` indexes. noisy_depth: (H, W)
-    metres, the view's depth after ``apply_depth_noise``."""
+    metres, the view's depth after ``apply_depth_noise``. known_features: object id -> its feature
+    row from an earlier detection of this same view; used instead of recomputing it. Which objects
+    are detected and what they look like depend only on colour, instance map and clean depth, never
+    on the noisy depth, so a re-detection at another noise rate may pass the stored features and
+    only positions are re-estimated."""
     h, w = view.shape
     noisy = np.asarray(noisy_depth)
     if noisy.shape != (h, w):
@@ -162,9 +167,14 @@ def detect(
         if config.surface_to_center:
             ray = p / np.linalg.norm(p)
             p = p + centre_offset_along(obj, R @ ray) * ray
-        mask_crop = np.zeros((y1 - y0, x1 - x0), dtype=np.uint8)
-        mask_crop[v - y0, u - x0] = 255
-        out_feat.append(object_features(view.color, (x0, y0, x1, y1), mask_crop, obj.cls, obj.size))
+        if known_features is not None and obj.id in known_features:
+            out_feat.append(known_features[obj.id])
+        else:
+            mask_crop = np.zeros((y1 - y0, x1 - x0), dtype=np.uint8)
+            mask_crop[v - y0, u - x0] = 255
+            out_feat.append(
+                object_features(view.color, (x0, y0, x1, y1), mask_crop, obj.cls, obj.size)
+            )
         out_pos.append(p)
         out_box.append((x0, y0, x1, y1))
         out_ids.append(obj.id)
