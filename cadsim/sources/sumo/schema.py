@@ -10,12 +10,15 @@ Exactly one of three ways to get a road network:
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 from cadsim.field_checks import hex_color_list, positive_range
 from cadsim.limits import MAX_SIMULATED_SECONDS
 from cadsim.scenario import Field, ScenarioContext, Table, register_source_schema
 from cadsim.sources.sumo.build import BUILTIN_TYPES
 from cadsim.sources.sumo.config import SumoConfigError, read_sumocfg
+from cadsim.sources.sumo.confinement import ConfinementError, check_loadable
+from cadsim.sources.sumo.options import OptionError, check_netgenerate_args, sumocfg_options
 
 HEX_COLOR = "a list of colours written '#rrggbb'"
 # Bounds where memory or run time grows with the value (docs/reliability.md).
@@ -52,7 +55,13 @@ NETWORK = Table(
         "sidewalks": Field(bool, True, "sidewalks along every road"),
         "sidewalk_width": Field(float, 2.0, "sidewalk width, metres", gt=0, le=20),
         "crossings": Field(bool, True, "pedestrian crossings at the junctions"),
-        "extra_args": Field(list, [], "further netgenerate options, passed as given", item=str),
+        "extra_args": Field(
+            list,
+            [],
+            "further netgenerate options (allowlisted: those shaping the network, none naming "
+            "a file)",
+            item=str,
+        ),
     },
     when_absent="omit",
 )
@@ -150,9 +159,22 @@ def check_traffic(t: dict, ctx: ScenarioContext, prefix: str) -> None:
             "no routes for traffic.net",
             "route files or a [traffic.demand] table",
         )
+    if t["network"] is not None:
+        try:
+            check_netgenerate_args(t["network"]["extra_args"])
+        except OptionError as exc:
+            raise ctx.error(
+                f"{prefix}.network.extra_args[{exc.index}]",
+                str(exc),
+                "netgenerate options that shape the network (none that names a file)",
+            ) from None
+    for key in ("routes", "additional"):
+        for i, path in enumerate(t[key]):
+            _check_confinable(path, ctx, f"{prefix}.{key}[{i}]")
     if t["demand"] is not None:
         _check_trip_counts(t["demand"], ctx, prefix + ".demand")
         _check_vtypes(t["demand"], ctx, prefix + ".demand")
+        _check_confinable(t["demand"]["vtypes"], ctx, prefix + ".demand.vtypes")
     if t["sumocfg"] is not None:
         net = _check_sumocfg(t["sumocfg"], ctx, prefix + ".sumocfg")
         require_usable_junction(net, ctx, prefix + ".sumocfg")
@@ -172,7 +194,20 @@ def _check_sumocfg(path: str, ctx: ScenarioContext, key: str) -> str:
             raise ctx.error(
                 key, f"{path} refers to {str(p)!r}, which does not exist", "its input files"
             )
+    try:
+        sumocfg_options(cfg.options)
+    except OptionError as exc:
+        raise ctx.error(key, f"{path}: {exc}", "a sumocfg SUMO can run confined") from None
+    for p in [*cfg.routes, *cfg.additional]:
+        _check_confinable(str(p), ctx, key)
     return str(cfg.net)
+
+
+def _check_confinable(path: str, ctx: ScenarioContext, key: str) -> None:
+    try:
+        check_loadable(Path(path))
+    except ConfinementError as exc:
+        raise ctx.error(key, str(exc), "a SUMO XML file without <include>") from None
 
 
 def _check_trip_counts(demand: dict, ctx: ScenarioContext, key: str) -> None:
