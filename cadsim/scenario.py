@@ -51,6 +51,10 @@ class ScenarioError(ValueError):
             text += f"; expected {expected}"
         super().__init__(text)
 
+    def __reduce__(self):
+        # Raised in worker processes too: pickled with its parts, not just the message.
+        return (type(self), (self.path, self.key, self.problem, self.expected))
+
 
 @dataclass(frozen=True)
 class ScenarioContext:

@@ -142,3 +142,13 @@ def test_the_schema_rejects_what_the_validator_rejects(text):
     jsonschema = pytest.importorskip("jsonschema")
     with pytest.raises(jsonschema.ValidationError):
         jsonschema.validate(tomllib.loads(text), scenario_json_schema())
+
+
+def test_scenario_errors_survive_the_trip_from_a_worker_process():
+    import pickle
+
+    err = pickle.loads(pickle.dumps(ScenarioError("/x/s.toml", "traffic.sumocfg", "bad", "good")))
+    assert (str(err.path), err.key, err.problem, err.expected) == (
+        "/x/s.toml", "traffic.sumocfg", "bad", "good",
+    )  # fmt: skip
+    assert str(err) == "/x/s.toml: traffic.sumocfg: bad; expected good"
