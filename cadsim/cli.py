@@ -1,7 +1,10 @@
 """`cadsim` command line. Each subcommand lives in its own module and is imported only when run,
 so `cadsim info` works without SUMO or pyrender installed.
 
-A subcommand module exposes ``add_arguments(parser)`` and ``run(args) -> int``.
+A subcommand module exposes ``add_arguments(parser)`` and ``run(args) -> int``. Errors are
+reported here, once: a user error (:mod:`cadsim.user_errors`) as one line ``cadsim CMD: error:
+...`` naming the file (and key), exit status 2; a bug with its traceback. ``--debug`` shows the
+traceback of every error.
 """
 
 from __future__ import annotations
@@ -11,6 +14,10 @@ import importlib
 import logging
 import os
 import sys
+
+from cadsim.user_errors import is_user_error, one_line
+
+DEBUG_HELP = "show the traceback of every error (user errors too)"
 
 # name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -23,6 +30,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "summarise a dataset (objects, covisibility, classes, depths)",
     ),
     "show": ("cadsim.commands.show", "draw one frame pair with boxes and ground-truth lines"),
+    "schema": ("cadsim.commands.schema", "print the JSON Schema of scenario files"),
     "evaluate": ("eval.commands.evaluate", "run matchers on datasets (cached, parallel)"),
     "sweep-noise": (
         "eval.commands.sweep_noise",
@@ -33,6 +41,23 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
+def int_in(low: int, high: int):
+    """An argparse ``type``: an integer in [low, high]; anything else is a usage error naming the
+    option (``argument --workers: expected an integer in 1..1024, got 0``)."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"expected an integer in {low}..{high}, got {value}")
+        return value
+
+    parse.__name__ = "integer"
+    return parse
+
+
 def _load(name: str):
     module, _ = COMMANDS[name]
     return importlib.import_module(module)
@@ -41,10 +66,13 @@ def _load(name: str):
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="cadsim", description=__doc__.splitlines()[0])
     parser.add_argument("-v", "--verbose", action="store_true", help="debug logging")
+    parser.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, (_, help_text) in COMMANDS.items():
         p = sub.add_parser(name, help=help_text)
         p.set_defaults(_command=name)
+        # Also after the command; SUPPRESS keeps a `--debug` given before it.
+        p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=DEBUG_HELP)
     return parser
 
 
@@ -66,10 +94,10 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into `head` and the like
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - keep Python's exit flush quiet
         return 0
-    except (ValueError, OSError) as exc:  # bad input: scenario, dataset, option, path
-        if args.verbose:
-            raise
-        print(f"cadsim {args._command}: error: {exc}", file=sys.stderr)
+    except Exception as exc:
+        if args.debug or not is_user_error(exc):
+            raise  # a bug (or --debug): the traceback is what a report needs
+        print(f"cadsim {args._command}: error: {one_line(exc)}", file=sys.stderr)
         return 2
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import platform
 import subprocess
 from collections.abc import Iterable
@@ -28,12 +29,20 @@ def package_versions(names: Iterable[str]) -> dict[str, str | None]:
 def git_state(repo: str | Path = REPO) -> dict[str, str | bool | None]:
     """{"commit": HEAD hash, "dirty": whether any file — tracked or untracked, not ignored, other
     than the outputs in GENERATED — differs from it} for the checkout at ``repo``; both None when
-    git or the checkout is absent."""
+    git or the checkout is absent. Read-only: ``GIT_OPTIONAL_LOCKS=0`` stops ``git status`` from
+    refreshing the index (which takes ``.git/index.lock`` and would collide with the user's own
+    git commands), so nothing in the checkout is created or modified."""
+    env = {**os.environ, "GIT_OPTIONAL_LOCKS": "0"}
 
     def git(*args: str) -> str | None:
         try:
             out = subprocess.run(
-                ["git", "-C", str(repo), *args], capture_output=True, text=True, timeout=10
+                ["git", "-C", str(repo), *args],
+                capture_output=True,
+                text=True,
+                timeout=10,
+                env=env,
+                stdin=subprocess.DEVNULL,
             )
         except (OSError, subprocess.SubprocessError):
             return None

@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import logging
+import math
 import os
 import tomllib
 import types
@@ -24,6 +25,10 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+from cadsim.limits import MAX_IMAGE_SIDE, MAX_PAIRS
+from cadsim.limits import MAX_PAIRS_PER_EPISODE as MAX_PER_EPISODE
+from cadsim.limits import MAX_SIMULATED_SECONDS as MAX_SIM_S
 
 log = logging.getLogger(__name__)
 
@@ -45,6 +50,10 @@ class ScenarioError(ValueError):
         if expected:
             text += f"; expected {expected}"
         super().__init__(text)
+
+    def __reduce__(self):
+        # Raised in worker processes too: pickled with its parts, not just the message.
+        return (type(self), (self.path, self.key, self.problem, self.expected))
 
 
 @dataclass(frozen=True)
@@ -189,10 +198,22 @@ def _wheel_sumo_home() -> str | None:
 # --------------------------------------------------------------------------------------------
 # Schemas of the tables every scenario has.
 
+MAX_DISTANCE_M = 10_000.0  # distances of observers from a junction and from each other
+
+
+def _check_observers(t: dict, ctx: ScenarioContext, prefix: str) -> None:
+    if t["min_distance"] > t["max_distance"]:
+        raise ctx.error(
+            _join(prefix, "min_distance"),
+            f"is {t['min_distance']:g}, more than max_distance {t['max_distance']:g}",
+            "min_distance <= max_distance",
+        )
+
+
 CAMERA = Table(
     {
-        "width": Field(int, 640, "image width, pixels", ge=16),
-        "height": Field(int, 480, "image height, pixels", ge=16),
+        "width": Field(int, 640, "image width, pixels", ge=16, le=MAX_IMAGE_SIDE),
+        "height": Field(int, 480, "image height, pixels", ge=16, le=MAX_IMAGE_SIDE),
         "hfov_deg": Field(float, 90.0, "horizontal field of view, degrees", gt=0, le=170),
         "mount_height": Field(
             (float, str),
@@ -212,34 +233,59 @@ OBSERVERS = Table(
             40.0,
             "an observer is at most this far (metres, along its route) from the junction",
             gt=0,
+            le=MAX_DISTANCE_M,
         ),
         "min_distance": Field(
-            float, 0.0, "an observer is at least this far (metres) from the junction", ge=0
+            float,
+            0.0,
+            "an observer is at least this far (metres) from the junction",
+            ge=0,
+            le=MAX_DISTANCE_M,
         ),
         "min_separation": Field(
-            float, 5.0, "the two observers are at least this far apart (metres)", ge=0
+            float,
+            5.0,
+            "the two observers are at least this far apart (metres)",
+            ge=0,
+            le=MAX_DISTANCE_M,
         ),
         "classes": Field(
-            list, ["car", "van", "bus", "truck"], "object classes that may carry a camera", item=str
+            list,
+            ["car", "van", "bus", "truck"],
+            "object classes that may carry a camera",
+            item=str,
+            check=bool,
+            expect="a non-empty list of class names",
         ),
         "junctions": Field(
             list, [], "junction ids to observe (empty: every usable junction)", item=str
         ),
-    }
+    },
+    check=lambda t, ctx, prefix: _check_observers(t, ctx, prefix),
 )
 
 SAMPLING = Table(
     {
-        "warm_up": Field(float, 60.0, "simulated seconds before the first snapshot", ge=0),
-        "interval": Field(float, 2.0, "simulated seconds between snapshots", gt=0),
+        "warm_up": Field(
+            float, 60.0, "simulated seconds before the first snapshot", ge=0, le=MAX_SIM_S
+        ),
+        "interval": Field(float, 2.0, "simulated seconds between snapshots", gt=0, le=MAX_SIM_S),
         "pairs_per_snapshot": Field(
-            int, 1, "at most this many frame pairs from one snapshot", ge=1
+            int, 1, "at most this many frame pairs from one snapshot", ge=1, le=MAX_PER_EPISODE
         ),
         "pairs_per_episode": Field(
-            int, 10, "frame pairs taken from one simulation before a new one starts", ge=1
+            int,
+            10,
+            "frame pairs taken from one simulation before a new one starts",
+            ge=1,
+            le=MAX_PER_EPISODE,
         ),
         "max_time": Field(
-            float, None, "stop a simulation at this time (s); absent: when its demand ends", gt=0
+            float,
+            None,
+            "stop a simulation at this time (s); absent: when its demand ends",
+            gt=0,
+            le=MAX_SIM_S,
         ),
     }
 )
@@ -248,7 +294,7 @@ TOP_LEVEL = {
     "name": Field(str, None, "scenario name (default: the file name without .toml)"),
     "description": Field(str, "", "free text"),
     "seed": Field(int, 0, "base seed of every random choice", ge=0),
-    "pairs": Field(int, 50, "number of frame pairs in a dataset", ge=1),
+    "pairs": Field(int, 50, "number of frame pairs in a dataset", ge=1, le=MAX_PAIRS),
 }
 TABLES = ("traffic", "camera", "observers", "noise", "detection", "sampling")
 
@@ -298,11 +344,21 @@ def load_scenario(path: str | Path) -> Scenario:
     ctx = ScenarioContext(path)
     if not path.is_file():
         raise ScenarioError(path, "", "scenario file does not exist", "an existing .toml file")
-    text = path.read_bytes().decode("utf-8")
+    data = path.read_bytes()
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(
+            path,
+            "",
+            f"not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start})",
+            "a TOML file, which is UTF-8",
+        ) from None
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(path, "", f"invalid TOML ({exc})", "a TOML document") from None
+    _reject_non_finite(raw, ctx, "")
 
     for key in raw:
         if key not in TOP_LEVEL and key not in TABLES:
@@ -338,6 +394,18 @@ def load_scenario(path: str | Path) -> Scenario:
         detection=detection,
         sampling=sampling,
     )
+
+
+def _reject_non_finite(value: Any, ctx: ScenarioContext, dotted: str) -> None:
+    """TOML allows ``inf`` and ``nan``; no key of a scenario does: raise naming the first."""
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ctx.error(dotted, f"is {value!r}", "a finite number")
+    if isinstance(value, dict):
+        for key, item in value.items():
+            _reject_non_finite(item, ctx, _join(dotted, key))
+    elif isinstance(value, list):
+        for i, item in enumerate(value):
+            _reject_non_finite(item, ctx, f"{dotted}[{i}]")
 
 
 def _validate_traffic(raw: Any, ctx: ScenarioContext) -> dict:
@@ -411,6 +479,7 @@ def _validate_value(value: Any, spec: Field, ctx: ScenarioContext, dotted: str) 
     if converted is _MISMATCH:
         raise ctx.error(dotted, f"has the wrong type ({_describe_value(value)})", expected)
     value = converted
+    _reject_non_finite(value, ctx, dotted)
     if isinstance(value, list) and spec.item is not None:
         items = [_convert(v, (spec.item,)) for v in value]
         if any(v is _MISMATCH for v in items):

@@ -16,6 +16,8 @@ import hashlib
 import json
 import os
 import tempfile
+import zipfile
+import zlib
 from dataclasses import asdict
 from functools import cache
 from pathlib import Path
@@ -102,7 +104,10 @@ class ResultCache:
         return self.root / key[:2] / f"{key}.npz"
 
     def __contains__(self, spec: RunSpec) -> bool:
-        return self.path(spec).is_file()
+        """Whether a complete entry exists. A truncated one (a disk filled up, a copy cut short:
+        no zip directory at its end) counts as absent, so the runner recomputes and replaces it."""
+        path = self.path(spec)
+        return path.is_file() and zipfile.is_zipfile(path)
 
     def store(self, result: RunResult) -> Path:
         """Write `result` atomically (temporary file + rename); returns its path."""
@@ -150,7 +155,7 @@ class ResultCache:
                 gts = _unragged(data, "gt_pairs")
                 assigned = _unragged(data, "assigned")
                 scores = _unragged(data, "scores")
-        except (OSError, ValueError, KeyError) as exc:
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
             raise ValueError(
                 f"{path}: unreadable cache entry ({exc}); delete it to recompute"
             ) from exc

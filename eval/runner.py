@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 from tqdm import tqdm
 
+from cadsim.user_errors import is_user_error, one_line
 from eval.cache import ResultCache, code_version
 from eval.executor import Executor
 from eval.tasks import MatcherSpec, RunResult, RunSpec, RunTask, execute
@@ -52,7 +53,14 @@ class RunStats:
 
 
 class RunFailed(RuntimeError):
-    """Some tasks raised; the other runs completed and are cached."""
+    """Some tasks raised; the other runs completed and are cached. ``errors``: what they raised;
+    ``user_error``: all of it is bad input (a corrupt dataset, a bad option), so the CLI reports
+    one line rather than a traceback (``cadsim.user_errors``)."""
+
+    def __init__(self, message: str, errors: Sequence[BaseException] = ()) -> None:
+        super().__init__(message)
+        self.errors = list(errors)
+        self.user_error = bool(self.errors) and all(is_user_error(e) for e in self.errors)
 
 
 def requests_for(
@@ -131,7 +139,7 @@ class Runner:
                 len(missing),
                 len(tasks),
             )
-            failures = []
+            failures, errors = [], []
             bar = tqdm(total=len(missing), desc=desc, unit="run", disable=not self.progress)
             with bar:
                 for done in self.executor.map_unordered(self.task_fn, tasks):
@@ -140,7 +148,12 @@ class Runner:
                         self.stats.failed += len(task.matchers)
                         detail = "".join(traceback.format_exception(done.error)).rstrip()
                         failures.append(f"{task}: {done.error!r}")
-                        log.error("task failed: %s\n%s", task, detail)
+                        errors.append(done.error)
+                        if is_user_error(done.error):  # bad input: its message says it all
+                            log.error("task failed: %s: %s", task, one_line(done.error))
+                            log.debug("%s", detail)
+                        else:
+                            log.error("task failed: %s\n%s", task, detail)
                     else:
                         for result in done.value:
                             self.cache.store(result)
@@ -149,6 +162,7 @@ class Runner:
             if failures:
                 raise RunFailed(
                     f"{len(failures)} of {len(tasks)} tasks failed (the rest are cached; re-run "
-                    "to retry only the failed ones):\n" + "\n".join(failures)
+                    f"to retry only the failed ones); the first: {one_line(errors[0])}",
+                    errors,
                 )
         return [self.cache.load(spec) for spec in specs]

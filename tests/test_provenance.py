@@ -1,5 +1,6 @@
 """Provenance: the git state recorded in manifests and run records."""
 
+import os
 import subprocess
 
 from cadsim.provenance import git_state, package_versions
@@ -33,3 +34,19 @@ def test_package_versions_name_missing_packages_as_none():
     assert (
         versions["numpy"] and versions["python"] and versions["surely-not-a-package-cadsim"] is None
     )
+
+
+def test_git_state_leaves_the_checkout_untouched(tmp_path):
+    """Issue 15 #7: a plain `git status` refreshes (rewrites) the index of a checkout whose files
+    were touched, taking .git/index.lock; git_state must not."""
+    _git(tmp_path, "init", "-q")
+    (tmp_path / "a.py").write_text("x = 1\n")
+    _git(tmp_path, "add", ".")
+    _git(tmp_path, "-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "init")
+    os.utime(tmp_path / "a.py", (978307200, 978307200))  # same content, new stat data
+    index = tmp_path / ".git" / "index"
+    before = (index.read_bytes(), index.stat().st_mtime_ns)
+    listing = sorted(p.name for p in (tmp_path / ".git").iterdir())
+    assert git_state(tmp_path)["dirty"] is False
+    assert (index.read_bytes(), index.stat().st_mtime_ns) == before
+    assert sorted(p.name for p in (tmp_path / ".git").iterdir()) == listing

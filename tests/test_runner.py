@@ -51,6 +51,9 @@ class FakeDataset(list):
         self.scenario_name = scenario
         self.manifest = {"scenario": {"name": scenario}}
 
+    def verify_once(self) -> None:
+        """In memory: nothing to re-hash."""
+
 
 def fake_matcher(problem: Problem, seed: int = 0, threshold=None, fail_seed=None, **_) -> Matching:
     """Scores from position distances, with a little seed-dependent jitter."""

@@ -69,7 +69,7 @@ def test_sumocfg_inputs_resolve_and_outputs_are_found():
     assert cfg.outputs == {"tripinfo-output": "tripinfos.xml"}  # not write-undeparted (a flag)
 
 
-def test_sumo_run_redirects_outputs_and_links_additional_files(tmp_path):
+def test_sumo_run_passes_allowlisted_options_and_confines_additional_files(tmp_path):
     traffic = {
         "sumocfg": str(GAME / "square.sumocfg"),
         "net": None,
@@ -81,16 +81,26 @@ def test_sumo_run_redirects_outputs_and_links_additional_files(tmp_path):
     }
     run = sumo_run(traffic, 5, tmp_path / "cache", tmp_path / "run", end=300.0)
     args = run.args
-    assert args[:2] == ["-c", str(GAME / "square.sumocfg")]
-    out = args[args.index("--tripinfo-output") + 1]
-    assert Path(out).parent == tmp_path / "run" / "outputs"
-    links = [Path(p) for p in args[args.index("--additional-files") + 1].split(",")]
-    assert [p.name for p in links][-1] == "straight.rou.xml" and len(links) == 5
-    for link in links:
-        assert link.is_symlink() and tmp_path / "run" in link.parents
-    assert links[0].resolve() == (GAME / "square" / "square.tll.xml").resolve()
-    assert "--step-length" not in args  # the sumocfg's own step
+    assert "-c" not in args  # SUMO never reads the sumocfg itself
+    assert args[:2] == ["-n", str((GAME / "square" / "square.net.xml").resolve())]
+    assert not any(a.startswith("--tripinfo") or a == "--gui-settings-file" for a in args)
+    files = [Path(p) for p in args[args.index("--additional-files") + 1].split(",")]
+    assert [p.name for p in files][-1] == "straight.rou.xml" and len(files) == 5
+    for path in files:
+        assert tmp_path / "run" in path.parents
+    assert files[0].is_symlink()
+    assert files[0].resolve() == (GAME / "square" / "square.tll.xml").resolve()
+    # input_additional.add.xml declares outputs: a rewritten copy writes them into the run folder.
+    confined = files[3]
+    assert confined.name == "input_additional.add.xml" and not confined.is_symlink()
+    root = ET.parse(confined).getroot()
+    for element, attribute in (("edgeData", "file"), ("timedEvent", "dest")):
+        for e in root.iter(element):
+            assert tmp_path / "run" / "outputs" in Path(e.get(attribute)).parents
+    assert args[args.index("--step-length") + 1] == ".1"  # the sumocfg's own step
+    assert args[args.index("--begin") + 1] == "0"
     assert args[args.index("--seed") + 1] == "5" and args[args.index("--end") + 1] == "300"
+    assert args.count("--end") == 1 and args.count("--seed") == 1
     assert run.net == (GAME / "square" / "square.net.xml").resolve()
 
 

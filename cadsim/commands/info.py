@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from collections import Counter
 
 import numpy as np
@@ -116,10 +115,6 @@ def _text(s: dict) -> str:
 def run(args: argparse.Namespace) -> int:
     from cadsim.dataset import Dataset
 
-    try:
-        summary = summarise(Dataset(args.dataset))
-    except ValueError as exc:
-        print(f"cadsim info: error: {exc}", file=sys.stderr)
-        return 2
+    summary = summarise(Dataset(args.dataset))
     print(json.dumps(summary, indent=1) if args.json else _text(summary))
     return 0

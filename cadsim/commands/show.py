@@ -4,29 +4,39 @@ and the ground-truth correspondences as lines."""
 from __future__ import annotations
 
 import argparse
-import sys
+from pathlib import Path
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("dataset", help="dataset folder written by `cadsim generate`")
     parser.add_argument("--pair", type=int, default=0, help="pair index K (default 0)")
-    parser.add_argument("--out", required=True, help="image file to write (.png, .pdf, .svg)")
+    parser.add_argument(
+        "--out",
+        required=True,
+        help="image file to write (.png, .pdf, .svg; no suffix: .png), or an existing folder "
+        "(the image is then named after the record, e.g. e00000_s01.png)",
+    )
     parser.add_argument("--no-labels", action="store_true", help="no class labels on the boxes")
+
+
+def output_path(out: str | Path, record_name: str) -> Path:
+    """The file ``cadsim show`` writes for ``--out``: inside an existing folder, the record's
+    name with .png; a name without a suffix gets .png (what matplotlib would write)."""
+    out = Path(out)
+    if out.is_dir():
+        return out / f"{record_name}.png"
+    return out if out.suffix else out.with_name(out.name + ".png")
 
 
 def run(args: argparse.Namespace) -> int:
     from cadsim.dataset import Dataset
     from cadsim.pair_drawing import draw_pair_from_record, save_figure
 
-    try:
-        ds = Dataset(args.dataset)
-        if args.pair < 0:
-            raise IndexError(f"--pair: expected a pair index 0..{len(ds) - 1}, got {args.pair}")
-        pair = ds[args.pair]
-        fig = draw_pair_from_record(pair, labels=not args.no_labels)
-    except (ValueError, IndexError) as exc:
-        print(f"cadsim show: error: {exc}", file=sys.stderr)
-        return 2
-    path = save_figure(fig, args.out)
+    ds = Dataset(args.dataset)
+    if not 0 <= args.pair < len(ds):
+        raise ValueError(f"--pair: {args.pair} is out of range; expected 0..{len(ds) - 1}")
+    pair = ds[args.pair]
+    fig = draw_pair_from_record(pair, labels=not args.no_labels)
+    path = save_figure(fig, output_path(args.out, pair.name))
     print(f"{path}: pair {pair.index} ({pair.name}), {len(pair.gt_pairs)} ground-truth pairs")
     return 0

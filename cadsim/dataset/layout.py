@@ -6,6 +6,7 @@ DIR/pairs/e00003_s01/              one frame-pair record: episode 3, slot 1
 DIR/episodes/e00003.json           per-episode summary (resume bookkeeping, generation statistics)
 DIR/.tmp-*                         records being written (removed on the next run if left over)
 DIR/.work/                         the sources' cache (networks, routes) while generating; removed at the end
+DIR/.generate.lock                 the writer lock (``writer_lock``): who is generating into DIR
 ```
 A record's name is its identity (episode, slot), so records computed in parallel or in an
 earlier, interrupted run land in the same place.
@@ -21,6 +22,7 @@ PAIRS_DIR = "pairs"
 EPISODES_DIR = "episodes"
 TEMP_PREFIX = ".tmp-"
 WORK_DIR = ".work"
+LOCK_FILE = ".generate.lock"
 
 # Files of one record.
 VIEW1_PNG = "view1.png"

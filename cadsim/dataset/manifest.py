@@ -9,7 +9,9 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import math
 import os
+import re
 from pathlib import Path
 
 from cadsim.dataset import layout
@@ -131,4 +133,61 @@ def read_manifest(dataset_dir: Path) -> dict:
     for key in ("complete", "records", "checksum", "generation", "scenario", "seeds"):
         if key not in manifest:
             raise DatasetError(f"{path}: missing key {key!r}")
+    _check_fields(manifest, path)
     return manifest
+
+
+_HEX64 = re.compile(r"^[0-9a-f]{64}$")
+
+
+def _is_int(v) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def _check_fields(manifest: dict, path: Path) -> None:
+    """The types and ranges of every field a reader or the generator uses; ``DatasetError``
+    naming the file and the dotted key otherwise. A record's name must be its (episode, slot)
+    name, so that no entry can point outside ``pairs/``."""
+
+    def need(ok: bool, key: str, value, expected: str) -> None:
+        if not ok:
+            shown = repr(value)
+            shown = shown if len(shown) <= 60 else shown[:57] + "..."
+            raise DatasetError(f"{path}: {key}: expected {expected}, got {shown}")
+
+    need(isinstance(manifest["complete"], bool), "complete", manifest["complete"], "true or false")
+    need(
+        isinstance(manifest["checksum"], str) and bool(_HEX64.match(manifest["checksum"])),
+        "checksum", manifest["checksum"], "64 hex digits",
+    )  # fmt: skip
+    for key in ("generation", "scenario", "seeds"):
+        need(isinstance(manifest[key], dict), key, manifest[key], "an object")
+    name = manifest["scenario"].get("name")
+    need(isinstance(name, str), "scenario.name", name, "a string")
+    root = manifest["seeds"].get("root")
+    need(_is_int(root) and root >= 0, "seeds.root", root, "an integer >= 0")
+    gen = manifest["generation"]
+    for key in ("noise", "detection"):
+        value = gen.get(key, {})
+        need(value is None or isinstance(value, dict), f"generation.{key}", value, "an object")
+    rate = (gen.get("noise") or {}).get("noise_rate", 0.0)
+    need(
+        isinstance(rate, int | float) and not isinstance(rate, bool) and math.isfinite(rate)
+        and rate >= 0,
+        "generation.noise.noise_rate", rate, "a finite number >= 0",
+    )  # fmt: skip
+    records = manifest["records"]
+    need(isinstance(records, list), "records", records, "a list")
+    for k, r in enumerate(records):
+        key = f"records[{k}]"
+        need(isinstance(r, dict), key, r, "an object")
+        for field in ("episode", "slot", "sim_seed"):
+            value = r.get(field)
+            need(_is_int(value) and value >= 0, f"{key}.{field}", value, "an integer >= 0")
+        expected_name = layout.record_name(r["episode"], r["slot"])
+        need(r.get("name") == expected_name, f"{key}.name", r.get("name"), repr(expected_name))
+        checksum = r.get("checksum")
+        need(
+            isinstance(checksum, str) and bool(_HEX64.match(checksum)),
+            f"{key}.checksum", checksum, "64 hex digits",
+        )  # fmt: skip

@@ -4,6 +4,7 @@ depth-noise and detection modules, which need only numpy/scipy/OpenCV)."""
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import json
 from collections.abc import Iterator, Sequence
 from functools import cached_property
@@ -174,8 +175,15 @@ class FramePair:
 
         if not np.isfinite(noise_rate) or noise_rate < 0:
             raise ValueError(f"noise_rate: expected a finite value >= 0, got {noise_rate!r}")
-        noise_cfg = dataclasses.replace(NoiseConfig(**self._noise), noise_rate=float(noise_rate))
-        det_cfg = DetectionConfig(**self._detection)
+        try:
+            noise_cfg = NoiseConfig(**self._noise)
+            det_cfg = DetectionConfig(**self._detection)
+        except (TypeError, ValueError) as exc:
+            manifest = self.path.parent.parent / layout.MANIFEST
+            raise DatasetError(
+                f"{manifest}: generation.noise / generation.detection rejected ({exc})"
+            ) from None
+        noise_cfg = dataclasses.replace(noise_cfg, noise_rate=float(noise_rate))
         views = []
         for v, color, depth, instance, camera, stored in (
             (1, self.color1, self.depth1, self.instance1, self.cameras[0], self.view1),
@@ -204,12 +212,18 @@ class FramePair:
         return pair
 
 
+# Datasets this process has verified: resolved path -> (dataset checksum, file signature).
+_VERIFIED: dict[str, tuple[str, str]] = {}
+
+
 class Dataset(Sequence[FramePair]):
     """A frame-pair dataset written by ``cadsim generate``.
 
     ``len(ds)``, ``ds[k]`` (a ``FramePair``), iteration in dataset order, ``ds.manifest`` (the
     parsed manifest.json), ``ds.checksum`` (hash over the records' checksums). ``verify()``
-    re-hashes every record. Raises ``DatasetError`` for a missing or incomplete dataset.
+    re-hashes every record; ``verify=True`` does it on opening, once per process for unchanged
+    files (:meth:`verify_once`). Raises ``DatasetError`` for a missing, incomplete or (verified)
+    modified dataset.
     """
 
     def __init__(self, path: str | Path, verify: bool = False) -> None:
@@ -226,7 +240,7 @@ class Dataset(Sequence[FramePair]):
         self.noise_config: dict = dict(gen.get("noise") or {})
         self.detection_config: dict = dict(gen.get("detection") or {})
         if verify:
-            self.verify()
+            self.verify_once()
 
     def __repr__(self) -> str:
         return f"Dataset({str(self.path)!r}, pairs={len(self)}, checksum={self.checksum[:12]})"
@@ -256,6 +270,36 @@ class Dataset(Sequence[FramePair]):
     def __iter__(self) -> Iterator[FramePair]:
         for k in range(len(self)):
             yield self[k]
+
+    def _file_signature(self) -> str:
+        """A digest of (size, mtime, inode) of the manifest and every record file: any rewrite
+        changes it (except one that restores size and mtime on the same inode)."""
+        h = hashlib.sha256()
+        for path in [
+            self.path / layout.MANIFEST,
+            *(
+                self.path / layout.PAIRS_DIR / entry["name"] / name
+                for entry in self._records
+                for name in layout.RECORD_FILES
+            ),
+        ]:
+            try:
+                st = path.stat()
+                h.update(f"{st.st_size} {st.st_mtime_ns} {st.st_ino};".encode())
+            except OSError:
+                h.update(b"missing;")
+        return h.hexdigest()
+
+    def verify_once(self) -> None:
+        """:meth:`verify`, unless this process already verified the same files (same manifest
+        checksum, and no file rewritten since: see ``_file_signature``). Costs one stat per
+        file when it skips; a full read and SHA-256 of every record when it does not."""
+        key = str(self.path.resolve())
+        signature = (self.checksum, self._file_signature())
+        if _VERIFIED.get(key) == signature:
+            return
+        self.verify()
+        _VERIFIED[key] = signature
 
     def verify(self) -> None:
         """Re-hash every record and the dataset; ``DatasetError`` naming the first mismatch."""

@@ -1,6 +1,6 @@
 """The local backends of :class:`cadsim.generation.executor.Executor`: this process
 (:class:`SerialExecutor`) or a pool of spawned processes on this machine
-(:class:`LocalProcessExecutor`)."""
+(:class:`LocalProcessExecutor`), whose processes exit when their parent dies."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import multiprocessing
 import os
 import queue as queue_module
 import signal
+import threading
 import time
 from contextlib import contextmanager
 from typing import Any
@@ -71,8 +72,28 @@ def _single_threaded_children():
                 os.environ.pop(var, None)
 
 
-def _pool_worker_init(channel) -> None:
-    """In each pool process: announce the pid, and route report_progress() to the parent."""
+ORPHAN_POLL_S = 0.5  # how often a pool process checks that its parent is alive
+ORPHANED_EXIT_STATUS = 3
+
+
+def _exit_when_orphaned(parent: int) -> None:
+    """Start a daemon thread that ends this process as soon as its parent (pid ``parent``) is
+    gone: once the parent dies, however it dies (SIGKILL included), this process is re-parented
+    and ``os.getppid()`` changes. Portable, unlike Linux's PR_SET_PDEATHSIG, which would also
+    fire when merely the parent *thread* that started the pool exits."""
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(ORPHAN_POLL_S)
+        os._exit(ORPHANED_EXIT_STATUS)  # no cleanup: unfinished records are .tmp-* (removed later)
+
+    threading.Thread(target=watch, name="cadsim-orphan-watch", daemon=True).start()
+
+
+def _pool_worker_init(channel, parent: int) -> None:
+    """In each pool process: exit with the parent, announce the pid, and route
+    report_progress() to the parent."""
+    _exit_when_orphaned(parent)
     channel.put(("pid", os.getpid()))
     progress_sink.set(lambda message: channel.put(("message", message)))
 
@@ -107,7 +128,7 @@ class LocalProcessExecutor(Executor):
             max_workers=self.workers,
             mp_context=ctx,
             initializer=_pool_worker_init,
-            initargs=(self._channel,),
+            initargs=(self._channel, os.getpid()),
         )
         self._broken = False
         with _single_threaded_children():  # workers start on submit while none is idle

@@ -56,8 +56,10 @@ from cadsim.dataset.manifest import (
 )
 from cadsim.dataset.record_format import PairRecord, ViewCapture, encode_record
 from cadsim.dataset.seeds import noise_seed, simulation_seed
+from cadsim.dataset.writer_lock import exclusive_writer
 from cadsim.generation.executor import Executor, report_progress
 from cadsim.generation.executors import make_executor
+from cadsim.limits import MAX_PAIRS, MAX_SEED, MAX_WORKERS
 
 log = logging.getLogger(__name__)
 
@@ -68,6 +70,8 @@ MIN_EXCLUSIVE = 1  # DESIGN §5: objects each view detects that the other does n
 
 class GenerationError(RuntimeError):
     """Generation cannot produce the requested dataset (bad output folder, too few pairs)."""
+
+    user_error = True  # reported as one line by the CLI (cadsim.user_errors)
 
 
 @dataclass(frozen=True)
@@ -355,21 +359,36 @@ def _load_scenario(scenario):
 
 
 def _check_resume(out: Path, config: dict) -> None:
-    """Refuse to mix records of another scenario/seed/configuration into ``out``."""
+    """Refuse to mix records of another scenario/seed/configuration into ``out``. A folder that
+    holds no record is free: whatever an earlier run left there (a manifest, episode summaries,
+    the sources' cache; e.g. of a run that failed on a typo) is cleared for this one."""
+    has_records = bool(layout.existing_records(out))
     if not (out / layout.MANIFEST).exists():
-        if any(layout.existing_records(out)):
+        if has_records:
             raise GenerationError(f"{out}: has frame-pair records but no manifest; use a new --out")
         return
     try:
         previous = read_manifest(out)["generation"]
     except DatasetError as exc:
+        if not has_records:
+            _clear_recordless(out, f"its manifest is unusable ({exc})")
+            return
         raise GenerationError(f"{out}: not resumable ({exc})") from exc
     differing = sorted(k for k in set(config) | set(previous) if config.get(k) != previous.get(k))
-    if differing:
+    if differing and not has_records:
+        _clear_recordless(out, "an earlier run with different " + ", ".join(differing))
+    elif differing:
         raise GenerationError(
             f"{out}: holds a dataset generated with different {', '.join(differing)}; "
             "use a new --out (or delete it) to generate this one"
         )
+
+
+def _clear_recordless(out: Path, why: str) -> None:
+    """Remove the bookkeeping of a run that wrote no record (its manifest is rewritten next)."""
+    log.info("%s: holds no frame-pair record (%s); starting afresh", out, why)
+    for folder in (layout.EPISODES_DIR, layout.WORK_DIR):
+        shutil.rmtree(out / folder, ignore_errors=True)
 
 
 def _episode_done_on_disk(out: Path, episode: int, need: int) -> int | None:
@@ -384,6 +403,47 @@ def _episode_done_on_disk(out: Path, episode: int, need: int) -> int | None:
         if summary.get("exhausted") and summary.get("accepted") == count:
             return count
     return None
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """A generation request, fully validated before anything is written."""
+
+    scenario: Any
+    out: Path
+    n_pairs: int
+    root_seed: int
+    seed_source: str
+    criteria: Criteria
+    config: dict
+    max_episodes: int
+
+
+def _plan(scenario, out, pairs, seed, workers, max_episodes) -> _Plan:
+    """Validate every argument (the scenario is loaded and checked if given as a path); raise
+    before the output folder is touched."""
+    scenario = _load_scenario(scenario)
+    n_pairs = _checked_int("--pairs", scenario.pairs if pairs is None else pairs, 1, MAX_PAIRS)
+    root_seed = _checked_int("--seed", scenario.seed if seed is None else seed, 0, MAX_SEED)
+    if workers is not None:
+        _checked_int("--workers", workers, 1, MAX_WORKERS)
+    crit = Criteria.from_sampling(scenario.sampling)
+    acceptance = {k: v for k, v in asdict(crit).items() if k != "pairs_per_episode"}
+    config = generation_config(scenario, root_seed, crit.pairs_per_episode, acceptance)
+    if max_episodes is None:
+        max_episodes = 10 * math.ceil(n_pairs / crit.pairs_per_episode) + 10
+    return _Plan(
+        scenario, Path(out).resolve(), n_pairs, root_seed,
+        "scenario" if seed is None else "--seed", crit, config, int(max_episodes),
+    )  # fmt: skip
+
+
+def _checked_int(name: str, value, low: int, high: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        raise GenerationError(f"{name}: expected an integer, got {value!r}")
+    if not low <= value <= high:
+        raise GenerationError(f"{name}: expected an integer in {low}..{high}, got {value}")
+    return int(value)
 
 
 def generate_dataset(
@@ -406,25 +466,31 @@ def generate_dataset(
     worker mounts at the same path. executor: run episodes there instead (not closed here).
     max_episodes: give up after this many episodes without N pairs (default
     10·⌈N / pairs_per_episode⌉ + 10).
+
+    Every argument is checked before ``out`` is touched; ``out`` is then locked against a
+    second writer (``cadsim.dataset.writer_lock``) until the final manifest is written.
     """
     t0 = time.perf_counter()
-    scenario = _load_scenario(scenario)
-    stages = stages or Stages()
-    out = Path(out).resolve()
-    n_pairs = int(scenario.pairs if pairs is None else pairs)
-    if n_pairs < 1:
-        raise GenerationError(f"--pairs: expected >= 1, got {n_pairs}")
-    root_seed = int(scenario.seed if seed is None else seed)
-    if workers is not None and workers < 1:
-        raise GenerationError(f"--workers: expected >= 1, got {workers}")
-    crit = Criteria.from_sampling(scenario.sampling)
-    acceptance = {k: v for k, v in asdict(crit).items() if k != "pairs_per_episode"}
-    config = generation_config(scenario, root_seed, crit.pairs_per_episode, acceptance)
-    seed_source = "scenario" if seed is None else "--seed"
-    if max_episodes is None:
-        max_episodes = 10 * math.ceil(n_pairs / crit.pairs_per_episode) + 10
+    plan = _plan(scenario, out, pairs, seed, workers, max_episodes)
+    plan.out.mkdir(parents=True, exist_ok=True)
+    with exclusive_writer(plan.out):
+        return _generate(plan, stages or Stages(), workers, progress, scheduler, executor, t0)
 
-    out.mkdir(parents=True, exist_ok=True)
+
+def _generate(
+    plan: _Plan,
+    stages: Stages,
+    workers: int | None,
+    progress: bool,
+    scheduler: str | None,
+    executor: Executor | None,
+    t0: float,
+) -> GenerationResult:
+    """The generation itself, with ``plan.out`` locked."""
+    scenario, out, n_pairs, root_seed = plan.scenario, plan.out, plan.n_pairs, plan.root_seed
+    crit, config, seed_source, max_episodes = (
+        plan.criteria, plan.config, plan.seed_source, plan.max_episodes,
+    )  # fmt: skip
     _check_resume(out, config)
     stale = remove_stale_temp(out)
     if stale:

@@ -20,6 +20,7 @@ import numpy as np
 from scipy.ndimage import gaussian_filter
 
 from cadsim.config_tables import check_number, config_from_table
+from cadsim.limits import MAX_IMAGE_SIDE, MAX_NOISE_RATE
 
 MIN_NOISY_DEPTH_M = 0.01
 
@@ -39,8 +40,15 @@ class NoiseConfig:
     correlated_fraction: float = 0.5
 
     def __post_init__(self) -> None:
-        check_number("[noise]", "noise_rate", self.noise_rate, minimum=0.0)
-        check_number("[noise]", "correlation_length_px", self.correlation_length_px, minimum=0.0)
+        check_number("[noise]", "noise_rate", self.noise_rate, minimum=0.0, maximum=MAX_NOISE_RATE)
+        # The correlated field's filter costs time in proportion to its length.
+        check_number(
+            "[noise]",
+            "correlation_length_px",
+            self.correlation_length_px,
+            minimum=0.0,
+            maximum=MAX_IMAGE_SIDE,
+        )
         check_number(
             "[noise]", "correlated_fraction", self.correlated_fraction, minimum=0.0, maximum=1.0
         )

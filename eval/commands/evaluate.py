@@ -19,6 +19,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from cadsim.cli import int_in
+from cadsim.limits import MAX_RUNS, MAX_WORKERS
 from eval import calibration, tasks
 from eval.cache import ResultCache
 from eval.executor import add_scheduler_argument, make_executor
@@ -54,9 +56,14 @@ def dataset_label(scenario_name: str) -> str:
 
 
 def open_entry(test_dir: str | Path, val_dir: str | Path | None) -> DatasetEntry:
-    """Open the test (and validation) dataset and describe them."""
+    """Open the test (and validation) dataset and describe them. Each is verified against its
+    manifest's checksums (once per process for unchanged files): the result cache is keyed by
+    the manifest's checksum, so a record modified after generation would otherwise go unseen."""
     test = tasks.open_dataset(str(test_dir))
     val = tasks.open_dataset(str(val_dir)) if val_dir is not None else None
+    for dataset in (test, val):
+        if dataset is not None:
+            dataset.verify_once()
     if val is not None and val.scenario_name != test.scenario_name:
         raise ValueError(
             f"{val_dir}: validation scenario {val.scenario_name!r} differs from "
@@ -264,13 +271,21 @@ def evaluate(
 def add_runner_arguments(parser: argparse.ArgumentParser) -> None:
     """Options every cached, parallel command shares."""
     parser.add_argument("--matchers", default="all", help="'all' or a comma list (default: all)")
-    parser.add_argument("--runs", type=int, default=4, help="runs with seeds 0..RUNS-1 (default 4)")
+    parser.add_argument(
+        "--runs",
+        type=int_in(1, MAX_RUNS),
+        default=4,
+        help=f"runs with seeds 0..RUNS-1, RUNS in 1..{MAX_RUNS} (default 4)",
+    )
     parser.add_argument("--out", default="results", help="output directory (default: results)")
     parser.add_argument(
         "--cache", default=DEFAULT_CACHE, help=f"result cache (default: {DEFAULT_CACHE})"
     )
     parser.add_argument(
-        "--workers", type=int, default=None, help="processes (default: one per core)"
+        "--workers",
+        type=int_in(1, MAX_WORKERS),
+        default=None,
+        help=f"processes, 1..{MAX_WORKERS} (default: one per core)",
     )
     add_scheduler_argument(parser)
 
@@ -296,8 +311,6 @@ def val_dirs(datasets: Sequence[str], given: Sequence[str] | None) -> list[str |
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.runs < 1:
-        raise SystemExit("--runs: expected ≥ 1")
     vals = [None] * len(args.datasets) if args.no_calibration else val_dirs(args.datasets, args.val)
     entries = [open_entry(d, v) for d, v in zip(args.datasets, vals, strict=True)]
     matchers = parse_matchers(args.matchers)

@@ -16,6 +16,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from cadsim.cli import int_in
+from cadsim.limits import MAX_NOISE_RATE, MAX_PAIRS
 from eval.cache import ResultCache
 from eval.commands.evaluate import (
     DatasetEntry,
@@ -37,12 +39,15 @@ DEFAULT_RATES = (0.0, 0.0003, 0.001, 0.003, 0.01, 0.03, 0.1)
 
 
 def parse_rates(text: str) -> list[float]:
+    """Comma-separated noise rates, each finite and in [0, MAX_NOISE_RATE]; sorted, distinct."""
     try:
         rates = [float(r) for r in text.split(",") if r.strip()]
     except ValueError as exc:
         raise ValueError(f"--rates: expected comma-separated numbers, got {text!r}") from exc
-    if not rates or any(r < 0 or r != r for r in rates):
-        raise ValueError(f"--rates: expected non-negative rates, got {text!r}")
+    if not rates or not all(0 <= r <= MAX_NOISE_RATE for r in rates):  # NaN fails too
+        raise ValueError(
+            f"--rates: expected one or more rates in [0, {MAX_NOISE_RATE:g}], got {text!r}"
+        )
     return sorted(set(rates))
 
 
@@ -74,6 +79,8 @@ def sweep(
 ) -> pd.DataFrame:
     """Run the sweep on the first `limit` frame pairs (None: all); write ``noise_runs.csv``
     (per-run means over the frame pairs) and return it."""
+    if limit is not None and limit < 1:
+        raise ValueError(f"--pairs: expected >= 1 frame pairs, got {limit}")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     taus = thresholds_for(out_dir, entry, matchers, seeds, runner)
@@ -99,17 +106,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="comma-separated noise rates (σ = rate·d², d in metres)",
     )
     parser.add_argument("--val", default=None, help="validation dataset (default: DATASET_DIR-val)")
-    parser.add_argument("--pairs", type=int, default=None, help="only the first N frame pairs")
+    parser.add_argument(
+        "--pairs",
+        type=int_in(1, MAX_PAIRS),
+        default=None,
+        help="only the first N frame pairs (N >= 1)",
+    )
     add_runner_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> int:
+    rates = parse_rates(args.rates)
     (val,) = val_dirs([args.dataset], [args.val] if args.val else None)
     entry = open_entry(args.dataset, val)
     matchers = parse_matchers(args.matchers)
     with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(ResultCache(args.cache), executor)
-        rates = parse_rates(args.rates)
         sweep(entry, matchers, range(args.runs), rates, runner, args.out, args.pairs)
     from eval.figures import write_fig4
 

@@ -14,6 +14,7 @@ from pathlib import Path
 
 from matplotlib.colors import to_rgb
 
+from cadsim.limits import MAX_IMAGE_SIDE
 from cadsim.scenario import (
     REQUIRED,
     Field,
@@ -127,6 +128,9 @@ class ArenaConfig:
 
 
 # -- schema ------------------------------------------------------------------------------------
+MAX_GROUP = 1000  # robots or objects per group: collision checks grow with their square
+
+
 def _is_colour_name(v) -> bool:
     try:
         to_rgb(v)
@@ -156,8 +160,8 @@ def _colour_name(default, doc: str) -> Field:
 
 def _intrinsics(hfov: float) -> dict[str, Field]:
     return {
-        "width": Field(int, 640, "image width, pixels", ge=16),
-        "height": Field(int, 480, "image height, pixels", ge=16),
+        "width": Field(int, 640, "image width, pixels", ge=16, le=MAX_IMAGE_SIDE),
+        "height": Field(int, 480, "image height, pixels", ge=16, le=MAX_IMAGE_SIDE),
         "hfov_deg": Field(float, hfov, "horizontal field of view, degrees", gt=0, le=170),
     }
 
@@ -165,7 +169,7 @@ def _intrinsics(hfov: float) -> dict[str, Field]:
 ROBOT_TABLE = Table(
     {
         "variant": _colour_name(REQUIRED, "marker colour: the only difference between groups"),
-        "count": Field(int, REQUIRED, "robots in this group", ge=1),
+        "count": Field(int, REQUIRED, "robots in this group", ge=1, le=MAX_GROUP),
         "body_color": _numbers(3, [0.16, 0.16, 0.18], "body colour", "rgb"),
         "size": _numbers(3, [0.45, 0.38, 0.32], "length, width, height, metres", "positive"),
         "speed": _numbers(2, [0.2, 0.4], "speed range, m/s", "range"),
@@ -174,7 +178,7 @@ ROBOT_TABLE = Table(
 OBJECT_TABLE = Table(
     {
         "cls": Field(str, REQUIRED, "object class", choices=PROP_CLASSES),
-        "count": Field(int, REQUIRED, "objects of this kind", ge=0),
+        "count": Field(int, REQUIRED, "objects of this kind", ge=0, le=MAX_GROUP),
         "size": _numbers(3, REQUIRED, "length, width, height, metres", "positive"),
         "color": _numbers(3, REQUIRED, "colour", "rgb"),
         "speed": _numbers(2, [0.4, 0.8], "walking speed range of people, m/s", "range"),
@@ -182,7 +186,7 @@ OBJECT_TABLE = Table(
 )
 MOTION_TABLE = Table(
     {
-        "dt": Field(float, 0.1, "simulation step, seconds", gt=0),
+        "dt": Field(float, 0.1, "simulation step, seconds", gt=0, le=10),
         "clearance": Field(float, 0.15, "minimum gap between any two objects, metres", ge=0),
         "waypoint_tolerance": Field(float, 0.1, "waypoint reached within, metres", gt=0),
         "max_blocked_steps": Field(int, 10, "blocked steps before a new waypoint", ge=1),
@@ -214,7 +218,7 @@ AERIAL_TABLE = Table(
         "relative_yaw_deg": _numbers(
             2, [-180.0, 180.0], "heading relative to the side camera", "range"
         ),
-        "candidates": Field(int, 4, "overhead cameras offered per snapshot", ge=1),
+        "candidates": Field(int, 4, "overhead cameras offered per snapshot", ge=1, le=100),
         **_intrinsics(60.0),
     }
 )

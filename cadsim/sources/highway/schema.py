@@ -64,8 +64,12 @@ TRAFFIC = Table(
             list, [0.25, 0.5, 0.25], "probabilities of the controlled vehicle's SLOWER, IDLE, FASTER",
             item=float, check=_weights, expect="three numbers >= 0 with a positive sum",
         ),
-        "max_snapshots": Field(int, 300, "snapshots offered before the source stops", ge=1),
-        "max_candidates": Field(int, 4, "observer pairs proposed per snapshot, best first", ge=1),
+        "max_snapshots": Field(
+            int, 300, "snapshots offered before the source stops", ge=1, le=100_000,
+        ),
+        "max_candidates": Field(
+            int, 4, "observer pairs proposed per snapshot, best first", ge=1, le=100,
+        ),
         "vehicle_colors": Field(
             list, ["#f0f0f0", "#b4b4b8", "#1e1e1e", "#a01e1e", "#1e3c8c"], "vehicle body colours",
             item=str, check=hex_color_list, expect=HEX_COLORS,

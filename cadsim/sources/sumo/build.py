@@ -24,27 +24,19 @@ from pathlib import Path
 
 import numpy as np
 
+from cadsim.sources.sumo.install import binary, sumo_env, sumo_home, sumo_version
+from cadsim.sources.sumo.options import check_netgenerate_args
+
 log = logging.getLogger(__name__)
 
 # Types SUMO defines without a file.
 BUILTIN_TYPES = {"DEFAULT_VEHTYPE", "DEFAULT_PEDTYPE", "DEFAULT_BIKETYPE", "DEFAULT_CONTAINERTYPE"}
 
 
-def sumo_home() -> Path:
-    """SUMO_HOME of the eclipse-sumo wheel (bin/ and tools/ inside)."""
-    import sumo
+class ToolFailed(RuntimeError):
+    """netgenerate or randomTrips exited with an error (its output's last lines say why)."""
 
-    return Path(sumo.SUMO_HOME)
-
-
-def sumo_version() -> str:
-    from importlib.metadata import version
-
-    return version("eclipse-sumo")
-
-
-def sumo_env() -> dict[str, str]:
-    return {**os.environ, "SUMO_HOME": str(sumo_home())}
+    user_error = True  # a scenario's options or inputs, not a bug (cadsim.user_errors)
 
 
 @dataclass(frozen=True)
@@ -62,14 +54,15 @@ def build_network(params: dict, workdir: Path) -> Path:
     key = content_hash({"netgenerate": args, "sumo": sumo_version()})
     folder = cached_folder(
         Path(workdir) / f"net-{key}",
-        lambda tmp: _run([str(_binary("netgenerate")), *args, "-o", str(tmp / "net.net.xml")], tmp),
+        lambda tmp: _run([str(binary("netgenerate")), *args, "-o", str(tmp / "net.net.xml")], tmp),
     )
     return folder / "net.net.xml"
 
 
 def netgenerate_args(params: dict) -> list[str]:
     """netgenerate options for a grid of ``junctions``² junctions with ``arm_length`` roads
-    attached at the boundary (junctions = 1: a single four-arm intersection)."""
+    attached at the boundary (junctions = 1: a single four-arm intersection), then the
+    scenario's ``extra_args`` (allowlisted: :func:`cadsim.sources.sumo.options.check_netgenerate_args`)."""
     n = params["junctions"]
     args = [
         "--grid",
@@ -92,7 +85,9 @@ def netgenerate_args(params: dict) -> list[str]:
         ]
     if params["crossings"] and params["sidewalks"]:
         args.append("--crossings.guess=true")
-    return args + list(params["extra_args"])
+    extra = list(params["extra_args"])
+    check_netgenerate_args(extra)  # the scenario check refuses these first; never run them
+    return args + extra
 
 
 def build_demand(net: Path, demand: dict, seed: int, workdir: Path) -> Demand:
@@ -154,7 +149,7 @@ def build_demand(net: Path, demand: dict, seed: int, workdir: Path) -> Demand:
         for name, proc in procs.items():
             output, _ = proc.communicate()
             if proc.returncode != 0:
-                raise RuntimeError(f"randomTrips ({name}) failed:\n{output[-2000:]}")
+                raise ToolFailed(f"randomTrips ({name}) failed: {_tail(output)}")
         write_person_types(vtypes, tmp / "persons.add.xml")
 
     folder = cached_folder(Path(workdir) / f"demand-{key}", build)
@@ -216,11 +211,16 @@ def file_hash(path: Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-def _binary(name: str) -> Path:
-    return sumo_home() / "bin" / name
-
-
 def _run(cmd: list[str], cwd: Path) -> None:
-    proc = subprocess.run(cmd, cwd=cwd, env=sumo_env(), capture_output=True, text=True)
+    """Run a SUMO tool in ``cwd`` (a folder inside the work folder); ``ToolFailed`` if it fails."""
+    proc = subprocess.run(
+        cmd, cwd=cwd, env=sumo_env(), capture_output=True, text=True, stdin=subprocess.DEVNULL
+    )
     if proc.returncode != 0:
-        raise RuntimeError(f"{Path(cmd[0]).name} failed:\n{(proc.stdout + proc.stderr)[-2000:]}")
+        raise ToolFailed(f"{Path(cmd[0]).name} failed: {_tail(proc.stdout + proc.stderr)}")
+
+
+def _tail(output: str, lines: int = 3) -> str:
+    """The last non-empty lines of a tool's output, on one line."""
+    kept = [line.strip() for line in output.splitlines() if line.strip()][-lines:]
+    return " | ".join(kept) or "(no output)"

@@ -1,18 +1,24 @@
-"""The sumo command line for a validated ``[traffic]`` table.
+"""The sumo command line for a validated ``[traffic]`` table, confined to the run folder.
 
-Inputs stay where they are. Outputs never land in the scenario's folder: output options of a
-sumocfg are redirected into the run folder, and additional files are passed through symbolic
-links in the run folder, because SUMO resolves an additional file's relative output paths (e.g.
-``<edgeData file="...">``) against the folder the additional file was loaded from.
+SUMO is never given a configuration file to read on its own: a ``.sumocfg``'s options are sorted
+(:mod:`cadsim.sources.sumo.options`) and only allowlisted ones are passed, on the command line,
+with its inputs resolved to absolute paths. Route and additional files are loaded through the
+run folder (:mod:`cadsim.sources.sumo.confinement`): outputs they declare are rewritten into
+``run_dir/outputs``. Inputs stay where they are and are only read.
 """
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 from pathlib import Path
 
 from cadsim.sources.sumo.build import build_demand, build_network
 from cadsim.sources.sumo.config import read_sumocfg
+from cadsim.sources.sumo.confinement import confined_files
+from cadsim.sources.sumo.options import sumocfg_options
+
+log = logging.getLogger(__name__)
 
 DEFAULT_STEP_LENGTH = 0.1  # seconds, for networks without a sumocfg
 
@@ -27,40 +33,48 @@ class SumoRun:
 
 def sumo_run(traffic: dict, seed: int, workdir: Path, run_dir: Path, end: float | None) -> SumoRun:
     """Build the net/demand if the scenario generates them (cached in ``workdir``) and assemble
-    the arguments. ``run_dir``: this simulation's private folder for links and outputs."""
+    the arguments. ``run_dir``: this simulation's private folder for confined inputs and
+    outputs. Raises ``OptionError``/``ConfinementError`` (ValueErrors) for a sumocfg option or an
+    XML file that cannot be run confined (the scenario check refuses those first)."""
     run_dir.mkdir(parents=True, exist_ok=True)
-    args: list[str] = []
     routes = [Path(p) for p in traffic["routes"]]
     additional = [Path(p) for p in traffic["additional"]]
+    passed: dict[str, str] = {}
+    own: dict[str, str] = {}
     if traffic["sumocfg"] is not None:
         cfg = read_sumocfg(traffic["sumocfg"])
+        sorted_out = sumocfg_options(cfg.options)
+        passed, own = sorted_out.passed, sorted_out.own
+        if sorted_out.dropped:
+            log.debug("%s: not passed to sumo: %s", cfg.path, ", ".join(sorted_out.dropped))
         net = cfg.net
-        args += ["-c", str(cfg.path)]
-        if routes:
-            routes = [*cfg.routes, *routes]
+        routes = [*cfg.routes, *routes]
         additional = [*cfg.additional, *additional]
-        out_dir = run_dir / "outputs"
-        out_dir.mkdir(exist_ok=True)
-        for name, value in sorted(cfg.outputs.items()):
-            args += [f"--{name}", str(out_dir / Path(value).name)]
     else:
         net = Path(traffic["net"]) if traffic["net"] else build_network(traffic["network"], workdir)
-        args += ["-n", str(net)]
         if traffic["demand"] is not None:
             demand = build_demand(net, traffic["demand"], seed, workdir)
             routes = [*demand.routes, *routes]
             additional = [*demand.additional, *additional]
+    args = ["-n", str(Path(net).resolve())]
     if routes:
-        args += ["--route-files", ",".join(str(p) for p in routes)]
+        args += ["--route-files", ",".join(map(str, confined_files(routes, run_dir, "routes")))]
     if additional:
-        args += ["--additional-files", ",".join(str(p) for p in _linked(additional, run_dir))]
+        linked = confined_files(additional, run_dir, "additional")
+        args += ["--additional-files", ",".join(map(str, linked))]
+    for name, value in passed.items():
+        args += [f"--{name}", value]
     step = traffic["step_length"]
     if step is None and traffic["sumocfg"] is None:
         step = DEFAULT_STEP_LENGTH
     if step is not None:
         args += ["--step-length", f"{step:g}"]
+    elif "step-length" in own:
+        args += ["--step-length", own["step-length"]]
     if end is not None:
         args += ["--end", f"{end:g}"]
+    elif "end" in own:
+        args += ["--end", own["end"]]
     args += [
         *["--seed", str(int(seed) % 2**31), "--random", "false"],
         *["--no-step-log", "true", "--no-warnings", "true", "--verbose", "false"],
@@ -68,17 +82,3 @@ def sumo_run(traffic: dict, seed: int, workdir: Path, run_dir: Path, end: float 
         *["--ignore-route-errors", "true", "--xml-validation", "never"],
     ]
     return SumoRun(args=args, net=Path(net))
-
-
-def _linked(files: list[Path], run_dir: Path) -> list[Path]:
-    """A symbolic link per file, each in its own sub-folder of ``run_dir``/additional."""
-    out = []
-    for k, target in enumerate(files):
-        folder = run_dir / "additional" / str(k)
-        folder.mkdir(parents=True, exist_ok=True)
-        link = folder / target.name
-        if link.is_symlink() or link.exists():
-            link.unlink()
-        link.symlink_to(target.resolve())
-        out.append(link)
-    return out

@@ -1,9 +1,10 @@
 """Reading a SUMO configuration file (``.sumocfg``) without running SUMO.
 
-SUMO resolves a relative path in a config against the config's folder, and a relative output path
-in an additional file against that additional file's folder. To run an externally written
-scenario unedited without writing into its folder, the source keeps the config's inputs and
-redirects every output (see :mod:`cadsim.sources.sumo.command`).
+SUMO resolves a relative path in a config against the config's folder; the reader resolves the
+inputs the same way. SUMO itself is never given the config: its options pass through an
+allowlist (:mod:`cadsim.sources.sumo.options`) and its outputs are not passed at all
+(:mod:`cadsim.sources.sumo.command`), so an externally written scenario runs unedited without
+anything written into its folder or elsewhere.
 """
 
 from __future__ import annotations
@@ -37,7 +38,8 @@ class SumoConfigError(ValueError):
 @dataclass(frozen=True)
 class SumoConfig:
     """Options of a .sumocfg. options: name -> value as written. net/routes/additional: absolute
-    paths of the input files. outputs: output option name -> value as written."""
+    paths of the input files. outputs: output option name -> value as written (for
+    information: none of them is passed to SUMO)."""
 
     path: Path
     options: dict[str, str]

@@ -10,31 +10,58 @@ Exactly one of three ways to get a road network:
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 from cadsim.field_checks import hex_color_list, positive_range
+from cadsim.limits import MAX_SIMULATED_SECONDS
 from cadsim.scenario import Field, ScenarioContext, Table, register_source_schema
 from cadsim.sources.sumo.build import BUILTIN_TYPES
 from cadsim.sources.sumo.config import SumoConfigError, read_sumocfg
+from cadsim.sources.sumo.confinement import ConfinementError, check_loadable
+from cadsim.sources.sumo.options import OptionError, check_netgenerate_args, sumocfg_options
 
 HEX_COLOR = "a list of colours written '#rrggbb'"
+# Bounds where memory or run time grows with the value (docs/reliability.md).
+MAX_GRID_SIDE = 20  # junctions per side: 400 junctions, each with its static scene
+MAX_LENGTH_M = 10_000.0
+MIN_PERIOD_S = 0.01  # at most 100 departures a second per kind
+MAX_TRIPS = 1_000_000  # trips per kind: end / period
+MIN_STEP_S = 0.001
+PERIOD_OR_OFF = f"0 (none) or a number >= {MIN_PERIOD_S:g} (seconds)"
+
+
+def _period_or_off(value: float) -> bool:
+    return value == 0 or value >= MIN_PERIOD_S
 
 
 NETWORK = Table(
     {
         "junctions": Field(
-            int, 1, "junctions per side of the grid (1: one four-arm intersection)", ge=1
+            int,
+            1,
+            "junctions per side of the grid (1: one four-arm intersection)",
+            ge=1,
+            le=MAX_GRID_SIDE,
         ),
         "block_length": Field(
-            float, 200.0, "distance between neighbouring junctions, metres", gt=0
+            float, 200.0, "distance between neighbouring junctions, metres", gt=0, le=MAX_LENGTH_M
         ),
-        "arm_length": Field(float, 150.0, "length of the roads leaving the grid, metres", gt=0),
+        "arm_length": Field(
+            float, 150.0, "length of the roads leaving the grid, metres", gt=0, le=MAX_LENGTH_M
+        ),
         "lanes": Field(int, 2, "lanes per direction", ge=1, le=6),
-        "speed": Field(float, 13.89, "speed limit, m/s", gt=0),
+        "speed": Field(float, 13.89, "speed limit, m/s", gt=0, le=100),
         "traffic_lights": Field(bool, True, "signalise the junctions (else priority junctions)"),
         "sidewalks": Field(bool, True, "sidewalks along every road"),
-        "sidewalk_width": Field(float, 2.0, "sidewalk width, metres", gt=0),
+        "sidewalk_width": Field(float, 2.0, "sidewalk width, metres", gt=0, le=20),
         "crossings": Field(bool, True, "pedestrian crossings at the junctions"),
-        "extra_args": Field(list, [], "further netgenerate options, passed as given", item=str),
+        "extra_args": Field(
+            list,
+            [],
+            "further netgenerate options (allowlisted: those shaping the network, none naming "
+            "a file)",
+            item=str,
+        ),
     },
     when_absent="omit",
 )
@@ -43,16 +70,26 @@ DEMAND = Table(
     {
         "vtypes": Field(str, doc="vType / vTypeDistribution file", path="file"),
         "vehicle_type": Field(str, "vehicles", "vType or distribution id of motor vehicles"),
-        "vehicle_period": Field(float, 1.0, "mean seconds between vehicle departures", gt=0),
+        "vehicle_period": Field(
+            float, 1.0, "mean seconds between vehicle departures", ge=MIN_PERIOD_S
+        ),
         "bicycle_type": Field(str, "bicycles", "vType or distribution id of bicycles"),
         "bicycle_period": Field(
-            float, 8.0, "mean seconds between bicycle departures (0: no bicycles)", ge=0
+            float,
+            8.0,
+            "mean seconds between bicycle departures (0: no bicycles)",
+            check=_period_or_off,
+            expect=PERIOD_OR_OFF,
         ),
         "person_type": Field(str, "persons", "vType or distribution id of pedestrians"),
         "person_period": Field(
-            float, 3.0, "mean seconds between pedestrian departures (0: no pedestrians)", ge=0
+            float,
+            3.0,
+            "mean seconds between pedestrian departures (0: no pedestrians)",
+            check=_period_or_off,
+            expect=PERIOD_OR_OFF,
         ),
-        "end": Field(float, 900.0, "last departure time, seconds", gt=0),
+        "end": Field(float, 900.0, "last departure time, seconds", gt=0, le=MAX_SIMULATED_SECONDS),
     },
     when_absent="omit",
 )
@@ -60,7 +97,11 @@ DEMAND = Table(
 SCENE = Table(
     {
         "radius": Field(
-            float, 200.0, "objects within this distance (m) of an observed junction are kept", gt=0
+            float,
+            200.0,
+            "objects within this distance (m) of an observed junction are kept",
+            gt=0,
+            le=MAX_LENGTH_M,
         ),
         "road": Field(bool, True, "road surface boxes and a ground plane"),
         "buildings": Field(bool, True, "building blocks between the roads"),
@@ -118,8 +159,22 @@ def check_traffic(t: dict, ctx: ScenarioContext, prefix: str) -> None:
             "no routes for traffic.net",
             "route files or a [traffic.demand] table",
         )
+    if t["network"] is not None:
+        try:
+            check_netgenerate_args(t["network"]["extra_args"])
+        except OptionError as exc:
+            raise ctx.error(
+                f"{prefix}.network.extra_args[{exc.index}]",
+                str(exc),
+                "netgenerate options that shape the network (none that names a file)",
+            ) from None
+    for key in ("routes", "additional"):
+        for i, path in enumerate(t[key]):
+            _check_confinable(path, ctx, f"{prefix}.{key}[{i}]")
     if t["demand"] is not None:
+        _check_trip_counts(t["demand"], ctx, prefix + ".demand")
         _check_vtypes(t["demand"], ctx, prefix + ".demand")
+        _check_confinable(t["demand"]["vtypes"], ctx, prefix + ".demand.vtypes")
     if t["sumocfg"] is not None:
         net = _check_sumocfg(t["sumocfg"], ctx, prefix + ".sumocfg")
         require_usable_junction(net, ctx, prefix + ".sumocfg")
@@ -139,7 +194,32 @@ def _check_sumocfg(path: str, ctx: ScenarioContext, key: str) -> str:
             raise ctx.error(
                 key, f"{path} refers to {str(p)!r}, which does not exist", "its input files"
             )
+    try:
+        sumocfg_options(cfg.options)
+    except OptionError as exc:
+        raise ctx.error(key, f"{path}: {exc}", "a sumocfg SUMO can run confined") from None
+    for p in [*cfg.routes, *cfg.additional]:
+        _check_confinable(str(p), ctx, key)
     return str(cfg.net)
+
+
+def _check_confinable(path: str, ctx: ScenarioContext, key: str) -> None:
+    try:
+        check_loadable(Path(path))
+    except ConfinementError as exc:
+        raise ctx.error(key, str(exc), "a SUMO XML file without <include>") from None
+
+
+def _check_trip_counts(demand: dict, ctx: ScenarioContext, key: str) -> None:
+    """randomTrips writes end / period trips per kind: bounded by MAX_TRIPS."""
+    for kind in ("vehicle", "bicycle", "person"):
+        period, end = demand[f"{kind}_period"], demand["end"]
+        if period > 0 and end / period > MAX_TRIPS:
+            raise ctx.error(
+                f"{key}.{kind}_period",
+                f"is {period:g}: {end / period:.0f} trips until end = {end:g} s",
+                f"at most {MAX_TRIPS} trips per kind (a longer period or an earlier end)",
+            )
 
 
 def _check_vtypes(demand: dict, ctx: ScenarioContext, key: str) -> None:
@@ -191,7 +271,11 @@ TRAFFIC = Table(
             list, [], "additional files (with net; added to a sumocfg's)", item=str, path="files"
         ),
         "step_length": Field(
-            float, None, "simulation step, seconds (default 0.1; a sumocfg's own)", gt=0
+            float,
+            None,
+            "simulation step, seconds (default 0.1; a sumocfg's own)",
+            ge=MIN_STEP_S,
+            le=10,
         ),
         "vehicle_colors": Field(
             list,

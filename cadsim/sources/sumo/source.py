@@ -12,7 +12,9 @@ closed.
 
 from __future__ import annotations
 
+import contextlib
 import logging
+import os
 import shutil
 import tempfile
 import weakref
@@ -26,9 +28,12 @@ import numpy as np
 from cadsim.scenario import Scenario, ScenarioError
 from cadsim.sources.base import ObserverPair, TrafficSource
 from cadsim.sources.observer_pairs import observer_pairs
+from cadsim.sources.sumo.build import ToolFailed
 from cadsim.sources.sumo.command import sumo_run
+from cadsim.sources.sumo.confinement import ConfinementError
 from cadsim.sources.sumo.frames import front_to_center, sumo_color
 from cadsim.sources.sumo.network import RoadNetwork
+from cadsim.sources.sumo.options import OptionError
 from cadsim.sources.sumo.static_scene import Region, build_static_scene, hex_to_rgb
 from cadsim.world import Snapshot, WorldObject
 
@@ -56,6 +61,19 @@ VEHICLE_CLASSES = {
 VAN_SHAPES = {"delivery", "passenger/van"}
 
 _active: list[SumoSource] = []  # the simulation running in this process (at most one)
+
+
+@contextlib.contextmanager
+def working_directory(folder: Path) -> Iterator[None]:
+    """Run the block with the process's working directory in ``folder``. libsumo runs in this
+    process: while it starts (and opens its outputs), a relative path SUMO resolves against the
+    working directory lands in the run folder. The worker runs one simulation at a time."""
+    previous = os.getcwd()
+    os.chdir(folder)
+    try:
+        yield
+    finally:
+        os.chdir(previous)
 
 
 def vehicle_class(vclass: str, gui_shape: str) -> tuple[str, str]:
@@ -94,13 +112,18 @@ class SumoSource(TrafficSource):
         (self.workdir / "runs").mkdir(parents=True, exist_ok=True)
         self.run_dir = Path(tempfile.mkdtemp(dir=self.workdir / "runs", prefix=f"seed{self.seed}-"))
         self._cleanup = weakref.finalize(self, shutil.rmtree, self.run_dir, True)
-        self.run = sumo_run(
-            self.scenario.traffic,
-            self.seed,
-            self.workdir,
-            self.run_dir,
-            self.scenario.sampling["max_time"],
-        )
+        try:
+            self.run = sumo_run(
+                self.scenario.traffic,
+                self.seed,
+                self.workdir,
+                self.run_dir,
+                self.scenario.sampling["max_time"],
+            )
+        except (OptionError, ConfinementError, ToolFailed) as exc:
+            traffic = self.scenario.traffic
+            key = next(f"traffic.{k}" for k in ("sumocfg", "net", "network") if traffic[k])
+            raise ScenarioError(self.scenario.path, key, str(exc)) from None
 
     def _observed_junctions(self) -> list[str]:
         traffic = self.scenario.traffic
@@ -138,10 +161,12 @@ class SumoSource(TrafficSource):
                 "(or run this one in another process)"
             )
         try:
-            libsumo.start(["sumo", *self.run.args])
+            with working_directory(self.run_dir):  # whatever SUMO resolves against it lands here
+                libsumo.start(["sumo", *self.run.args])
         except libsumo.TraCIException as exc:
-            raise RuntimeError(
-                f"sumo failed to start ({exc}); arguments: {self.run.args}"
+            log.debug("sumo arguments: %s", self.run.args)
+            raise ScenarioError(
+                self.scenario.path, "traffic", f"sumo failed to start ({exc})"
             ) from None
         _active.append(self)
         self._running = True
