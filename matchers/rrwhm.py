@@ -13,7 +13,7 @@ from .problem import Problem
 from .result import finish, max_normalised
 from .sinkhorn import sinkhorn
 from .sparse_tensor import SparseTensor
-from .tensor_build import resolve_tensor
+from .tensor_build import MAX_ENTRIES, resolve_tensor
 
 
 def reweighted_jump(x: np.ndarray, n: int, m: int, beta: float, sinkhorn_iter: int) -> np.ndarray:
@@ -90,6 +90,7 @@ def rrwhm(
     triangles: int | None = None,
     neighbours: int | None = None,
     sigma: float | None = None,
+    max_tensor_entries: int | None = MAX_ENTRIES,
     jump: float = 0.8,
     beta: float = 30.0,
     max_iter: int = 300,
@@ -114,7 +115,7 @@ def rrwhm(
     check_count("max_iter", max_iter)
     check_range("tol", tol, 0.0, np.inf)
     check_count("sinkhorn_iter", sinkhorn_iter)
-    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma)
+    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_tensor_entries)
     x, iterations, converged = hypergraph_walk(built, jump, beta, max_iter, tol, sinkhorn_iter)
     scores = max_normalised(x, problem.n1, problem.n2)
     info = {"converged": converged, "tensor_entries": built.nnz, "tensor": built.info}

@@ -5,10 +5,11 @@ from __future__ import annotations
 import time
 
 import numpy as np
+import scipy.sparse as sp
 
 from .matching import Matching
 from .options import check_count, check_problem, check_range, rng_from_seed
-from .pairwise import resolve_affinity
+from .pairwise import NEIGHBOURS, resolve_affinity
 from .problem import Problem
 from .result import finish, max_normalised
 
@@ -42,16 +43,19 @@ def sm(
     seed: int | None = 0,
     threshold: float | None = None,
     *,
-    affinity: np.ndarray | None = None,
+    affinity: np.ndarray | sp.spmatrix | None = None,
     sigma2: float = 0.5,
+    affinity_neighbours: int | None = NEIGHBOURS,
     max_iter: int = 200,
     tol: float = 1e-8,
 ) -> Matching:
     """Spectral Matching: principal eigenvector of the pairwise affinity M, then Hungarian.
 
-    Options: ``affinity`` — a precomputed (nm, nm) matrix in the a = i*m + j convention
-    (default: :func:`~matchers.pairwise.pairwise_affinity` with ``sigma2``, 0.5, in squared
-    position units); ``max_iter`` (200) and ``tol`` (1e-8) of the power iteration.
+    Options: ``affinity`` — a precomputed (nm, nm) matrix, dense or scipy sparse, in the
+    a = i*m + j convention (default: :func:`~matchers.pairwise.resolve_affinity` with ``sigma2``,
+    0.5, in squared position units, dense while a candidate match has at most
+    ``affinity_neighbours`` (500) partners, else keeping each match's 500 strongest);
+    ``max_iter`` (200) and ``tol`` (1e-8) of the power iteration.
     Scores: eigenvector divided by its maximum. Deterministic (uniform start; seed unused).
     """
     started = time.perf_counter()
@@ -60,7 +64,7 @@ def sm(
     check_count("max_iter", max_iter)
     check_range("tol", tol, 0.0, np.inf, open_low=True)
     n, m = problem.n1, problem.n2
-    affinity = resolve_affinity(problem, affinity, sigma2)
+    affinity = resolve_affinity(problem, affinity, sigma2, affinity_neighbours)
     x, iterations, converged = spectral_vector(affinity, max_iter, tol)
     scores = max_normalised(x, n, m)
     return finish("sm", scores, threshold, started, iterations, {"converged": converged})

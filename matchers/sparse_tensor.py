@@ -66,7 +66,9 @@ class SparseTensor:
         need not be symmetric: each stands for its whole permutation class. ``assume_unique``
         skips the sorting and de-duplication (an O(N log N) sort) when the caller guarantees
         three distinct indices per row and no repeated triple; rows then keep their input order."""
-        indices = np.asarray(indices, dtype=np.int64).reshape(-1, 3)
+        indices = np.asarray(indices).reshape(-1, 3)
+        if indices.dtype.kind not in "iu":
+            indices = indices.astype(np.int64)
         values = np.asarray(values, dtype=float).reshape(-1)
         if indices.shape[0] != values.shape[0]:
             raise ValueError(f"values: {values.shape[0]} values for {indices.shape[0]} triples")
@@ -76,6 +78,7 @@ class SparseTensor:
                 indices, values = indices[keep], values[keep]
             return cls(indices, values, n, m, info)
         size = n * m
+        indices = indices.astype(np.int64, copy=False)
         if indices.size and (indices.min() < 0 or indices.max() >= size):
             raise ValueError(f"indices: match indices must lie in [0, {size})")
         indices = _sort_rows(indices)

@@ -11,7 +11,7 @@ from .options import check_count, check_problem, rng_from_seed
 from .problem import Problem
 from .result import finish, max_normalised
 from .sparse_tensor import SparseTensor
-from .tensor_build import resolve_tensor
+from .tensor_build import MAX_ENTRIES, resolve_tensor
 
 NORMALISATIONS = ("doubly", "rows", "global")
 
@@ -93,6 +93,7 @@ def tm(
     triangles: int | None = None,
     neighbours: int | None = None,
     sigma: float | None = None,
+    max_tensor_entries: int | None = MAX_ENTRIES,
     max_iter: int = 100,
     normalisation: str = "doubly",
     sparsity: bool = True,
@@ -110,7 +111,7 @@ def tm(
     check_count("max_iter", max_iter)
     if normalisation not in NORMALISATIONS:
         raise ValueError(f"normalisation: expected one of {NORMALISATIONS}, got {normalisation!r}")
-    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma)
+    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_tensor_entries)
     x = tensor_power(built, max_iter, normalisation, bool(sparsity)) if built.nnz else None
     if x is None:  # no hyperedges: nothing but the uniform prior — report no evidence
         scores = np.zeros((problem.n1, problem.n2))
