@@ -215,72 +215,88 @@ def _capped_candidates(
     :data:`PERMUTATIONS`; instead of a tree over all 6 (6x the points to index), the tree holds
     ``base`` once and each sampled triangle asks it 6 times, its descriptor permuted back:
     |a - s c[P]| summed over vertices equals |s a[P^-1] - c| (s = -1 for a 2-D signed
-    descriptor in a reversing order). At most k pairs per sampled triangle, as uncapped."""
+    descriptor in a reversing order); a triangle keeps at most k pairs, as uncapped."""
     count = len(desc_s)
     signs = (1, 1, 1, -1, -1, -1) if oriented else (1,) * 6
     queries = np.concatenate(
         [desc_s[:, np.argsort(perm)] * sign for perm, sign in zip(PERMUTATIONS, signs, strict=True)]
     )
     tree = cKDTree(np.round(base_desc, _DECIMALS), balanced_tree=False, compact_nodes=False)
-    per_order = min(k, len(base))
-    pseudo, dist, idx = capped_neighbours(tree, np.round(queries, _DECIMALS), per_order, cap, p)
-    order, rows = np.divmod(pseudo, count)
-    per_row = np.bincount(rows, minlength=count)
-    if per_row.max() > k:  # a triangle's own k-NN list ends inside the cut: keep its k best
-        ranked = np.lexsort((dist, rows))
-        rank = np.arange(len(rows)) - np.repeat(np.cumsum(per_row) - per_row, per_row)
-        keep = np.zeros(len(rows), dtype=bool)
-        keep[ranked[rank < k]] = True
-        order, rows, dist, idx = order[keep], rows[keep], dist[keep], idx[keep]
-    by_row = np.argsort(rows, kind="stable")
-    order, rows, dist, idx = order[by_row], rows[by_row], dist[by_row], idx[by_row]
+    groups = np.tile(np.arange(count), 6)
+    query, dist, idx = capped_neighbours(
+        tree, np.round(queries, _DECIMALS), groups, k, min(k, len(base)), cap, p
+    )
+    order, rows = np.divmod(query, count)
     theirs = [base[idx, PERMUTATIONS[order, f]] for f in range(3)]
     return rows, dist, theirs
 
 
 def capped_neighbours(
-    tree: cKDTree, queries: np.ndarray, k: int, cap: int, p: int
+    tree: cKDTree,
+    queries: np.ndarray,
+    groups: np.ndarray,
+    k: int,
+    per_query: int,
+    cap: int,
+    p: int,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The ``cap`` smallest distances among every query's k nearest neighbours in ``tree``.
+    """The ``cap`` best pairs of the uncapped k-NN lists, without forming those lists.
 
-    Returns (query row, distance, neighbour index) of the kept pairs, ordered by query row and,
-    within a row, by rank — the order the uncapped builder would list them in. Each row starts
-    with about twice its share of ``cap`` neighbours; a row whose farthest neighbour is still
-    within the running cut (the cap-th smallest distance gathered so far) is asked again for
-    4x as many, up to k. A row not asked again therefore holds every neighbour within the cut,
-    and the rows asked for k neighbours got exactly the uncapped query, so the kept pairs are
-    the uncapped list's best ``cap`` (ties at the cut: earliest first)."""
+    Query q belongs to group ``groups[q]`` (a sampled triangle; its 6 vertex orders are 6
+    queries); a group's uncapped list is the k nearest over its queries' neighbours, each query
+    contributing at most ``per_query``. Every query starts with about twice its share of ``cap``
+    neighbours; one whose farthest neighbour is still within both the running cut (the cap-th
+    smallest distance of the pool) and its group's k-th smallest is asked again for 4x as many.
+    A query not asked again holds every neighbour that could still be kept, so the result is
+    the uncapped lists' ``cap`` smallest distances (ties: earliest in the pool first).
+    Returns (query, distance, neighbour index) of the kept pairs, grouped by group.
+    """
     count = len(queries)
-    first = min(k, max(1, -(-2 * cap // count)))
+    first = min(per_query, max(1, -(-2 * cap // count)))
     dist, idx = tree.query(queries, k=first, p=p, workers=-1)
-    dist, idx = dist.reshape(count, first), idx.reshape(count, first)
-    pool_row = np.repeat(np.arange(count), first)
+    pool_query = np.repeat(np.arange(count), first)
     pool_dist, pool_idx = dist.reshape(-1), idx.reshape(-1)
     asked = np.full(count, first)
-    farthest = dist[:, -1].copy()
+    farthest = dist.reshape(count, first)[:, -1].copy()
     while True:
+        keep, group_kth = _group_best(groups[pool_query], pool_dist, k, int(groups.max()) + 1)
+        pool_query, pool_dist, pool_idx = pool_query[keep], pool_dist[keep], pool_idx[keep]
         cut = np.partition(pool_dist, cap - 1)[cap - 1] if pool_dist.size > cap else np.inf
-        again = np.flatnonzero((asked < k) & (farthest <= cut))
+        again = np.flatnonzero(
+            (asked < per_query) & (farthest <= np.minimum(cut, group_kth[groups]))
+        )
         if not again.size:
             break
-        more = min(k, 4 * int(asked[again].max()))
+        more = min(per_query, 4 * int(asked[again].max()))
         dist, idx = tree.query(queries[again], k=more, p=p, workers=-1)
-        dist, idx = dist.reshape(len(again), more), idx.reshape(len(again), more)
         stale = np.zeros(count, dtype=bool)
         stale[again] = True
-        keep = ~stale[pool_row]
-        pool_row = np.concatenate([pool_row[keep], np.repeat(again, more)])
-        pool_dist = np.concatenate([pool_dist[keep], dist.reshape(-1)])
-        pool_idx = np.concatenate([pool_idx[keep], idx.reshape(-1)])
-        asked[again], farthest[again] = more, dist[:, -1]
+        fresh = ~stale[pool_query]
+        pool_query = np.concatenate([pool_query[fresh], np.repeat(again, more)])
+        pool_dist = np.concatenate([pool_dist[fresh], dist.reshape(-1)])
+        pool_idx = np.concatenate([pool_idx[fresh], idx.reshape(-1)])
+        asked[again], farthest[again] = more, dist.reshape(len(again), more)[:, -1]
     if pool_dist.size > cap:
-        cut = np.partition(pool_dist, cap - 1)[cap - 1]
         inside = pool_dist < cut
-        tied = np.flatnonzero(pool_dist == cut)[: cap - int(inside.sum())]
-        inside[tied] = True
-        pool_row, pool_dist, pool_idx = pool_row[inside], pool_dist[inside], pool_idx[inside]
-    order = np.argsort(pool_row, kind="stable")  # rows re-asked were appended at the end
-    return pool_row[order], pool_dist[order], pool_idx[order]
+        inside[np.flatnonzero(pool_dist == cut)[: cap - int(inside.sum())]] = True
+        pool_query, pool_dist, pool_idx = pool_query[inside], pool_dist[inside], pool_idx[inside]
+    order = np.argsort(groups[pool_query], kind="stable")
+    return pool_query[order], pool_dist[order], pool_idx[order]
+
+
+def _group_best(group: np.ndarray, dist: np.ndarray, k: int, groups: int):
+    """(mask of the pool entries among their group's k smallest distances — ties: earlier
+    first —, each group's k-th smallest distance or inf if it has fewer than k)."""
+    size = np.bincount(group, minlength=groups)
+    kth = np.full(groups, np.inf)
+    if size.max() <= k:
+        return np.ones(len(dist), dtype=bool), kth
+    ranked = np.lexsort((dist, group))
+    rank = np.empty(len(dist), dtype=np.int64)
+    rank[ranked] = np.arange(len(dist)) - np.repeat(np.cumsum(size) - size, size)
+    full = rank == k - 1
+    kth[group[full]] = dist[full]
+    return rank < k, kth
 
 
 def resolve_tensor(
