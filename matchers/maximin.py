@@ -128,8 +128,8 @@ def maximin(
     8. Hungarian on the scores (x divided by its maximum); ``threshold`` drops weak pairs.
 
     Tensor options as for every hypergraph matcher (``tensor`` "paper" default | "duchenne" |
-    a SparseTensor; ``triangles``, ``neighbours``, ``sigma``; ``seed`` drives triangle sampling
-    and the random init). With no tensor entries (fewer than 3 objects in a view) the walk term
+    a SparseTensor; ``triangles``, ``neighbours``, ``sigma``, ``max_tensor_entries``; ``seed``
+    drives triangle sampling and the random init). With no tensor entries (fewer than 3 objects in a view) the walk term
     is zero and the result rests on appearance alone.
     """
     started = time.perf_counter()

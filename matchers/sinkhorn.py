@@ -71,17 +71,20 @@ def _positive_sweeps(
     size_r, size_c = work.shape
     rows, cols = np.empty(size_r), np.empty(size_c)
     row_factor = rows[:, None]
+    # ufuncs bound once and called positionally: on a 20 x 20 matrix the call overhead is the cost
+    add, divide, multiply = np.add.reduce, np.divide, np.multiply
+    largest, smallest = np.maximum.reduce, np.minimum.reduce
     sweeps = 0
     for sweeps in range(1, max_iter + 1):  # noqa: B007 - sweeps is reported
-        np.add.reduce(work, axis=1, out=rows)
-        if sweeps > 1 and rows.max() - row_target <= tol and row_target - rows.min() <= tol:
+        add(work, 1, None, rows)
+        if sweeps > 1 and largest(rows) - row_target <= tol and row_target - smallest(rows) <= tol:
             sweeps -= 1
             break
-        np.divide(row_target, rows, out=rows)
-        work *= row_factor
-        np.add.reduce(work, axis=0, out=cols)
-        np.divide(col_target, cols, out=cols)
-        work *= cols
+        divide(row_target, rows, rows)
+        multiply(work, row_factor, work)
+        add(work, 0, None, cols)
+        divide(col_target, cols, cols)
+        multiply(work, cols, work)
     if not (np.isfinite(rows).all() and np.isfinite(cols).all()):
         return None
     return work, sweeps
