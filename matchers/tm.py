@@ -45,13 +45,14 @@ def _doubly_positive(mat: np.ndarray, rounds: int) -> np.ndarray:
     bit-identical, without its per-call allocations and zero-norm masking."""
     square = np.empty_like(mat)
     rows, cols = np.empty((mat.shape[0], 1)), np.empty((1, mat.shape[1]))
+    add, multiply, sqrt, divide = np.add.reduce, np.multiply, np.sqrt, np.divide
     for _ in range(rounds):
-        np.multiply(mat, mat, out=square)
-        np.sqrt(np.add.reduce(square, axis=1, keepdims=True, out=rows), out=rows)
-        mat /= rows
-        np.multiply(mat, mat, out=square)
-        np.sqrt(np.add.reduce(square, axis=0, keepdims=True, out=cols), out=cols)
-        mat /= cols
+        multiply(mat, mat, square)
+        sqrt(add(square, 1, None, rows, True), rows)
+        divide(mat, rows, mat)
+        multiply(mat, mat, square)
+        sqrt(add(square, 0, None, cols, True), cols)
+        divide(mat, cols, mat)
     return mat
 
 
