@@ -19,7 +19,7 @@ from itertools import permutations
 
 import numpy as np
 
-from .tensor_product import PAIR_LIMIT, SlotLayout, index_dtype
+from .tensor_product import FUSE_AFTER, PAIR_LIMIT, SlotLayout, index_dtype
 
 
 @dataclass(frozen=True, eq=False)
@@ -114,8 +114,8 @@ class SparseTensor:
 
     def _fused(self) -> object | None:
         """The CSR product matrix (:mod:`matchers.tensor_product`), or None while the bincount
-        passes are cheaper: the layout is sorted on the second product of an index pattern,
-        and only when the (nm)^2 outer product fits :data:`PAIR_LIMIT`."""
+        passes are cheaper: the layout is sorted on the FUSE_AFTER-th product of an index
+        pattern, and only when the (nm)^2 outer product fits :data:`PAIR_LIMIT`."""
         if self._matrix:
             return self._matrix[0]
         if self.size * self.size > PAIR_LIMIT or not self.nnz:
@@ -123,7 +123,7 @@ class SparseTensor:
         plan = self._plan
         if "layout" not in plan:
             plan["calls"] = plan.get("calls", 0) + 1
-            if plan["calls"] < 2:
+            if plan["calls"] < FUSE_AFTER:
                 return None
             plan["layout"] = SlotLayout(self._slots, self.nnz, self.size)
         self._matrix.append(plan["layout"].matrix(self.values))

@@ -13,9 +13,9 @@ row's terms in storage order, in the same order and with the same roundings as `
 the two are bit-identical (a test checks it), so switching between them never changes a result.
 
 The outer product needs (nm)^2 doubles, so the CSR path is used only while that is at most
-:data:`PAIR_LIMIT` (nm <= 2048); larger problems use the ``bincount`` passes. The sort costs about
-as much as three ``bincount`` products, so a tensor builds its layout on its second product
-(one-shot uses, such as BCAGM's restricted tensors, never pay for it).
+:data:`PAIR_LIMIT` (nm <= 2048); larger problems use the ``bincount`` passes. The sort costs a
+few ``bincount`` products, so a tensor builds its layout on its :data:`FUSE_AFTER`-th product
+(short uses, such as BCAGM's restricted tensors, never pay for it).
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ import numpy as np
 import scipy.sparse as sp
 
 PAIR_LIMIT = 2048 * 2048  # largest (nm)^2 for which the outer product w is formed (32 MB)
+FUSE_AFTER = 3  # products of an index pattern run as bincount passes before the layout is built
 
 
 def index_dtype(size: int) -> type:
@@ -38,23 +39,20 @@ class SlotLayout:
         # slots: (3N,) slot 0, 1, 2 match indices of the N triples, concatenated
         self.size = size
         self.count = count
-        key = slots.astype(np.uint16) if size <= 2**16 else slots  # uint16: radix sort
-        order = np.argsort(key, kind="stable")
-        ia, ib, ic = slots[:count], slots[count : 2 * count], slots[2 * count :]
+        key = slots.astype(np.uint16) if size <= 2**16 else slots  # uint16: a radix sort
         dtype = index_dtype(max(size * size, 3 * count + 1))
-        pairs = np.empty(3 * count, dtype=dtype)
-        np.add(ib.astype(dtype) * size, ic, out=pairs[:count])
-        np.add(ia.astype(dtype) * size, ic, out=pairs[count : 2 * count])
-        np.add(ia.astype(dtype) * size, ib, out=pairs[2 * count :])
-        self.columns = pairs[order]
-        self.entry = (order % count).astype(dtype) if count else order.astype(dtype)
+        self.order = np.argsort(key, kind="stable").astype(dtype)
+        ia, ib, ic = slots[:count], slots[count : 2 * count], slots[2 * count :]
+        pairs = np.empty(3 * count, dtype=dtype)  # column b*nm + c of each incidence
+        np.add(np.multiply(ib, size, dtype=dtype), ic, out=pairs[:count])
+        np.add(np.multiply(ia, size, dtype=dtype), ic, out=pairs[count : 2 * count])
+        np.add(np.multiply(ia, size, dtype=dtype), ib, out=pairs[2 * count :])
+        self.columns = pairs[self.order]
         indptr = np.zeros(size + 1, dtype=dtype)
         np.cumsum(np.bincount(slots, minlength=size), out=indptr[1:])
         self.indptr = indptr
 
     def matrix(self, values: np.ndarray) -> sp.csr_matrix:
         """The (nm, nm*nm) CSR matrix of these incidences with the triples' ``values``."""
-        return sp.csr_matrix(
-            (values[self.entry], self.columns, self.indptr),
-            shape=(self.size, self.size * self.size),
-        )
+        data = np.concatenate([values, values, values])[self.order]
+        return sp.csr_matrix((data, self.columns, self.indptr), shape=(self.size, self.size**2))

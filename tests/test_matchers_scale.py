@@ -9,6 +9,7 @@ import scipy.sparse as sp
 from matchers import Problem, SparseTensor, build_tensor, get
 from matchers.pairwise import pairwise_affinity, resolve_affinity, sparse_pairwise_affinity
 from matchers.tensor_build import MAX_ENTRIES
+from matchers.tensor_product import FUSE_AFTER
 
 
 def _problem(n, m, dim=3, seed=0, noise=0.05, features=True):
@@ -161,8 +162,10 @@ def test_fused_product_is_bit_identical_to_bincount():
     rng = np.random.default_rng(0)
     x, y, z = rng.random((3, tensor.size))
     plain = [tensor.slot_sums(x), again.bilinear(y, z)]  # first products: bincount passes
+    for _ in range(FUSE_AFTER - 2):
+        tensor.slot_sums(x)
     assert not tensor._matrix and not again._matrix
-    fused = [tensor.slot_sums(x), tensor.bilinear(y, z)]  # later ones: the CSR layout
+    fused = [tensor.slot_sums(x), tensor.bilinear(y, z)]  # from the FUSE_AFTER-th: the layout
     assert tensor._matrix
     for a, b in zip(plain, fused, strict=True):
         assert np.array_equal(a, b)
