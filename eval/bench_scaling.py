@@ -8,8 +8,9 @@ against n). It is a benchmark output, not a ``make reproduce`` result.
 
 ``python -m eval.bench_scaling --cap-accuracy`` runs every hypergraph matcher with and without
 the default tensor cap (``max_tensor_entries``) where the cap binds: the outlier protocol of
-:mod:`eval.validation.synthetic` with outliers in both views (10 inliers, 50 outliers per view by
-default; uncapped, 100 per view is 1.5e8 entries, beyond this machine) and the synthetic CoID
+:mod:`eval.validation.synthetic` with 20 inliers (the published 10 give view 1 only 120
+triangles, too few for the cap to bind) and 50 and 100 outliers (``--both-views``: in each view)
+and the synthetic CoID
 benchmark of :mod:`eval.validation.coid_synthetic` scaled to 40-60 objects per view, and prints
 the markdown table kept in docs/matchers.md. Both tensors of a problem come from the same seed.
 """
@@ -138,18 +139,19 @@ def scaling(sizes: tuple[int, ...], matchers: list[str], out: Path, timeout_s: f
 # --------------------------------------------------------------------------- cap accuracy
 
 
-def _outlier_problems(outliers: int, trials: int, seed: int):
-    """The outlier protocol of :mod:`eval.validation.synthetic` (10 inliers, sigma 0.03, scale
-    1.5) with ``outliers`` in *each* view (the published protocol has them in view 2 only, where
-    10 objects in view 1 give 120 triangles: the cap never binds). Inliers are view 1's rows
-    0-9; ``truth`` gives their partners."""
+def _outlier_problems(inliers: int, outliers: int, both: bool, trials: int, seed: int):
+    """The outlier protocol of :mod:`eval.validation.synthetic` (sigma 0.03, scale 1.5) with
+    ``inliers`` inliers (published: 10, where view 1's 120 triangles times k stay under the cap
+    even at 200 outliers) and ``outliers`` in view 2, or in each view when ``both``. Inliers are
+    view 1's first rows; ``truth`` gives their partners."""
     from eval.validation.point_sets import make_point_sets
     from matchers import Problem
 
     for t in range(trials):
-        rng = np.random.default_rng([seed, 5021, outliers, t])
-        ps = make_point_sets(rng, 10, outliers, sigma=0.03, scale=1.5)
-        points1 = np.concatenate([ps.points1, rng.standard_normal((outliers, 2))])
+        rng = np.random.default_rng([seed, 5021, inliers, outliers, int(both), t])
+        ps = make_point_sets(rng, inliers, outliers, sigma=0.03, scale=1.5)
+        extra = rng.standard_normal((outliers if both else 0, 2))
+        points1 = np.concatenate([ps.points1, extra])
         yield Problem(points1, ps.points2), ps.truth, int(rng.integers(2**31))
 
 
@@ -173,7 +175,9 @@ def _score(kind: str, pairs: np.ndarray, truth: np.ndarray, n1: int, n2: int) ->
     return float(pair_metrics(pairs, truth, n1, n2).f1)
 
 
-def cap_accuracy(outliers: list[int], trials: int, frames: int, seed: int) -> None:
+def cap_accuracy(
+    inliers: int, outliers: list[int], both: bool, trials: int, frames: int, seed: int
+) -> None:
     """Accuracy (F1 for CoID, full Hungarian assignment, no threshold) of every hypergraph
     matcher on the same problems with the capped and the uncapped tensor."""
     from matchers import build_tensor, get
@@ -182,13 +186,16 @@ def cap_accuracy(outliers: list[int], trials: int, frames: int, seed: int) -> No
         *[
             (
                 "outliers",
-                f"10 inliers + {k} outliers per view",
+                f"{inliers} inliers + {k} outliers" + (" in each view" if both else ""),
                 "duchenne",
-                list(_outlier_problems(k, trials, seed)),
+                list(_outlier_problems(inliers, k, both, trials, seed)),
             )
             for k in outliers
         ],
-        ("coid", "CoID 40-60 objects", "paper", list(_coid_problems(frames, seed))),
+        *(
+            [("coid", "CoID 40-60 objects", "paper", list(_coid_problems(frames, seed)))]
+            * (frames > 0)
+        ),
     ]
     print("| problems | " + " | ".join(HYPERGRAPH) + " | entries capped / uncapped |")
     print("|---|" + "---|" * (len(HYPERGRAPH) + 1))
@@ -228,7 +235,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--timeout", type=float, default=600.0, help="seconds per point")
     parser.add_argument("--point", nargs=2, metavar=("MATCHER", "N"), help=argparse.SUPPRESS)
     parser.add_argument("--cap-accuracy", action="store_true", help="the cap's accuracy table")
-    parser.add_argument("--outliers", type=int, nargs="+", default=[50], help="per view")
+    parser.add_argument("--inliers", type=int, default=20, help="outlier protocol inliers")
+    parser.add_argument("--outliers", type=int, nargs="+", default=[50, 100], help="outliers")
+    parser.add_argument("--both-views", action="store_true", help="outliers in each view")
     parser.add_argument("--trials", type=int, default=3, help="outlier trials per setting")
     parser.add_argument("--frames", type=int, default=3, help="CoID frame pairs")
     parser.add_argument("--seed", type=int, default=0)
@@ -236,7 +245,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.point:
         print(json.dumps(measure_point(args.point[0], int(args.point[1]))))
     elif args.cap_accuracy:
-        cap_accuracy(args.outliers, args.trials, args.frames, args.seed)
+        cap_accuracy(
+            args.inliers, args.outliers, args.both_views, args.trials, args.frames, args.seed
+        )
     else:
         scaling(tuple(args.sizes), args.matchers, args.out, args.timeout)
     return 0
