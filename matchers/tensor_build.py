@@ -40,6 +40,7 @@ The "duchenne" bandwidth is then the mean over the kept entries.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -140,9 +141,10 @@ def build_tensor(
     oriented = spec.signed_in_2d and problem.dim == 2
     if not len(tri_s):
         return SparseTensor.empty(n, m, info | {"entries_raw": 0})
-    base = all_triangles(len(full_pts))
-    capped = max_entries is not None and len(tri_s) * min(k, 6 * len(base)) > max_entries
+    ordered = 6 * math.comb(len(full_pts), 3)
+    capped = max_entries is not None and len(tri_s) * min(k, ordered) > max_entries
     if capped:  # the count of valid ordered triples decides
+        base = all_triangles(len(full_pts))
         base_desc, base_valid = spec.descriptor(full_pts, base)
         base, base_desc = base[base_valid], base_desc[base_valid]
         capped = len(tri_s) * min(k, 6 * len(base)) > max_entries
