@@ -12,7 +12,7 @@ from .options import check_count, check_problem, rng_from_seed
 from .problem import Problem
 from .result import finish
 from .sparse_tensor import SparseTensor
-from .tensor_build import resolve_tensor
+from .tensor_build import MAX_ENTRIES, resolve_tensor
 
 _ASCENT = 1e-12  # relative increase of the objective that counts as ascent
 
@@ -120,6 +120,7 @@ def bcagm(
     triangles: int | None = None,
     neighbours: int | None = None,
     sigma: float | None = None,
+    max_tensor_entries: int | None = MAX_ENTRIES,
     max_iter: int = 50,
 ) -> Matching:
     """BCAGM (:func:`bcagm_solve`; the plain 4-block variant, no MP/IPFP sub-solver), then the
@@ -136,7 +137,7 @@ def bcagm(
     rng = rng_from_seed(seed)
     check_count("max_iter", max_iter)
     n, m = problem.n1, problem.n2
-    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma)
+    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_tensor_entries)
     x, sweeps, info = bcagm_solve(built, max_iter)
     support = x * built.product(x)
     top = support.max() if support.size else 0.0

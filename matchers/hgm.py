@@ -11,7 +11,7 @@ from .options import check_count, check_problem, check_range, rng_from_seed
 from .problem import Problem
 from .result import finish, max_normalised
 from .sparse_tensor import SparseTensor
-from .tensor_build import resolve_tensor
+from .tensor_build import MAX_ENTRIES, resolve_tensor
 
 
 def nearest_substochastic_kl(
@@ -83,6 +83,7 @@ def hgm(
     triangles: int | None = None,
     neighbours: int | None = None,
     sigma: float | None = None,
+    max_tensor_entries: int | None = MAX_ENTRIES,
     max_iter: int = 1000,
     tol: float = 1e-3,
 ) -> Matching:
@@ -98,7 +99,7 @@ def hgm(
     rng = rng_from_seed(seed)
     check_count("max_iter", max_iter)
     check_range("tol", tol, 0.0, np.inf, open_low=True)
-    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma)
+    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_tensor_entries)
     z, cycles, converged = hgm_solve(built, max_iter, tol)
     scores = max_normalised(z, problem.n1, problem.n2)
     info = {"converged": converged, "tensor_entries": built.nnz, "tensor": built.info}

@@ -13,7 +13,7 @@ from .problem import Problem
 from .result import finish, max_normalised
 from .sinkhorn import sinkhorn
 from .sparse_tensor import SparseTensor
-from .tensor_build import resolve_tensor
+from .tensor_build import MAX_ENTRIES, resolve_tensor
 
 INITS = ("uniform", "appearance", "random")
 NORMALISATIONS = ("sum", "none")
@@ -108,6 +108,7 @@ def maximin(
     triangles: int | None = None,
     neighbours: int | None = None,
     sigma: float | None = None,
+    max_tensor_entries: int | None = MAX_ENTRIES,
     alpha: float = 0.3,
     beta: float = 1.0,
     max_iter: int = 100,
@@ -128,8 +129,8 @@ def maximin(
     8. Hungarian on the scores (x divided by its maximum); ``threshold`` drops weak pairs.
 
     Tensor options as for every hypergraph matcher (``tensor`` "paper" default | "duchenne" |
-    a SparseTensor; ``triangles``, ``neighbours``, ``sigma``; ``seed`` drives triangle sampling
-    and the random init). With no tensor entries (fewer than 3 objects in a view) the walk term
+    a SparseTensor; ``triangles``, ``neighbours``, ``sigma``, ``max_tensor_entries``; ``seed``
+    drives triangle sampling and the random init). With no tensor entries (fewer than 3 objects in a view) the walk term
     is zero and the result rests on appearance alone.
 
     ``first_order``: an (n, m) array in [0, 1] used as b instead of the features' cosine
@@ -151,7 +152,7 @@ def maximin(
     n, m = problem.n1, problem.n2
     if n == 0 or m == 0:
         return finish("maximin", np.zeros((n, m)), threshold, started, 0, {"converged": True})
-    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma)
+    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_tensor_entries)
     b = (
         appearance_similarity(problem).reshape(-1)
         if first_order is None

@@ -19,16 +19,17 @@ from __future__ import annotations
 import time
 
 import numpy as np
+import scipy.sparse as sp
 
 from .appearance_similarity import appearance_similarity
 from .matching import Matching
 from .options import check_count, check_problem, check_range, rng_from_seed
-from .pairwise import resolve_affinity
+from .pairwise import NEIGHBOURS, resolve_affinity
 from .problem import Problem
 from .result import finish, max_normalised
 from .rrwhm import jump_walk
 from .sparse_tensor import SparseTensor
-from .tensor_build import resolve_tensor
+from .tensor_build import MAX_ENTRIES, resolve_tensor
 
 
 def multi_order_step(b: np.ndarray, affinity: np.ndarray, tensor: SparseTensor, weights):
@@ -62,10 +63,12 @@ def mos(
     triangles: int | None = None,
     neighbours: int | None = None,
     sigma: float | None = None,
-    affinity: np.ndarray | None = None,
+    max_tensor_entries: int | None = MAX_ENTRIES,
+    affinity: np.ndarray | sp.spmatrix | None = None,
     sigma2: float | None = None,
     sigma_scale: float | None = None,
     pairwise: str = "positions",
+    affinity_neighbours: int | None = NEIGHBOURS,
     weights: tuple[float, float, float] = (1 / 3, 1 / 3, 1 / 3),
     jump: float = 0.8,
     beta: float = 30.0,
@@ -76,8 +79,8 @@ def mos(
     """MOS (see the module docstring), then Hungarian.
 
     ``weights`` (first, second, third order; non-negative, not all zero; default equal thirds),
-    pairwise options ``affinity`` / ``sigma2`` / ``sigma_scale`` / ``pairwise`` as for
-    :func:`matchers.sm.sm` (the second-order term), tensor
+    pairwise options ``affinity`` / ``sigma2`` / ``sigma_scale`` / ``pairwise`` /
+    ``affinity_neighbours`` as for :func:`matchers.sm.sm` (the second-order term), tensor
     options as for every hypergraph matcher, walk options as for :func:`matchers.rrwhm.rrwhm`.
     Scores: the final distribution divided by its maximum.
     """
@@ -103,8 +106,10 @@ def mos(
     check_range("tol", tol, 0.0, np.inf)
     check_count("sinkhorn_iter", sinkhorn_iter)
     n, m = problem.n1, problem.n2
-    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma)
-    pairwise = resolve_affinity(problem, affinity, sigma2, sigma_scale, pairwise)
+    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_tensor_entries)
+    pairwise = resolve_affinity(
+        problem, affinity, sigma2, sigma_scale, pairwise, affinity_neighbours
+    )
     b = appearance_similarity(problem).reshape(-1)
     step = multi_order_step(b, pairwise, built, weights)
     x, iterations, converged = jump_walk(step, n, m, jump, beta, max_iter, tol, sinkhorn_iter)

@@ -13,7 +13,7 @@ from .problem import Problem
 from .result import finish, max_normalised
 from .sinkhorn import sinkhorn
 from .sparse_tensor import SparseTensor
-from .tensor_build import resolve_tensor
+from .tensor_build import MAX_ENTRIES, resolve_tensor
 
 
 def reweighted_jump(x: np.ndarray, n: int, m: int, beta: float, sinkhorn_iter: int) -> np.ndarray:
@@ -90,6 +90,7 @@ def rrwhm(
     triangles: int | None = None,
     neighbours: int | None = None,
     sigma: float | None = None,
+    max_tensor_entries: int | None = MAX_ENTRIES,
     jump: float = 0.8,
     beta: float = 30.0,
     max_iter: int = 300,
@@ -100,7 +101,9 @@ def rrwhm(
 
     Tensor options (every hypergraph matcher): ``tensor`` "paper" | "duchenne" | a prebuilt
     :class:`~matchers.sparse_tensor.SparseTensor`; ``triangles``, ``neighbours``, ``sigma``
-    override the recipe's sampled-triangle count, k-NN count and bandwidth
+    override the recipe's sampled-triangle count, k-NN count and bandwidth;
+    ``max_tensor_entries`` (250,000; None = no cap) bounds triangles x neighbours, keeping the
+    best-ranked entries — it binds only above n*m = 500 with the defaults
     (:func:`~matchers.tensor_build.build_tensor`); ``seed`` drives the triangle sampling.
     Walk options (reference defaults): ``jump`` 0.8 (c = 0.2 on the walk), ``beta`` 30,
     ``max_iter`` 300, ``tol`` 1e-6 (squared L2 change), ``sinkhorn_iter`` 100 (our cap).
@@ -114,7 +117,7 @@ def rrwhm(
     check_count("max_iter", max_iter)
     check_range("tol", tol, 0.0, np.inf)
     check_count("sinkhorn_iter", sinkhorn_iter)
-    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma)
+    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_tensor_entries)
     x, iterations, converged = hypergraph_walk(built, jump, beta, max_iter, tol, sinkhorn_iter)
     scores = max_normalised(x, problem.n1, problem.n2)
     info = {"converged": converged, "tensor_entries": built.nnz, "tensor": built.info}

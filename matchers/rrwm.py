@@ -5,18 +5,19 @@ from __future__ import annotations
 import time
 
 import numpy as np
+import scipy.sparse as sp
 
 from .indexing import conflict_mask
 from .matching import Matching
 from .options import check_count, check_problem, check_range, rng_from_seed
-from .pairwise import resolve_affinity
+from .pairwise import NEIGHBOURS, resolve_affinity
 from .problem import Problem
 from .result import finish, max_normalised
 from .sinkhorn import sinkhorn
 
 
 def reweighted_walk(
-    affinity: np.ndarray,
+    affinity: np.ndarray | sp.spmatrix,
     n: int,
     m: int,
     jump: float = 0.8,
@@ -43,13 +44,23 @@ def reweighted_walk(
     or all-zero when M is all-zero —, iterations, converged).
     """
     size = n * m
-    mat = np.array(affinity, dtype=float)
-    if zero_conflicts and size:
-        mat[conflict_mask(n, m)] = 0.0
-    col_max = mat.sum(axis=0).max() if size else 0.0
+    if sp.issparse(affinity):
+        mat = sp.csr_matrix(affinity, dtype=float, copy=True)
+        if zero_conflicts and mat.nnz:
+            a, b = np.repeat(np.arange(size), np.diff(mat.indptr)), mat.indices
+            mat.data[(a // m == b // m) | (a % m == b % m)] = 0.0
+        col_max = np.asarray(mat.sum(axis=0)).max() if size else 0.0
+    else:
+        mat = np.array(affinity, dtype=float)
+        if zero_conflicts and size:
+            mat[conflict_mask(n, m)] = 0.0
+        col_max = mat.sum(axis=0).max() if size else 0.0
     if not col_max > 0:
         return np.zeros(size), 0, True
-    mat /= col_max
+    if sp.issparse(mat):
+        mat.data /= col_max
+    else:
+        mat /= col_max
     x = np.full(size, 1.0 / size)
     y = x.copy()
     previous = x.copy()
@@ -75,10 +86,11 @@ def rrwm(
     seed: int | None = 0,
     threshold: float | None = None,
     *,
-    affinity: np.ndarray | None = None,
+    affinity: np.ndarray | sp.spmatrix | None = None,
     sigma2: float | None = None,
     sigma_scale: float | None = None,
     pairwise: str = "positions",
+    affinity_neighbours: int | None = NEIGHBOURS,
     jump: float = 0.8,
     beta: float = 30.0,
     max_iter: int = 300,
@@ -86,9 +98,11 @@ def rrwm(
     zero_conflicts: bool = True,
     sinkhorn_iter: int = 100,
 ) -> Matching:
-    """RRWM on the pairwise affinity (:func:`~matchers.pairwise.pairwise_affinity`, ``sigma2``
+    """RRWM on the pairwise affinity (:func:`~matchers.pairwise.resolve_affinity`: ``sigma2``
     0.5 or relative ``sigma_scale``, ``pairwise`` "positions" | "image", as for
-    :func:`matchers.sm.sm`; or a precomputed ``affinity`` in the a = i*m + j convention), then
+    :func:`matchers.sm.sm`; dense up to ``affinity_neighbours`` (500) partners per candidate match,
+    sparse beyond; or a precomputed dense or scipy-sparse ``affinity`` in the a = i*m + j
+    convention), then
     Hungarian.
 
     Defaults are the original code's: ``jump`` 0.8 (weight on the reweighted jump), ``beta`` 30,
@@ -105,7 +119,9 @@ def rrwm(
     check_range("tol", tol, 0.0, np.inf)
     check_count("sinkhorn_iter", sinkhorn_iter)
     n, m = problem.n1, problem.n2
-    affinity = resolve_affinity(problem, affinity, sigma2, sigma_scale, pairwise)
+    affinity = resolve_affinity(
+        problem, affinity, sigma2, sigma_scale, pairwise, affinity_neighbours
+    )
     x, iterations, converged = reweighted_walk(
         affinity, n, m, jump, beta, max_iter, tol, bool(zero_conflicts), sinkhorn_iter
     )

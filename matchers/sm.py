@@ -5,10 +5,11 @@ from __future__ import annotations
 import time
 
 import numpy as np
+import scipy.sparse as sp
 
 from .matching import Matching
 from .options import check_count, check_problem, check_range, rng_from_seed
-from .pairwise import resolve_affinity
+from .pairwise import NEIGHBOURS, resolve_affinity
 from .problem import Problem
 from .result import finish, max_normalised
 
@@ -42,10 +43,11 @@ def sm(
     seed: int | None = 0,
     threshold: float | None = None,
     *,
-    affinity: np.ndarray | None = None,
+    affinity: np.ndarray | sp.spmatrix | None = None,
     sigma2: float | None = None,
     sigma_scale: float | None = None,
     pairwise: str = "positions",
+    affinity_neighbours: int | None = NEIGHBOURS,
     max_iter: int = 200,
     tol: float = 1e-8,
 ) -> Matching:
@@ -56,7 +58,9 @@ def sm(
     position units, or ``sigma_scale``, the kernel width sigma as a multiple of the problem's
     median within-view distance; ``pairwise`` "positions" (default) or "image" — edge lengths
     between box centres, pixels1/pixels2); ``max_iter`` (200) and ``tol`` (1e-8) of the power
-    iteration.
+    iteration; ``affinity_neighbours`` (500): dense while a candidate
+    match has at most that many partners, else each match keeps its 500 strongest (a precomputed
+    ``affinity`` may be scipy sparse).
     Scores: eigenvector divided by its maximum. Deterministic (uniform start; seed unused).
     """
     started = time.perf_counter()
@@ -65,7 +69,9 @@ def sm(
     check_count("max_iter", max_iter)
     check_range("tol", tol, 0.0, np.inf, open_low=True)
     n, m = problem.n1, problem.n2
-    affinity = resolve_affinity(problem, affinity, sigma2, sigma_scale, pairwise)
+    affinity = resolve_affinity(
+        problem, affinity, sigma2, sigma_scale, pairwise, affinity_neighbours
+    )
     x, iterations, converged = spectral_vector(affinity, max_iter, tol)
     scores = max_normalised(x, n, m)
     return finish("sm", scores, threshold, started, iterations, {"converged": converged})

@@ -1,31 +1,40 @@
 """Sparse super-symmetric third-order affinity tensor over the n*m candidate matches.
 
-Storage: one row per unordered triple of distinct candidate matches, ``indices`` (N, 3) int64
-(match index a = i*m + j, see :mod:`matchers.indexing`; rows are in increasing order a < b < c
+Storage: one row per unordered triple of distinct candidate matches, ``indices`` (N, 3) int32
+(int64 only if n*m does not fit; match index a = i*m + j, see :mod:`matchers.indexing`; rows
+are in increasing order a < b < c
 unless the tensor was built with ``assume_unique``, where they are in the builder's order — no
 operation depends on the order inside a row) and ``values`` (N,) > 0.
 The tensor it stands for is super-symmetric: T[a, b, c] = value for all 6 permutations of a stored
 triple; every other entry — including any with a repeated index — is 0. Memory is linear in N;
 no dense (nm)^3 array is ever formed (except by :meth:`SparseTensor.dense`, for tests).
+Products run as one fused pass (:mod:`matchers.tensor_product`), bit-identical to the
+``np.bincount`` formulation they replace.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from itertools import permutations
 
 import numpy as np
+
+from .tensor_product import FUSE_AFTER, PAIR_LIMIT, SlotLayout, index_dtype
 
 
 @dataclass(frozen=True, eq=False)
 class SparseTensor:
     """Super-symmetric sparse tensor; build it with :meth:`from_entries` (or :meth:`empty`)."""
 
-    indices: np.ndarray  # (N, 3) int64, three distinct indices per row, no triple twice
+    indices: np.ndarray  # (N, 3) int32 (int64 if nm >= 2^31), distinct per row, no triple twice
     values: np.ndarray  # (N,) float
     n: int
     m: int
     info: dict | None = None
+    # product plan shared by tensors with the same indices: {"layout": SlotLayout, "calls": int};
+    # per tensor: the CSR matrix with its own values
+    _plan: dict = field(default_factory=dict, repr=False, compare=False)
+    _matrix: list = field(default_factory=list, repr=False, compare=False)
 
     @property
     def size(self) -> int:
@@ -39,7 +48,7 @@ class SparseTensor:
 
     @classmethod
     def empty(cls, n: int, m: int, info: dict | None = None) -> SparseTensor:
-        return cls(np.zeros((0, 3), dtype=np.int64), np.zeros(0), n, m, info)
+        return cls(np.zeros((0, 3), dtype=index_dtype(n * m)), np.zeros(0), n, m, info)
 
     @classmethod
     def from_entries(
@@ -57,7 +66,9 @@ class SparseTensor:
         need not be symmetric: each stands for its whole permutation class. ``assume_unique``
         skips the sorting and de-duplication (an O(N log N) sort) when the caller guarantees
         three distinct indices per row and no repeated triple; rows then keep their input order."""
-        indices = np.asarray(indices, dtype=np.int64).reshape(-1, 3)
+        indices = np.asarray(indices).reshape(-1, 3)
+        if indices.dtype.kind not in "iu":
+            indices = indices.astype(np.int64)
         values = np.asarray(values, dtype=float).reshape(-1)
         if indices.shape[0] != values.shape[0]:
             raise ValueError(f"values: {values.shape[0]} values for {indices.shape[0]} triples")
@@ -67,6 +78,7 @@ class SparseTensor:
                 indices, values = indices[keep], values[keep]
             return cls(indices, values, n, m, info)
         size = n * m
+        indices = indices.astype(np.int64, copy=False)
         if indices.size and (indices.min() < 0 or indices.max() >= size):
             raise ValueError(f"indices: match indices must lie in [0, {size})")
         indices = _sort_rows(indices)
@@ -92,12 +104,30 @@ class SparseTensor:
         values = np.asarray(values, dtype=float)
         if values.shape != self.values.shape:
             raise ValueError(f"values: expected shape {self.values.shape}, got {values.shape}")
-        return SparseTensor(self.indices, values, self.n, self.m, self.info)
+        return SparseTensor(self.indices, values, self.n, self.m, self.info, self._plan)
 
     def __post_init__(self) -> None:
         # column-major layout: indices is the transpose of a C-contiguous (3, N) array, so the
         # three slots are contiguous (fast gathers) and their concatenation is a free reshape
-        object.__setattr__(self, "indices", np.ascontiguousarray(self.indices.T).T)
+        dtype = index_dtype(self.n * self.m)
+        object.__setattr__(self, "indices", np.ascontiguousarray(self.indices.T, dtype=dtype).T)
+
+    def _fused(self) -> object | None:
+        """The CSR product matrix (:mod:`matchers.tensor_product`), or None while the bincount
+        passes are cheaper: the layout is sorted on the FUSE_AFTER-th product of an index
+        pattern, and only when the (nm)^2 outer product fits :data:`PAIR_LIMIT`."""
+        if self._matrix:
+            return self._matrix[0]
+        if self.size * self.size > PAIR_LIMIT or not self.nnz:
+            return None
+        plan = self._plan
+        if "layout" not in plan:
+            plan["calls"] = plan.get("calls", 0) + 1
+            if plan["calls"] < FUSE_AFTER:
+                return None
+            plan["layout"] = SlotLayout(self._slots, self.nnz, self.size)
+        self._matrix.append(plan["layout"].matrix(self.values))
+        return self._matrix[0]
 
     @property
     def _columns(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -131,6 +161,11 @@ class SparseTensor:
         """out[a] = sum_{b,c} T[a, b, c] y[b] z[c]  (mode-1 product with y and z), length n*m."""
         if not self.nnz:
             return np.zeros(self.size)
+        fused = self._fused()
+        if fused is not None:
+            pair = np.outer(y, z)
+            pair += pair.T  # [b, c] = y_b z_c + y_c z_b, the same sum in the same order
+            return fused @ pair.reshape(-1)
         ia, ib, ic = self._columns
         ya, yb, yc = np.take(y, ia), np.take(y, ib), np.take(y, ic)
         za, zb, zc = np.take(z, ia), np.take(z, ib), np.take(z, ic)
@@ -153,6 +188,9 @@ class SparseTensor:
         once; it is half of :meth:`product`."""
         if not self.nnz:
             return np.zeros(self.size)
+        fused = self._fused()
+        if fused is not None:
+            return fused @ np.outer(x, x).reshape(-1)
         ia, ib, ic = self._columns
         xa, xb, xc = np.take(x, ia), np.take(x, ib), np.take(x, ic)
         count = self.nnz

@@ -25,10 +25,22 @@ objects can swap which of several equal-valued tied candidates are kept. Triangl
 with coincident vertices are skipped. Because the sampled triangles are distinct and the other
 view's ordered triples are distinct, no match triple can come up twice, so the builder skips the
 de-duplication sort of :meth:`SparseTensor.from_entries` (a test checks that claim).
+
+Bounded size (``max_entries``, default :data:`MAX_ENTRIES` = 250,000 = 500^2): with the defaults
+a tensor has (n*m)^2 entries, 10^8 at 100 vs 100. When triangles x neighbours exceeds the cap,
+the builder keeps the ``max_entries`` highest-valued entries of the tensor it would otherwise
+build — the same sampled triangles and the same per-triangle k-NN lists, ranked globally by
+descriptor distance (the value is a decreasing function of it) — without forming that tensor:
+each triangle is first asked for about twice its share of neighbours, and only triangles whose
+last neighbour is still inside the running global cut are asked again for more (4x, up to k).
+Ties at the cut are kept in triangle order. With the defaults the cap binds exactly when
+n*m > 500, so every problem up to 500 candidate matches gets the paper's tensor unchanged.
+The "duchenne" bandwidth is then the mean over the kept entries.
 """
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -38,9 +50,19 @@ from scipy.spatial import cKDTree
 
 from .problem import Problem
 from .sparse_tensor import SparseTensor
-from .triangles import angle_cosines, ordered_descriptors, sample_triangles, signed_sines
+from .tensor_product import index_dtype
+from .triangles import (
+    PERMUTATIONS,
+    all_triangles,
+    angle_cosines,
+    ordered_descriptors,
+    sample_triangles,
+    signed_sines,
+)
 
 _DECIMALS = 9
+MAX_ENTRIES = 250_000
+"""Default cap on tensor entries: 500^2, the size of the paper's tensor at n*m = 500."""
 Descriptor = Callable[[np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 
@@ -68,14 +90,19 @@ def build_tensor(
     triangles: int | None = None,
     neighbours: int | None = None,
     sigma: float | None = None,
+    max_entries: int | None = MAX_ENTRIES,
 ) -> SparseTensor:
     """Third-order tensor of ``problem`` by ``recipe`` ("paper" or "duchenne").
 
     triangles: number of sampled triangles (default n*m); neighbours: k of the k-NN search per
-    triangle (default n*m); sigma: bandwidth override (default: the recipe's). The tensor's
-    ``info`` records the recipe, counts, bandwidth and ``build_s`` (seconds). ``rng`` (a numpy
-    Generator or seed) drives the triangle sampling. Fewer than 3 objects in a view, or no
-    non-degenerate triangle, gives an empty tensor.
+    triangle (default n*m); sigma: bandwidth override (default: the recipe's); max_entries: cap
+    on triangles x neighbours (default 250,000; None = no cap), keeping the highest-valued
+    entries (module docstring). The tensor's ``info`` records the recipe, counts, bandwidth,
+    whether the cap bound and ``build_s`` (seconds). ``rng`` (a numpy Generator or seed) drives
+    the triangle sampling. Fewer than 3 objects in a view, or no non-degenerate triangle, gives
+    an empty tensor.
+
+    >>> tensor = build_tensor(Problem(points1, points2), "paper", rng=0)
     """
     if recipe not in RECIPES:
         raise ValueError(f"tensor: unknown recipe {recipe!r}; expected one of {sorted(RECIPES)}")
@@ -85,6 +112,16 @@ def build_tensor(
             raise ValueError(f"{label}: expected a positive integer or None, got {value!r}")
     if sigma is not None and not sigma > 0:
         raise ValueError(f"sigma: expected a positive number or None, got {sigma!r}")
+    if max_entries is not None and (
+        isinstance(max_entries, bool) or not isinstance(max_entries, int | np.integer)
+    ):
+        raise ValueError(
+            f"max_tensor_entries: expected a positive integer or None, got {max_entries!r}"
+        )
+    if max_entries is not None and max_entries < 1:
+        raise ValueError(
+            f"max_tensor_entries: expected a positive integer or None, got {max_entries!r}"
+        )
     started = time.perf_counter()
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     n, m = problem.n1, problem.n2
@@ -102,46 +139,166 @@ def build_tensor(
     desc_s, valid_s = spec.descriptor(sampled_pts, tri_s)
     tri_s, desc_s = tri_s[valid_s], desc_s[valid_s]
     oriented = spec.signed_in_2d and problem.dim == 2
-    tri_f, desc_f, valid_f = ordered_descriptors(full_pts, spec.descriptor, oriented)
-    tri_f, desc_f = tri_f[valid_f], desc_f[valid_f]
-    k = min(k, len(tri_f))
-    if not len(tri_s) or k == 0:
+    if not len(tri_s):
         return SparseTensor.empty(n, m, info | {"entries_raw": 0})
+    ordered = 6 * math.comb(len(full_pts), 3)
+    capped = max_entries is not None and len(tri_s) * min(k, ordered) > max_entries
+    if capped:  # the count of valid ordered triples decides
+        base = all_triangles(len(full_pts))
+        base_desc, base_valid = spec.descriptor(full_pts, base)
+        base, base_desc = base[base_valid], base_desc[base_valid]
+        capped = len(tri_s) * min(k, 6 * len(base)) > max_entries
 
-    # Rounded to 1e-9, far below any meaningful difference: a rotation/translation/scaling of a
-    # view perturbs descriptors by ~1e-16, and rounding makes them bit-identical, so the k-NN
-    # choice — including which of several exactly tied candidates (common under the L1 metric,
-    # where swapping two vertices often leaves the distance unchanged) fill the last places —
-    # does not change under those transforms.
-    desc_s, desc_f = np.round(desc_s, _DECIMALS), np.round(desc_f, _DECIMALS)
-    tree = cKDTree(desc_f, balanced_tree=False, compact_nodes=False)
-    dist, idx = tree.query(desc_s, k=k, p=spec.minkowski_p, workers=-1)
-    dist, idx = dist.reshape(len(tri_s), k), idx.reshape(len(tri_s), k)
+    if not capped:  # the paper's tensor, exactly
+        tri_f, desc_f, valid_f = ordered_descriptors(full_pts, spec.descriptor, oriented)
+        tri_f, desc_f = tri_f[valid_f], desc_f[valid_f]
+        k = min(k, len(tri_f))
+        if k == 0:
+            return SparseTensor.empty(n, m, info | {"entries_raw": 0})
+        # Rounded to 1e-9, far below any meaningful difference: a rotation/translation/scaling
+        # of a view perturbs descriptors by ~1e-16, and rounding makes them bit-identical, so
+        # the k-NN choice — including which of several exactly tied candidates (common under
+        # the L1 metric, where swapping two vertices often leaves the distance unchanged) fill
+        # the last places — does not change under those transforms.
+        desc_s, desc_f = np.round(desc_s, _DECIMALS), np.round(desc_f, _DECIMALS)
+        tree = cKDTree(desc_f, balanced_tree=False, compact_nodes=False)
+        dist, idx = tree.query(desc_s, k=k, p=spec.minkowski_p, workers=-1)
+        dist, idx = dist.reshape(len(tri_s), k), idx.reshape(len(tri_s), k)
+        mine = tri_s[:, :, None]  # (T, 3, 1)
+        theirs = [np.take(np.ascontiguousarray(tri_f[:, f]), idx) for f in range(3)]  # (T, k)
+    else:
+        k = min(k, 6 * len(base))
+        rows, dist, theirs = _capped_candidates(
+            base, base_desc, desc_s, k, max_entries, spec.minkowski_p, oriented
+        )
+        mine = tri_s[rows]  # (E, 3)
     bandwidth = sigma if sigma is not None else spec.sigma
     if bandwidth is None:
         mean = float(dist.mean())
         bandwidth = mean if mean > 0 else 1.0
     values = np.exp(-dist / bandwidth).reshape(-1)
 
-    matches = np.empty((3, len(tri_s), k), dtype=np.int64)  # slot-major: no copy downstream
+    # slot-major (3, ...) so that the tensor's column-major indices need no copy downstream
+    matches = np.empty((3, *dist.shape), dtype=index_dtype(n * m))
     for f in range(3):
-        mine = tri_s[:, f][:, None]  # (T, 1)
-        theirs = np.take(np.ascontiguousarray(tri_f[:, f]), idx)  # (T, k)
+        mine_f = mine[:, f]  # (T, 1) or (E,)
         if swap:
-            np.add(theirs * m, mine, out=matches[f])
+            np.add(theirs[f] * m, mine_f, out=matches[f])
         else:
-            np.add(mine * m, theirs, out=matches[f])
+            np.add(mine_f * m, theirs[f], out=matches[f])
     info |= {
         "triangles": int(len(tri_s)),
         "neighbours": int(k),
         "bandwidth": float(bandwidth),
         "entries_raw": int(values.size),
+        "capped": bool(capped),
+        "max_entries": max_entries,
         "build_s": time.perf_counter() - started,
     }
     # distinct sampled triangles x distinct ordered triples => no triple occurs twice
     return SparseTensor.from_entries(
         matches.reshape(3, -1).T, values, n, m, info, assume_unique=True
     )
+
+
+def _capped_candidates(
+    base: np.ndarray,
+    base_desc: np.ndarray,
+    desc_s: np.ndarray,
+    k: int,
+    cap: int,
+    p: int,
+    oriented: bool,
+) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """The capped k-NN lists: (triangle row, distance, [vertex f of the matched ordered triple
+    of the other view for f = 0, 1, 2]) of the ``cap`` best (triangle, ordered triple) pairs.
+
+    The other view's ordered triples are its valid triangles ``base`` in the 6 vertex orders of
+    :data:`PERMUTATIONS`; instead of a tree over all 6 (6x the points to index), the tree holds
+    ``base`` once and each sampled triangle asks it 6 times, its descriptor permuted back:
+    |a - s c[P]| summed over vertices equals |s a[P^-1] - c| (s = -1 for a 2-D signed
+    descriptor in a reversing order); a triangle keeps at most k pairs, as uncapped."""
+    count = len(desc_s)
+    signs = (1, 1, 1, -1, -1, -1) if oriented else (1,) * 6
+    queries = np.concatenate(
+        [desc_s[:, np.argsort(perm)] * sign for perm, sign in zip(PERMUTATIONS, signs, strict=True)]
+    )
+    tree = cKDTree(np.round(base_desc, _DECIMALS), balanced_tree=False, compact_nodes=False)
+    groups = np.tile(np.arange(count), 6)
+    query, dist, idx = capped_neighbours(
+        tree, np.round(queries, _DECIMALS), groups, k, min(k, len(base)), cap, p
+    )
+    order, rows = np.divmod(query, count)
+    theirs = [base[idx, PERMUTATIONS[order, f]] for f in range(3)]
+    return rows, dist, theirs
+
+
+def capped_neighbours(
+    tree: cKDTree,
+    queries: np.ndarray,
+    groups: np.ndarray,
+    k: int,
+    per_query: int,
+    cap: int,
+    p: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The ``cap`` best pairs of the uncapped k-NN lists, without forming those lists.
+
+    Query q belongs to group ``groups[q]`` (a sampled triangle; its 6 vertex orders are 6
+    queries); a group's uncapped list is the k nearest over its queries' neighbours, each query
+    contributing at most ``per_query``. Every query starts with about twice its share of ``cap``
+    neighbours; one whose farthest neighbour is still within both the running cut (the cap-th
+    smallest distance of the pool) and its group's k-th smallest is asked again for 4x as many.
+    A query not asked again holds every neighbour that could still be kept, so the result is
+    the uncapped lists' ``cap`` smallest distances (ties: earliest in the pool first).
+    Returns (query, distance, neighbour index) of the kept pairs, grouped by group.
+    """
+    count = len(queries)
+    first = min(per_query, max(1, -(-2 * cap // count)))
+    dist, idx = tree.query(queries, k=first, p=p, workers=-1)
+    pool_query = np.repeat(np.arange(count), first)
+    pool_dist, pool_idx = dist.reshape(-1), idx.reshape(-1)
+    asked = np.full(count, first)
+    farthest = dist.reshape(count, first)[:, -1].copy()
+    while True:
+        keep, group_kth = _group_best(groups[pool_query], pool_dist, k, int(groups.max()) + 1)
+        pool_query, pool_dist, pool_idx = pool_query[keep], pool_dist[keep], pool_idx[keep]
+        cut = np.partition(pool_dist, cap - 1)[cap - 1] if pool_dist.size > cap else np.inf
+        again = np.flatnonzero(
+            (asked < per_query) & (farthest <= np.minimum(cut, group_kth[groups]))
+        )
+        if not again.size:
+            break
+        more = min(per_query, 4 * int(asked[again].max()))
+        dist, idx = tree.query(queries[again], k=more, p=p, workers=-1)
+        stale = np.zeros(count, dtype=bool)
+        stale[again] = True
+        fresh = ~stale[pool_query]
+        pool_query = np.concatenate([pool_query[fresh], np.repeat(again, more)])
+        pool_dist = np.concatenate([pool_dist[fresh], dist.reshape(-1)])
+        pool_idx = np.concatenate([pool_idx[fresh], idx.reshape(-1)])
+        asked[again], farthest[again] = more, dist.reshape(len(again), more)[:, -1]
+    if pool_dist.size > cap:
+        inside = pool_dist < cut
+        inside[np.flatnonzero(pool_dist == cut)[: cap - int(inside.sum())]] = True
+        pool_query, pool_dist, pool_idx = pool_query[inside], pool_dist[inside], pool_idx[inside]
+    order = np.argsort(groups[pool_query], kind="stable")
+    return pool_query[order], pool_dist[order], pool_idx[order]
+
+
+def _group_best(group: np.ndarray, dist: np.ndarray, k: int, groups: int):
+    """(mask of the pool entries among their group's k smallest distances — ties: earlier
+    first —, each group's k-th smallest distance or inf if it has fewer than k)."""
+    size = np.bincount(group, minlength=groups)
+    kth = np.full(groups, np.inf)
+    if size.max() <= k:
+        return np.ones(len(dist), dtype=bool), kth
+    ranked = np.lexsort((dist, group))
+    rank = np.empty(len(dist), dtype=np.int64)
+    rank[ranked] = np.arange(len(dist)) - np.repeat(np.cumsum(size) - size, size)
+    full = rank == k - 1
+    kth[group[full]] = dist[full]
+    return rank < k, kth
 
 
 def resolve_tensor(
@@ -151,6 +308,7 @@ def resolve_tensor(
     triangles: int | None,
     neighbours: int | None,
     sigma: float | None,
+    max_entries: int | None = MAX_ENTRIES,
 ) -> SparseTensor:
     """The ``tensor=`` option of the hypergraph matchers: a recipe name, or a prebuilt tensor
     (so that several matchers can be run on exactly the same tensor)."""
@@ -163,4 +321,4 @@ def resolve_tensor(
         return tensor
     if not isinstance(tensor, str):
         raise ValueError(f"tensor: expected a recipe name or a SparseTensor, got {tensor!r}")
-    return build_tensor(problem, tensor, rng, triangles, neighbours, sigma)
+    return build_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_entries)
