@@ -15,6 +15,7 @@ docs/matchers.md.
 """
 
 from .matching import Matching
+from .memory_budget import ProblemTooLarge
 from .problem import Problem
 from .registry import ENTRY_POINT_GROUP, available, get, register, requires, search_space
 from .sparse_tensor import SparseTensor
@@ -24,6 +25,7 @@ __all__ = [
     "ENTRY_POINT_GROUP",
     "Matching",
     "Problem",
+    "ProblemTooLarge",
     "SparseTensor",
     "available",
     "build_tensor",

@@ -24,5 +24,10 @@ def appearance_similarity(problem: Problem) -> np.ndarray:
 
 
 def _unit_rows(features: np.ndarray) -> np.ndarray:
-    norms = np.linalg.norm(features, axis=1, keepdims=True)
-    return np.divide(features, norms, out=np.zeros_like(features), where=norms > 0)
+    """Rows scaled to unit length; all-zero rows stay zero. Each row is first divided by its
+    largest magnitude, so rows with huge (1e200) or tiny (1e-200) entries neither overflow nor
+    underflow the norm."""
+    peak = np.abs(features).max(axis=1, keepdims=True)
+    scaled = np.divide(features, peak, out=np.zeros_like(features), where=peak > 0)
+    norms = np.linalg.norm(scaled, axis=1, keepdims=True)
+    return np.divide(scaled, norms, out=np.zeros_like(scaled), where=norms > 0)

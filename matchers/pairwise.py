@@ -13,6 +13,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.spatial.distance import cdist
 
+from .memory_budget import check_memory
 from .problem import Problem
 from .scale import median_spacing
 from .tensor_product import index_dtype
@@ -91,6 +92,11 @@ def pairwise_affinity(
     n, m = problem.n1, problem.n2
     if n == 0 or m == 0:
         return np.zeros((n * m, n * m))
+    check_memory(  # the (nm)^2 differences, their Gaussian and the shared-node mask
+        f"dense pairwise affinity ({n} x {m} objects: {(n * m) ** 2:,} entries)",
+        3 * 8 * float(n * m) ** 2,
+        "affinity_neighbours (None means dense)",
+    )
     d1 = cdist(first, first)
     d2 = cdist(second, second)
     diff = d1[:, None, :, None] - d2[None, :, None, :]  # (n, m, n, m) = [i, j, k, l]
@@ -128,6 +134,11 @@ def sparse_pairwise_affinity(
     keep = min(int(neighbours), max((n - 1) * (m - 1), 0))
     if keep == 0:
         return sp.csr_matrix((size, size))
+    check_memory(  # kept entries (values + two indices), doubled by symmetrising; per-row scratch
+        f"sparse pairwise affinity ({n} x {m} objects, {keep} partners per candidate match)",
+        2 * 2 * 24 * float(size) * keep + 3 * 8 * float(m) * size,
+        "affinity_neighbours",
+    )
     first, second = edge_positions(problem, pairwise)
     d1 = cdist(first, first)
     d2 = cdist(second, second)

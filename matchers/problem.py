@@ -10,7 +10,13 @@ import numpy as np
 
 
 def _as_array(name: str, value, ndim: int) -> np.ndarray:
-    arr = np.asarray(value, dtype=float)
+    try:
+        arr = np.asarray(value, dtype=float)
+    except (TypeError, ValueError, OverflowError):
+        raise ValueError(
+            f"{name}: expected a rectangular array of numbers, got {type(value).__name__} "
+            "(ragged rows or non-numeric entries)"
+        ) from None
     if arr.ndim == 1 and arr.size == 0:
         arr = arr.reshape(0, 0)
     if arr.ndim != ndim:

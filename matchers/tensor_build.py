@@ -48,6 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .memory_budget import check_memory
 from .problem import Problem
 from .sparse_tensor import SparseTensor
 from .tensor_product import index_dtype
@@ -134,6 +135,7 @@ def build_tensor(
     )
     n_tri = triangles if triangles is not None else n * m
     k = neighbours if neighbours is not None else n * m
+    _check_tensor_memory(n, m, len(sampled_pts), len(full_pts), n_tri, k, max_entries)
 
     tri_s = sample_triangles(len(sampled_pts), n_tri, rng)
     desc_s, valid_s = spec.descriptor(sampled_pts, tri_s)
@@ -198,6 +200,32 @@ def build_tensor(
     # distinct sampled triangles x distinct ordered triples => no triple occurs twice
     return SparseTensor.from_entries(
         matches.reshape(3, -1).T, values, n, m, info, assume_unique=True
+    )
+
+
+# Working bytes per stored entry (distances, neighbour indices, the three match indices, the value
+# and the sparse tensor's sort/dedup copies) and per ordered triple of the searched view
+# (vertex triple, descriptor, k-d tree); measured peaks stay below these.
+_BYTES_PER_ENTRY = 160
+_BYTES_PER_TRIPLE = 96
+
+
+def _check_tensor_memory(
+    n: int, m: int, sampled: int, full: int, triangles: int, k: int, max_entries: int | None
+) -> None:
+    """Refuse (``ProblemTooLarge``) a tensor whose build would exceed the memory budget."""
+    sampled_triangles = min(triangles, math.comb(sampled, 3))
+    ordered = 6 * math.comb(full, 3)
+    entries = sampled_triangles * min(k, ordered)
+    if max_entries is not None and entries > max_entries:
+        entries, triples = max_entries, math.comb(full, 3)  # the capped search: unordered base
+    else:
+        triples = ordered
+    check_memory(
+        f"third-order tensor ({n} x {m} objects: {entries:,} entries, {triples:,} triangles "
+        "searched)",
+        entries * _BYTES_PER_ENTRY + triples * _BYTES_PER_TRIPLE,
+        "max_tensor_entries, triangles or neighbours",
     )
 
 

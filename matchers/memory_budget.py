@@ -1,0 +1,49 @@
+"""The per-process memory budget of a matcher call, checked before anything large is allocated.
+
+Defaults keep every matcher bounded (the tensor entry cap, the sparse pairwise affinity), but an
+explicit option can ask for more (``max_tensor_entries=None``, ``affinity_neighbours=None``, huge
+``triangles``/``neighbours``, a view of thousands of objects). Such a call is refused with
+:class:`ProblemTooLarge` — a ``ValueError`` naming the sizes, the budget and the option to change —
+instead of exhausting the machine. The budget is ``$CADSIM_MAX_MATCHER_MB`` megabytes per process
+(default 4096: one process per core on a 2-core, 24 GiB machine leaves more than half free).
+"""
+
+from __future__ import annotations
+
+import os
+
+BUDGET_ENV = "CADSIM_MAX_MATCHER_MB"
+DEFAULT_BUDGET_MB = 4096
+
+
+class ProblemTooLarge(ValueError):
+    """A matcher call whose working memory would exceed the per-process budget."""
+
+
+def budget_mb() -> float:
+    """The budget in MB: ``$CADSIM_MAX_MATCHER_MB`` (a positive number) or 4096."""
+    text = os.environ.get(BUDGET_ENV, "").strip()
+    if not text:
+        return float(DEFAULT_BUDGET_MB)
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (value > 0 and value < float("inf")):
+        raise ValueError(f"${BUDGET_ENV}: expected a positive number of megabytes, got {text!r}")
+    return value
+
+
+def check_memory(what: str, n_bytes: float, option: str) -> None:
+    """Raise :class:`ProblemTooLarge` if ``n_bytes`` (an estimate of the working memory of
+    ``what``) exceeds the budget; ``option`` says what the caller can change.
+
+    >>> check_memory("pairwise affinity (10 x 10 objects)", 1e6, "affinity_neighbours")
+    """
+    limit = budget_mb()
+    need = float(n_bytes) / 2**20
+    if need > limit:
+        raise ProblemTooLarge(
+            f"{what} needs about {need:,.0f} MB, over the {limit:,.0f} MB budget per process; "
+            f"lower {option}, or raise ${BUDGET_ENV}"
+        )
