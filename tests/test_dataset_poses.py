@@ -125,3 +125,17 @@ def test_distinct_observers_never_repeat_a_pair_of_vehicles(tmp_path):
     assert len(ds) == 3 and len(by_episode) == 3  # one record per episode, the rest repeats
     for keys in by_episode.values():
         assert len(keys) == len(set(keys))
+
+
+def test_generating_into_an_older_dataset_says_to_use_a_new_folder(fake_dataset, tmp_path):
+    from cadsim.generation.pipeline import GenerationError
+
+    old = tmp_path / "old"
+    shutil.copytree(fake_dataset, old)
+    manifest = json.loads((old / "manifest.json").read_text())
+    manifest["format_version"] = 1
+    (old / "manifest.json").write_text(json.dumps(manifest))
+    with pytest.raises(GenerationError, match="version 1 is older.*use a new --out"):
+        generate_dataset(
+            FakeScenario(), old, pairs=3, workers=1, stages=FAKE_STAGES, progress=False
+        )

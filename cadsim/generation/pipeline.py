@@ -397,7 +397,9 @@ def _check_resume(out: Path, config: dict) -> None:
     try:
         previous = read_manifest(out)["generation"]
     except DatasetError as exc:
-        raise GenerationError(f"{out}: not resumable ({exc})") from exc
+        raise GenerationError(
+            f"{out}: not resumable ({exc}); use a new --out (or delete it) to generate there"
+        ) from exc
     differing = sorted(k for k in set(config) | set(previous) if config.get(k) != previous.get(k))
     if differing:
         raise GenerationError(
