@@ -88,7 +88,10 @@ def test_redetect_reuses_stored_features_instead_of_recomputing(dataset, monkeyp
     pair = dataset[0]
     cfg = DetectionConfig(**SCENARIO.detection)
     view = RenderedView(pair.color1, pair.depth1, pair.instance1)
-    recomputed = detection.detect(view, pair.depth1, pair.objects, pair.cameras[0], cfg)
+    attributes = np.random.default_rng(pair.record["observers"][0]["attribute_seed"])
+    recomputed = detection.detect(
+        view, pair.depth1, pair.objects, pair.cameras[0], cfg, attribute_rng=attributes
+    )
     calls = []
     real = detection.object_features
     monkeypatch.setattr(detection, "object_features", lambda *a: calls.append(a) or real(*a))

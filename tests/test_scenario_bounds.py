@@ -19,7 +19,9 @@ SCENARIOS = sorted((ROOT / "scenarios").glob("*.toml"))
 CROSS = '[traffic]\nsource = "sumo"\nsumocfg = "$SUMO_HOME/tools/game/cross.sumocfg"\n'
 ARENA = (ROOT / "scenarios" / "mrc-arena.toml").read_text()
 HIGHWAY = (ROOT / "scenarios" / "highway-intersection.toml").read_text()
-CAD = (ROOT / "scenarios" / "cad-intersection.toml").read_text()
+CAD = (
+    ROOT / "scenarios" / "cad-dense.toml"
+).read_text()  # the old default: its values are pinned below
 
 
 def _error(tmp_path: Path, text: str | bytes) -> ScenarioError:
