@@ -136,9 +136,7 @@ def pair_metrics(predicted, ground_truth, n1: int, n2: int) -> PairMetrics:
         correct=int(correct),
         accuracy=float(_accuracy(correct, n1 + n2)),
         balanced_accuracy=float(
-            _balanced_accuracy(
-                tp, len(gt), unmatched_negative1 + unmatched_negative2, negatives
-            )
+            _balanced_accuracy(tp, len(gt), unmatched_negative1 + unmatched_negative2, negatives)
         ),
         precision=precision,
         recall=recall,
