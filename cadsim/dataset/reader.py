@@ -150,7 +150,9 @@ class FramePair:
         return self._instance["instance2"]
 
     def problem(self):
-        """The matching problem (positions and features of both views), as ``matchers.Problem``."""
+        """The matching problem as ``matchers.Problem``: positions (metres, each camera's frame)
+        and features of both views, and the box centres in pixels (``pixels1``/``pixels2``, for
+        matchers that compare objects in the image)."""
         from matchers.problem import Problem
 
         return Problem(
@@ -159,6 +161,8 @@ class FramePair:
             self.view1.features,
             self.view2.features,
             meta={"pair": self.index, "name": self.name, "noise_rate": self.noise_rate},
+            pixels1=_box_centres(self.view1.boxes),
+            pixels2=_box_centres(self.view2.boxes),
         )
 
     def select(self, rows1, rows2) -> FramePair:
@@ -201,6 +205,12 @@ class FramePair:
             det = detect(RenderedView(color, depth, instance), noisy, self.objects, camera, det_cfg)
             views.append(ViewDetections.from_detections(det))
         return self._with_views(tuple(views), noise_rate)
+
+
+def _box_centres(boxes: np.ndarray) -> np.ndarray:
+    """(k, 2) centres (u, v) in pixels of (k, 4) boxes (u0, v0, u1, v1)."""
+    boxes = np.asarray(boxes, dtype=float).reshape(-1, 4)
+    return (boxes[:, :2] + boxes[:, 2:]) / 2
 
 
 class Dataset(Sequence[FramePair]):

@@ -88,12 +88,15 @@ def open_entry(test_dir: str | Path, val_dir: str | Path | None) -> DatasetEntry
 
 
 def parse_matchers(text: str) -> list[MatcherSpec]:
-    """``all`` (every registered matcher, paper order first) or a comma-separated list."""
-    from matchers.registry import available
+    """``all`` or a comma-separated list. ``all``: every registered matcher that needs nothing
+    beyond what every dataset gives (``matchers.requires`` empty; the localisation-prior matchers
+    must be named), paper order first."""
+    from matchers.registry import available, requires
 
     known = list(available())
     if text.strip() == "all":
-        names = [n for n in PAPER_ORDER if n in known] + [n for n in known if n not in PAPER_ORDER]
+        plain = [n for n in known if not requires(n)]
+        names = [n for n in PAPER_ORDER if n in plain] + [n for n in plain if n not in PAPER_ORDER]
     else:
         names = [n.strip() for n in text.split(",") if n.strip()]
         unknown = [n for n in names if n not in known]
