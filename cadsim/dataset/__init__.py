@@ -12,6 +12,10 @@ Reading (needs neither SUMO nor pyrender)::
     problem = pair.problem()          # matchers.Problem
     noisy = pair.redetect(noise_rate=0.05, seed=1)   # new noise on stored clean depth, no render
     pair.color1, pair.depth1, pair.instance1, pair.cameras, pair.objects   # loaded on demand
+    pair.observer_poses, pair.camera_extrinsics, pair.camera_to_world      # true poses, 4x4s
+
+    from cadsim.dataset.regime import dataset_regime
+    dataset_regime(ds)                # objects per view, covisible, shares, appearance AUC, ...
 
 Layout, every file and field, determinism and resume: docs/dataset.md.
 """

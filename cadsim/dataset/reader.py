@@ -18,6 +18,7 @@ from cadsim.dataset.detections import ViewDetections, ground_truth_pairs
 from cadsim.dataset.encoding import decode_png, load_npz
 from cadsim.dataset.manifest import DatasetError, read_manifest
 from cadsim.dataset.seeds import noise_seed
+from cadsim.observer_pose import ObserverPose, camera_to_world
 from cadsim.world import WorldObject
 
 
@@ -27,8 +28,12 @@ class FramePair:
     index: position in the dataset. episode, slot: the record's identity; sim_seed: its
     simulation's seed. view1, view2: ``ViewDetections`` (positions in each observer's camera
     frame, metres). gt_pairs: (k, 2) int64 (i, j) indices of the same object in view1/view2.
-    cameras: the two ``Camera``s (world frame poses). noise_rate: the depth-noise rate the current
-    detections were made at. Images (color1/2, clean depth1/2, instance1/2) load on first use.
+    cameras: the two ``Camera``s (world frame poses). observer_poses: the two observers' true
+    world poses (``ObserverPose``: body origin, metres, and heading, radians).
+    camera_extrinsics: per view, the 4×4 camera (OpenCV) → observer body transform.
+    camera_to_world: per view, the 4×4 camera (OpenCV) → world transform. noise_rate: the
+    depth-noise rate the current detections were made at. Images (color1/2, clean depth1/2,
+    instance1/2) load on first use.
     """
 
     def __init__(
@@ -93,6 +98,28 @@ class FramePair:
     def cameras(self) -> tuple[Camera, Camera]:
         obs = self.record["observers"]
         return Camera.from_dict(obs[0]["camera"]), Camera.from_dict(obs[1]["camera"])
+
+    @cached_property
+    def observer_poses(self) -> tuple[ObserverPose, ObserverPose]:
+        """The two observers' true world poses: the carrying object's bounding-box centre (world
+        metres) and heading (radians CCW from +x); a camera on no object: its own."""
+        obs = self.record["observers"]
+        return ObserverPose.from_dict(obs[0]["pose"]), ObserverPose.from_dict(obs[1]["pose"])
+
+    @cached_property
+    def camera_extrinsics(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per view, the 4×4 transform from the camera's OpenCV frame to its observer's body
+        frame (x forward, y left, z up, origin at the body's centre): the camera mount."""
+        return tuple(
+            pose.camera_extrinsics(cam)
+            for pose, cam in zip(self.observer_poses, self.cameras, strict=True)
+        )
+
+    @cached_property
+    def camera_to_world(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per view, the 4×4 transform from the camera's OpenCV frame to the world frame (true
+        pose): ``camera_to_world[0] @ [p, 1]`` puts a view-1 position into the world."""
+        return camera_to_world(self.cameras[0]), camera_to_world(self.cameras[1])
 
     @property
     def observer_ids(self) -> tuple[str, str]:
@@ -177,7 +204,9 @@ class FramePair:
         pair = FramePair(
             self.path, self.index, self._entry, self._noise, self._detection, views, noise_rate
         )
-        for name in ("record", "color1", "color2", "_depth", "_instance", "objects", "cameras"):
+        shared = ("record", "color1", "color2", "_depth", "_instance", "objects", "cameras")
+        shared += ("observer_poses", "camera_extrinsics", "camera_to_world")
+        for name in shared:
             if name in self.__dict__:
                 pair.__dict__[name] = self.__dict__[name]
         return pair
@@ -186,7 +215,8 @@ class FramePair:
         """This pair re-detected at depth-noise rate ``noise_rate`` (σ = noise_rate · d²): noise
         seeded by (seed, episode, slot, view) applied to the stored clean depth, then detection;
         nothing is re-rendered. Same arguments ⇒ identical detections; rate 0 ⇒ clean-depth
-        detections; the dataset's root seed and noise rate ⇒ the stored detections."""
+        detections; the dataset's root seed and noise rate ⇒ the stored detections. The detector's
+        attribute errors are the record's (``attribute_seed``), the same for every call."""
         from cadsim.render.view import RenderedView
         from cadsim.sensing.depth_noise import NoiseConfig, apply_depth_noise
         from cadsim.sensing.detection import DetectionConfig, detect
@@ -202,7 +232,10 @@ class FramePair:
         ):
             rng = np.random.default_rng(noise_seed(seed, self.episode, self.slot, v))
             noisy = apply_depth_noise(depth, noise_cfg, rng)
-            det = detect(RenderedView(color, depth, instance), noisy, self.objects, camera, det_cfg)
+            # The attribute errors are the record's own, whatever ``seed``.
+            attributes = np.random.default_rng(self.record["observers"][v - 1]["attribute_seed"])
+            view = RenderedView(color, depth, instance)
+            det = detect(view, noisy, self.objects, camera, det_cfg, attribute_rng=attributes)
             views.append(ViewDetections.from_detections(det))
         return self._with_views(tuple(views), noise_rate)
 

@@ -5,7 +5,12 @@ Files of ``pairs/eEEEEE_sSS/`` (see docs/dataset.md for every field):
 (H, W) float32 metres along the optical axis, 0 = no hit; ``instance.npz`` ``instance1``/
 ``instance2`` (H, W) int32 index into ``record.json``'s ``objects``, -1 = none; ``detections.npz``
 ``view{1,2}_{positions,boxes,features,object_ids,classes,pixels}`` at the scenario's noise
-config; ``record.json`` cameras, observers, seeds, snapshot time and objects, ground truth.
+config; ``record.json`` cameras, observers (with their true world poses), seeds, snapshot time and
+objects, ground truth.
+
+Format versions: 1, the first; 2 adds ``observers[].pose`` and ``observers[].attribute_seed``
+(features carry detector-like attributes from then on). A change of the record layout bumps
+``FORMAT_VERSION``; the reader refuses other versions with a message naming both.
 """
 
 from __future__ import annotations
@@ -19,16 +24,18 @@ from cadsim.camera import Camera
 from cadsim.dataset import layout
 from cadsim.dataset.detections import ViewDetections, ground_truth_pairs
 from cadsim.dataset.encoding import json_bytes, npz_bytes, png_bytes
+from cadsim.observer_pose import ObserverPose
 from cadsim.world import WorldObject
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 
 
 @dataclass(frozen=True, eq=False)
 class ViewCapture:
     """One observer's view: camera, the id of the object carrying it ("" for none), the rendered
     colour (H, W, 3) uint8 RGB, clean depth (H, W) float32 metres, instance ids (H, W) int32, the
-    detections at the scenario's noise config, and the seed of that noise."""
+    detections at the scenario's noise config, the seed of that noise, the seed of the detector's
+    attribute errors and the observer's true world pose."""
 
     camera: Camera
     observer_id: str
@@ -37,6 +44,8 @@ class ViewCapture:
     instance: np.ndarray
     detections: ViewDetections
     noise_seed: int
+    attribute_seed: int
+    pose: ObserverPose
 
 
 @dataclass(frozen=True, eq=False)
@@ -92,7 +101,13 @@ def encode_record(rec: PairRecord) -> dict[str, bytes]:
         "sim_seed": int(rec.sim_seed),
         "time": float(rec.time),
         "observers": [
-            {"id": v.observer_id, "camera": v.camera.as_dict(), "noise_seed": int(v.noise_seed)}
+            {
+                "id": v.observer_id,
+                "camera": v.camera.as_dict(),
+                "pose": v.pose.as_dict(),
+                "noise_seed": int(v.noise_seed),
+                "attribute_seed": int(v.attribute_seed),
+            }
             for v in views
         ],
         "objects": [o.as_dict() for o in rec.objects],
