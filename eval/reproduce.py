@@ -395,15 +395,11 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _write_regime_cards(out: Path, entries) -> None:
-    """``regime.csv`` for every evaluated test dataset (skipped, with a warning, while the regime
-    function is not in ``cadsim.dataset``)."""
+    """``regime.csv`` for every evaluated test dataset."""
     from eval.regime_cards import write_regime
 
     (out / "regime.csv").unlink(missing_ok=True)
-    try:
-        write_regime(out, {e.label: e.test_dir for e in entries})
-    except ImportError as exc:
-        log.warning("[regime cards] skipped: %s", exc)
+    write_regime(out, {e.label: e.test_dir for e in entries})
 
 
 if __name__ == "__main__":
