@@ -6,7 +6,8 @@
 - ``fig_regime.png/.pdf``: F1 and balanced accuracy against the achieved non-covisible share of
   the regime sweep, one line per matcher, one row of panels per dataset (from
   ``regime_sweep.csv``);
-- ``qualitative.png/.pdf``: paper Fig. 3 style — one pair per dataset, both views side by side,
+- ``qualitative.png/.pdf``: paper Fig. 3 style — one pair per paper dataset (MRC, CAD; every
+  dataset when neither is there), both views side by side,
   lines for RRWHM, MOS and maximin: green correct, red wrong, yellow dashed missed (from
   ``qualitative.json`` and the dataset's images).
 """
@@ -20,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from eval.tables import dataset_order, matcher_order, method_name
+from eval.tables import PAPER_DATASETS, dataset_order, matcher_order, method_name
 
 log = logging.getLogger(__name__)
 
@@ -190,7 +191,8 @@ def write_qualitative(out_dir: str | Path) -> list[Path]:
     spec = json.loads(path.read_text(encoding="utf-8"))
     if not spec:
         return []
-    datasets = sorted(spec, key=dataset_order)
+    # The paper's datasets (MRC, CAD) when present — not their variants such as CAD-dense.
+    datasets = sorted([d for d in spec if d in PAPER_DATASETS] or spec, key=dataset_order)
     missing = [
         spec[d]["dataset_dir"] for d in datasets if not Path(spec[d]["dataset_dir"]).is_dir()
     ]
