@@ -1,5 +1,6 @@
 """Experiment runner: computes the runs that are not cached yet, in parallel, and stores each as
-it completes, so a re-run computes only what changed and an interrupted sweep resumes.
+it completes, so a re-run computes only what changed and an interrupted sweep resumes. A run of
+the first N frame pairs is read from the cached run of the whole dataset when there is one.
 
 Missing runs are grouped into :class:`eval.tasks.RunTask` s: with a noise rate, all matchers of
 one (dataset, seed, rate) share a task (they share its re-detection); without, each run is its
@@ -10,6 +11,7 @@ datasets), whichever executor runs them (local processes or a Dask cluster, docs
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import traceback
 from collections.abc import Callable, Iterable, Sequence
@@ -36,10 +38,17 @@ class RunRequest:
     seed: int
     noise_rate: float | None = None
     limit: int | None = None
+    keep: float | None = None
 
     def spec(self, version: str) -> RunSpec:
         return RunSpec(
-            self.dataset_checksum, self.matcher, self.seed, self.noise_rate, version, self.limit
+            self.dataset_checksum,
+            self.matcher,
+            self.seed,
+            self.noise_rate,
+            version,
+            self.limit,
+            self.keep,
         )
 
 
@@ -69,12 +78,15 @@ def requests_for(
     seeds: Iterable[int],
     noise_rates: Iterable[float | None] = (None,),
     limit: int | None = None,
+    keep: float | None = None,
 ) -> list[RunRequest]:
     """Every combination of (dataset dir, checksum) × matcher × seed × noise rate (first `limit`
-    frame pairs of each dataset; None: all)."""
+    frame pairs of each dataset; None: all; non-covisible detections thinned to level `keep`,
+    where 1 and None both mean no thinning and share the untouched runs)."""
     matchers, seeds, noise_rates = list(matchers), list(seeds), list(noise_rates)
+    keep = None if keep is None or float(keep) == 1.0 else float(keep)
     return [
-        RunRequest(d, c, m, s, r, limit)
+        RunRequest(d, c, m, s, r, limit, keep)
         for d, c in datasets
         for r in noise_rates
         for s in seeds
@@ -86,11 +98,18 @@ def _group(missing: Sequence[RunRequest], version: str) -> list[RunTask]:
     groups: dict[tuple, list[MatcherSpec]] = {}
     for req in missing:
         shared = req.noise_rate is not None
-        key = (req.dataset_dir, req.dataset_checksum, req.seed, req.noise_rate, req.limit)
+        key = (
+            req.dataset_dir,
+            req.dataset_checksum,
+            req.seed,
+            req.noise_rate,
+            req.limit,
+            req.keep,
+        )
         key = key if shared else (*key, req.matcher)
         groups.setdefault(key, []).append(req.matcher)
     return [
-        RunTask(k[0], k[1], k[2], k[3], tuple(dict.fromkeys(ms)), version, k[4])
+        RunTask(k[0], k[1], k[2], k[3], tuple(dict.fromkeys(ms)), version, k[4], k[5])
         for k, ms in groups.items()
     ]
 
@@ -124,10 +143,31 @@ class Runner:
             for name in ("cached", "computed", "failed"):
                 setattr(self.totals, name, getattr(self.totals, name) + getattr(self.stats, name))
 
+    def _source(self, spec: RunSpec) -> RunSpec | None:
+        """The cached run `spec` can be read from: itself, or — for a run of the first N frame
+        pairs — the cached run of the whole dataset (frame pairs are computed independently and in
+        dataset order, so the first N outcomes are the same); None when neither is cached."""
+        if spec in self.cache:
+            return spec
+        if spec.limit is not None:
+            full = dataclasses.replace(spec, limit=None)
+            if full in self.cache:
+                return full
+        return None
+
+    def _load(self, spec: RunSpec) -> RunResult:
+        source = self._source(spec)
+        result = self.cache.load(spec if source is None else source)
+        if source is not None and source != spec:
+            outcomes = result.outcomes[: spec.limit]
+            share = len(outcomes) / max(len(result.outcomes), 1)
+            result = RunResult(spec, result.dataset_dir, outcomes, result.wall_s * share)
+        return result
+
     def _run(self, requests: Sequence[RunRequest], desc: str) -> list[RunResult]:
         specs = [req.spec(self.version) for req in requests]
         missing = list(
-            {s: r for s, r in zip(specs, requests, strict=True) if s not in self.cache}.values()
+            {s: r for s, r in zip(specs, requests, strict=True) if self._source(s) is None}.values()
         )
         self.stats = RunStats(cached=len(set(specs)) - len(missing))
         if missing:
@@ -165,4 +205,4 @@ class Runner:
                     f"to retry only the failed ones); the first: {one_line(errors[0])}",
                     errors,
                 )
-        return [self.cache.load(spec) for spec in specs]
+        return [self._load(spec) for spec in specs]

@@ -178,7 +178,9 @@ class FramePair:
         return self._instance["instance2"]
 
     def problem(self):
-        """The matching problem (positions and features of both views), as ``matchers.Problem``."""
+        """The matching problem as ``matchers.Problem``: positions (metres, each camera's frame)
+        and features of both views, and the box centres in pixels (``pixels1``/``pixels2``, for
+        matchers that compare objects in the image)."""
         from matchers.problem import Problem
 
         return Problem(
@@ -187,7 +189,28 @@ class FramePair:
             self.view1.features,
             self.view2.features,
             meta={"pair": self.index, "name": self.name, "noise_rate": self.noise_rate},
+            pixels1=_box_centres(self.view1.boxes),
+            pixels2=_box_centres(self.view2.boxes),
         )
+
+    def select(self, rows1, rows2) -> FramePair:
+        """This pair with only the detections at `rows1` of view 1 and `rows2` of view 2 (integer
+        indices, in that order); ground truth follows the kept objects. Images are shared."""
+        views = (self.view1.take(rows1), self.view2.take(rows2))
+        return self._with_views(views, self.noise_rate)
+
+    def _with_views(
+        self, views: tuple[ViewDetections, ViewDetections], noise_rate: float
+    ) -> FramePair:
+        pair = FramePair(
+            self.path, self.index, self._entry, self._noise, self._detection, views, noise_rate
+        )
+        shared = ("record", "color1", "color2", "_depth", "_instance", "objects", "cameras")
+        shared += ("observer_poses", "camera_extrinsics", "camera_to_world")
+        for name in shared:
+            if name in self.__dict__:
+                pair.__dict__[name] = self.__dict__[name]
+        return pair
 
     def redetect(self, noise_rate: float, seed: int) -> FramePair:
         """This pair re-detected at depth-noise rate ``noise_rate`` (σ = noise_rate · d²): noise
@@ -233,21 +256,13 @@ class FramePair:
                 known_features=known,
             )
             views.append(ViewDetections.from_detections(det))
-        pair = FramePair(
-            self.path,
-            self.index,
-            self._entry,
-            self._noise,
-            self._detection,
-            tuple(views),
-            noise_rate,
-        )
-        shared = ("record", "color1", "color2", "_depth", "_instance", "objects", "cameras")
-        shared += ("observer_poses", "camera_extrinsics", "camera_to_world")
-        for name in shared:
-            if name in self.__dict__:
-                pair.__dict__[name] = self.__dict__[name]
-        return pair
+        return self._with_views(tuple(views), noise_rate)
+
+
+def _box_centres(boxes: np.ndarray) -> np.ndarray:
+    """(k, 2) centres (u, v) in pixels of (k, 4) boxes (u0, v0, u1, v1)."""
+    boxes = np.asarray(boxes, dtype=float).reshape(-1, 4)
+    return (boxes[:, :2] + boxes[:, 2:]) / 2
 
 
 # Datasets this process has verified: resolved path -> (dataset checksum, file signature).
