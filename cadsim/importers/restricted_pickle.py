@@ -22,6 +22,7 @@ Must not import torch, torch_geometric, or anything outside numpy and the standa
 from __future__ import annotations
 
 import io
+import os
 import pickle
 import pickletools
 import zipfile
@@ -326,9 +327,10 @@ def load_torch_archive(path: str | Path) -> object:
     """
     path = Path(path)
     with open(path, "rb") as f:
-        blob = f.read(MAX_ARCHIVE_BYTES + 1)
-    if len(blob) > MAX_ARCHIVE_BYTES:
-        raise ImportFormatError(path, f"larger than {MAX_ARCHIVE_BYTES} bytes")
+        size = os.fstat(f.fileno()).st_size
+        if size > MAX_ARCHIVE_BYTES:
+            raise ImportFormatError(path, f"{size} bytes, larger than {MAX_ARCHIVE_BYTES}")
+        blob = f.read()
     try:
         with zipfile.ZipFile(io.BytesIO(blob)) as archive:
             prefix = _archive_prefix(archive, path)
