@@ -206,6 +206,36 @@ def test_allowlist_is_exactly_the_globals_of_a_shipped_file():
     assert found == set(ALLOWLIST)
 
 
+@needs_shared
+def test_shipped_subset_matches_its_readme_table():
+    """The per-sequence regime of the folder's README (and docs/external-data.md), recomputed."""
+    rows = {}
+    for pair in iter_pairs(SHARED):
+        _, i, j = np.intersect1d(pair.view_s.y, pair.view_t.y, return_indices=True)
+        gap = pair.view_s.pos_world[i, :2] - pair.view_t.pos_world[j, :2]  # ground plane: x, y
+        row = rows.setdefault(pair.sequence, {"ids": [], "objects": [], "covisible": [], "err": []})
+        row["ids"].append(int(pair.pair_id))
+        row["objects"] += [len(pair.view_s), len(pair.view_t)]
+        row["covisible"].append(len(i))
+        row["err"] += np.linalg.norm(gap, axis=1).tolist()
+    summary = {
+        seq: (
+            len(r["ids"]),
+            min(r["ids"]),
+            max(r["ids"]),
+            round(float(np.mean(r["objects"])), 1),
+            round(float(np.mean(r["covisible"])), 2),
+            round(float(np.median(r["err"])), 2),
+        )
+        for seq, r in rows.items()
+    }
+    assert summary == {
+        "069": (61, 60260, 60320, 7.6, 4.07, 3.37),
+        "070": (201, 60321, 60521, 7.8, 4.68, 2.95),
+        "071": (48, 60522, 60569, 9.2, 4.65, 2.95),
+    }
+
+
 # --- refusal: nothing from the file runs ---
 
 
