@@ -327,6 +327,27 @@ def test_misused_or_unknown_globals_are_refused(tmp_path, pkl, expected):
     assert str(info.value).startswith(str(path))
 
 
+@pytest.mark.parametrize("module, name", sorted(ALLOWLIST))
+@pytest.mark.parametrize(
+    "state",
+    [
+        EMPTY_DICT + op_str("dtype") + op_str("<f8") + b"s",  # __dict__ update
+        op_tuple(NONE, EMPTY_DICT + op_str("__defaults__") + op_tuple(op_int(1)) + b"s"),  # setattr
+    ],
+)
+def test_build_cannot_alter_a_stand_in_for_later_files(tmp_path, module, name, state):
+    before = {key: repr(value) for key, value in ALLOWLIST.items()}
+    path = write(
+        tmp_path / "build.pt",
+        archive_bytes(PROTO2 + op_global(module, name) + state + BUILD + STOP, {}),
+    )
+    with pytest.raises(ImportFormatError):
+        read_view(path)
+    assert {key: repr(value) for key, value in ALLOWLIST.items()} == before
+    arrays = view_arrays(2)
+    assert np.array_equal(read_view(write(tmp_path / "ok.pt", view_archive(arrays))).x, arrays["x"])
+
+
 # --- size guards: refused before any large allocation ---
 
 

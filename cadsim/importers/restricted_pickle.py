@@ -27,6 +27,7 @@ import pickle
 import pickletools
 import zipfile
 import zlib
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import ClassVar
@@ -66,34 +67,43 @@ class _Refused(pickle.UnpicklingError):
     """A stand-in was used in a way this format never uses it."""
 
 
-@dataclass(frozen=True)
+def _refuse_setstate(self: object, state: object) -> None:
+    """``__setstate__`` of the slotted stand-ins: pickle's BUILD may not alter them (a frozen
+    slotted dataclass's own ``__setstate__`` would write the fields, frozen or not)."""
+    raise _Refused(f"BUILD on {type(self).__name__} is not part of this format")
+
+
+@dataclass(frozen=True, slots=True)
 class StorageType:
     """Stand-in for a torch storage class (``torch.FloatStorage``): the dtype of its raw bytes."""
 
     global_name: str
     dtype: np.dtype
+    __setstate__ = _refuse_setstate
 
     def __call__(self, *args: object, **kwargs: object) -> None:
         raise _Refused(f"call of {self.global_name} is not part of this format")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class ClassReference:
     """Stand-in for a class the pickle stores as a value, never instantiates
     (``torch_geometric.data.data.DataEdgeAttr``)."""
 
     global_name: str
+    __setstate__ = _refuse_setstate
 
     def __call__(self, *args: object, **kwargs: object) -> None:
         raise _Refused(f"call of {self.global_name} is not part of this format")
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Storage:
     """One tensor storage: ``values`` (numel,) read-only, little-endian, as stored in the archive."""
 
     key: str
     values: np.ndarray
+    __setstate__ = _refuse_setstate
 
 
 class PickledObject:
@@ -183,6 +193,19 @@ def rebuild_tensor(
     return np.array(view, dtype=dtype)
 
 
+@dataclass(frozen=True, slots=True)
+class StandInFunction:
+    """Stand-in for an allowlisted function: immutable (no ``__dict__``, no ``__defaults__``), so
+    a pickle's BUILD cannot alter it for the files read after this one."""
+
+    global_name: str
+    function: Callable[..., object]
+    __setstate__ = _refuse_setstate
+
+    def __call__(self, *args: object) -> object:
+        return self.function(*args)
+
+
 def _empty_ordered_dict(*args: object) -> dict:
     """Stand-in for ``collections.OrderedDict``: this format only builds empty ones (hooks)."""
     if args:
@@ -191,10 +214,12 @@ def _empty_ordered_dict(*args: object) -> dict:
 
 
 ALLOWLIST: dict[tuple[str, str], object] = {
-    ("torch._utils", "_rebuild_tensor_v2"): rebuild_tensor,
+    ("torch._utils", "_rebuild_tensor_v2"): StandInFunction(
+        "torch._utils._rebuild_tensor_v2", rebuild_tensor
+    ),
     ("torch", "FloatStorage"): StorageType("torch.FloatStorage", np.dtype("<f4")),
     ("torch", "IntStorage"): StorageType("torch.IntStorage", np.dtype("<i4")),
-    ("collections", "OrderedDict"): _empty_ordered_dict,
+    ("collections", "OrderedDict"): StandInFunction("collections.OrderedDict", _empty_ordered_dict),
     ("torch_geometric.data.data", "Data"): _object_stand_in("torch_geometric.data.data.Data"),
     ("torch_geometric.data.storage", "GlobalStorage"): _object_stand_in(
         "torch_geometric.data.storage.GlobalStorage"
@@ -207,7 +232,9 @@ ALLOWLIST: dict[tuple[str, str], object] = {
     ),
 }
 """Every global a DMGM CAD ``.pt`` pickle references (all 620 files disassembled with
-``pickletools``), mapped to its stand-in; docs/external-data.md says why each is there."""
+``pickletools``), mapped to its stand-in; docs/external-data.md says why each is there. Every
+stand-in is immutable to pickle (slotted frozen instances; classes whose ``__setstate__`` cannot be
+called on the class itself), so one file cannot change how the next is read."""
 
 
 def _check_opcodes(data: bytes, path: Path, entry: str) -> None:
