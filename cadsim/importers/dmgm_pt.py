@@ -78,10 +78,15 @@ def _mapping(obj: object, path: Path) -> dict:
     data, slices = obj
     if slices is not None:
         raise ImportFormatError(path, "collated dataset (slices not None) is not one view")
-    if not (isinstance(data, PickledObject) and data.global_name.endswith(".data.Data")):
+    if not (
+        isinstance(data, PickledObject) and data.global_name == "torch_geometric.data.data.Data"
+    ):
         raise ImportFormatError(path, f"first element is {type(data).__name__}, not Data")
     store = data.state.get("_store")
-    if not (isinstance(store, PickledObject) and store.global_name.endswith(".GlobalStorage")):
+    if not (
+        isinstance(store, PickledObject)
+        and store.global_name == "torch_geometric.data.storage.GlobalStorage"
+    ):
         raise ImportFormatError(path, "Data has no GlobalStorage '_store'")
     mapping = store.state.get("_mapping")
     if not isinstance(mapping, dict):
