@@ -63,7 +63,9 @@ def mos(
     neighbours: int | None = None,
     sigma: float | None = None,
     affinity: np.ndarray | None = None,
-    sigma2: float = 0.5,
+    sigma2: float | None = None,
+    sigma_scale: float | None = None,
+    pairwise: str = "positions",
     weights: tuple[float, float, float] = (1 / 3, 1 / 3, 1 / 3),
     jump: float = 0.8,
     beta: float = 30.0,
@@ -74,7 +76,8 @@ def mos(
     """MOS (see the module docstring), then Hungarian.
 
     ``weights`` (first, second, third order; non-negative, not all zero; default equal thirds),
-    pairwise options ``affinity`` / ``sigma2`` as for :func:`matchers.rrwm.rrwm`, tensor
+    pairwise options ``affinity`` / ``sigma2`` / ``sigma_scale`` / ``pairwise`` as for
+    :func:`matchers.sm.sm` (the second-order term), tensor
     options as for every hypergraph matcher, walk options as for :func:`matchers.rrwhm.rrwhm`.
     Scores: the final distribution divided by its maximum.
     """
@@ -101,7 +104,7 @@ def mos(
     check_count("sinkhorn_iter", sinkhorn_iter)
     n, m = problem.n1, problem.n2
     built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma)
-    pairwise = resolve_affinity(problem, affinity, sigma2)
+    pairwise = resolve_affinity(problem, affinity, sigma2, sigma_scale, pairwise)
     b = appearance_similarity(problem).reshape(-1)
     step = multi_order_step(b, pairwise, built, weights)
     x, iterations, converged = jump_walk(step, n, m, jump, beta, max_iter, tol, sinkhorn_iter)

@@ -1,4 +1,6 @@
-"""Second-order affinity matrix for SM / RRWM / MOS: Gaussian of the difference of edge lengths."""
+"""Second-order affinity matrix for SM / RRWM / MOS: Gaussian of the difference of edge lengths,
+measured between 3-D positions (default) or between box centres in the image, with an absolute
+or a relative (multiple of the problem's median spacing) kernel width."""
 
 from __future__ import annotations
 
@@ -6,25 +8,82 @@ import numpy as np
 from scipy.spatial.distance import cdist
 
 from .problem import Problem
+from .scale import median_spacing
+
+PAIRWISE_SPACES = ("positions", "image")
+DEFAULT_SIGMA2 = 0.5
 
 
-def pairwise_affinity(problem: Problem, sigma2: float = 0.5) -> np.ndarray:
+def edge_positions(problem: Problem, pairwise: str = "positions") -> tuple[np.ndarray, np.ndarray]:
+    """The (n, D) and (m, D) positions whose distances are the edge lengths: ``"positions"`` —
+    points1/points2 (metres for CoID data); ``"image"`` — pixels1/pixels2 (box centres, pixels),
+    the way the paper's pairwise baselines compared objects. ValueError if pixels are missing."""
+    if pairwise not in PAIRWISE_SPACES:
+        raise ValueError(f"pairwise: expected one of {PAIRWISE_SPACES}, got {pairwise!r}")
+    if pairwise == "positions":
+        return problem.points1, problem.points2
+    if problem.pixels1 is None:
+        raise ValueError(
+            "pairwise='image': the problem has no pixels1/pixels2 (box centres in pixels); "
+            "give them to Problem or use pairwise='positions'"
+        )
+    return problem.pixels1, problem.pixels2
+
+
+def kernel_sigma2(
+    problem: Problem,
+    sigma2: float | None = None,
+    sigma_scale: float | None = None,
+    pairwise: str = "positions",
+) -> float:
+    """The kernel width sigma^2 (squared units of the edge lengths) from one of two options:
+    ``sigma2`` — absolute (default 0.5 when neither is given); ``sigma_scale`` — relative, sigma
+    = sigma_scale x the median within-view distance of the chosen space pooled over both views
+    (:func:`~matchers.scale.median_spacing`), so one value suits scenes of any size.
+
+    >>> p = Problem(np.array([[0.0, 0.0], [2.0, 0.0]]), np.array([[0.0, 0.0], [2.0, 0.0]]))
+    >>> kernel_sigma2(p, sigma_scale=0.5)  # median spacing 2 -> sigma 1
+    1.0
+    """
+    if sigma2 is not None and sigma_scale is not None:
+        raise ValueError("sigma2/sigma_scale: give one kernel width, not both")
+    if sigma_scale is None:
+        sigma2 = DEFAULT_SIGMA2 if sigma2 is None else sigma2
+        if isinstance(sigma2, bool) or not isinstance(sigma2, int | float | np.number):
+            raise ValueError(f"sigma2: expected a positive number, got {sigma2!r}")
+        if not (np.isfinite(sigma2) and sigma2 > 0):
+            raise ValueError(f"sigma2: expected a finite positive number, got {sigma2!r}")
+        return float(sigma2)
+    if isinstance(sigma_scale, bool) or not isinstance(sigma_scale, int | float | np.number):
+        raise ValueError(f"sigma_scale: expected a positive number, got {sigma_scale!r}")
+    if not (np.isfinite(sigma_scale) and sigma_scale > 0):
+        raise ValueError(f"sigma_scale: expected a finite positive number, got {sigma_scale!r}")
+    first, second = edge_positions(problem, pairwise)
+    return float((sigma_scale * median_spacing(first, second)) ** 2)
+
+
+def pairwise_affinity(
+    problem: Problem, sigma2: float = DEFAULT_SIGMA2, pairwise: str = "positions"
+) -> np.ndarray:
     """Dense (nm, nm) affinity M[a, b] between candidate matches a = (i, j) and b = (k, l).
 
     M[a, b] = exp(-(d1[i, k] - d2[j, l])**2 / sigma2) for i != k and j != l, where d1, d2 are the
-    Euclidean distances inside each view (same units as the positions; 2-D or 3-D). Entries of
+    Euclidean distances inside each view between the positions (``pairwise="positions"``,
+    default: points1/points2, 2-D or 3-D, their units) or between the box centres in the image
+    (``pairwise="image"``: pixels1/pixels2, pixels). Entries of
     matches that share a node (i == k or j == l, the diagonal included) are 0. sigma2 = 0.5 is the
     setting of the published synthetic benchmarks (``makeMatchingProblem_2nd.m``); it is in squared
-    position units, so scale it with your data. Rigid-invariant, not scale-invariant.
-    Memory: (nm)^2 doubles (40 vs 40 points: 20 MB).
+    position units, so scale it with your data (or use ``sigma_scale``, :func:`kernel_sigma2`).
+    Rigid-invariant, not scale-invariant. Memory: (nm)^2 doubles (40 vs 40 points: 20 MB).
     """
     if not sigma2 > 0:
         raise ValueError(f"sigma2: expected a positive number, got {sigma2!r}")
+    first, second = edge_positions(problem, pairwise)
     n, m = problem.n1, problem.n2
     if n == 0 or m == 0:
         return np.zeros((n * m, n * m))
-    d1 = cdist(problem.points1, problem.points1)
-    d2 = cdist(problem.points2, problem.points2)
+    d1 = cdist(first, first)
+    d2 = cdist(second, second)
     diff = d1[:, None, :, None] - d2[None, :, None, :]  # (n, m, n, m) = [i, j, k, l]
     affinity = np.exp(-(diff**2) / sigma2)
     same_i = np.eye(n, dtype=bool)[:, None, :, None]
@@ -33,12 +92,24 @@ def pairwise_affinity(problem: Problem, sigma2: float = 0.5) -> np.ndarray:
     return affinity.reshape(n * m, n * m)
 
 
-def resolve_affinity(problem: Problem, affinity: np.ndarray | None, sigma2: float) -> np.ndarray:
-    """The ``affinity=`` option of SM/RRWM/MOS: a precomputed (nm, nm) non-negative matrix in the
-    a = i*m + j convention, checked, or (None) :func:`pairwise_affinity` with ``sigma2``."""
+def resolve_affinity(
+    problem: Problem,
+    affinity: np.ndarray | None,
+    sigma2: float | None,
+    sigma_scale: float | None = None,
+    pairwise: str = "positions",
+) -> np.ndarray:
+    """The pairwise options of SM/RRWM/MOS: ``affinity`` — a precomputed (nm, nm) non-negative
+    matrix in the a = i*m + j convention, checked (``sigma2`` is then unused, as it always was;
+    ``sigma_scale`` or ``pairwise="image"`` with it is an error) — or
+    (None) :func:`pairwise_affinity` in space ``pairwise`` with the width of
+    :func:`kernel_sigma2` (``sigma2`` absolute, default 0.5, or ``sigma_scale`` relative)."""
     size = problem.n1 * problem.n2
     if affinity is None:
-        return pairwise_affinity(problem, sigma2)
+        width = kernel_sigma2(problem, sigma2, sigma_scale, pairwise)
+        return pairwise_affinity(problem, width, pairwise)
+    if sigma_scale is not None or pairwise != "positions":
+        raise ValueError("affinity: a precomputed affinity takes no sigma_scale or pairwise option")
     affinity = np.asarray(affinity, dtype=float)
     if affinity.shape != (size, size):
         raise ValueError(f"affinity: expected shape ({size}, {size}), got {affinity.shape}")

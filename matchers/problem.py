@@ -1,4 +1,6 @@
-"""The matching problem: two views of objects, positions plus optional appearance features."""
+"""The matching problem: two views of objects — positions, plus optional appearance features,
+image positions (box centres in pixels) and a localisation prior (positions in a shared world
+frame with their stated uncertainty)."""
 
 from __future__ import annotations
 
@@ -25,7 +27,22 @@ class Problem:
     points1: (n, D) object positions in view 1 (D = 2 or 3; metres in the observer's own frame
     for CoID data, any unit for synthetic/landmark data). points2: (m, D), same D.
     features1: (n, d) and features2: (m, d) appearance features, or None for uniform appearance.
+
+    Optional, each pair given both or neither (matchers that do not use them ignore them):
+
+    * pixels1: (n, 2), pixels2: (m, 2) — box centres in each view's image, in pixels (the
+      ``pairwise="image"`` option of SM / RRWM / MOS).
+    * world1: (n, 3), world2: (m, 3) — object positions in one shared world frame (metres;
+      x, y horizontal, z up) as each agent's own noisy localisation (e.g. GPS pose) puts them:
+      the localisation prior. world_sigma: its stated position uncertainty per view, metres
+      (> 0; the standard deviation of one view's error along each horizontal axis). Requires
+      world1/world2.
+
     Validated on construction: NaN/inf or inconsistent shapes raise ``ValueError`` naming the array.
+
+    >>> Problem(np.zeros((2, 3)), np.ones((1, 3)), world1=np.zeros((2, 3)),
+    ...         world2=np.ones((1, 3)), world_sigma=1.2).world_sigma
+    1.2
     """
 
     points1: np.ndarray
@@ -33,6 +50,11 @@ class Problem:
     features1: np.ndarray | None = None
     features2: np.ndarray | None = None
     meta: dict = field(default_factory=dict, compare=False)
+    pixels1: np.ndarray | None = None
+    pixels2: np.ndarray | None = None
+    world1: np.ndarray | None = None
+    world2: np.ndarray | None = None
+    world_sigma: float | None = None
 
     def __post_init__(self) -> None:
         p1 = _as_array("points1", self.points1, 2)
@@ -64,6 +86,36 @@ class Problem:
                 )
             object.__setattr__(self, "features1", f1)
             object.__setattr__(self, "features2", f2)
+        for first, second, width in (("pixels1", "pixels2", 2), ("world1", "world2", 3)):
+            self._set_per_object(first, second, width)
+        self._set_world_sigma()
+
+    def _set_per_object(self, first: str, second: str, width: int) -> None:
+        """Validate an optional pair of (n, width) / (m, width) per-object arrays."""
+        a, b = getattr(self, first), getattr(self, second)
+        if (a is None) != (b is None):
+            raise ValueError(f"{first}/{second}: give both or neither")
+        if a is None:
+            return
+        for name, value, count in ((first, a, self.n1), (second, b, self.n2)):
+            arr = _as_array(name, value, 2)
+            if count == 0 and arr.size == 0:
+                arr = arr.reshape(0, width)
+            if arr.shape != (count, width):
+                raise ValueError(f"{name}: expected shape ({count}, {width}), got {arr.shape}")
+            object.__setattr__(self, name, arr)
+
+    def _set_world_sigma(self) -> None:
+        if self.world_sigma is None:
+            return
+        if self.world1 is None:
+            raise ValueError("world_sigma: given without world1/world2")
+        value = self.world_sigma
+        if isinstance(value, bool) or not isinstance(value, int | float | np.number):
+            raise ValueError(f"world_sigma: expected a positive number of metres, got {value!r}")
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"world_sigma: expected a finite number > 0 (metres), got {value!r}")
+        object.__setattr__(self, "world_sigma", float(value))
 
     @property
     def n1(self) -> int:

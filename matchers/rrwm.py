@@ -76,7 +76,9 @@ def rrwm(
     threshold: float | None = None,
     *,
     affinity: np.ndarray | None = None,
-    sigma2: float = 0.5,
+    sigma2: float | None = None,
+    sigma_scale: float | None = None,
+    pairwise: str = "positions",
     jump: float = 0.8,
     beta: float = 30.0,
     max_iter: int = 300,
@@ -85,7 +87,9 @@ def rrwm(
     sinkhorn_iter: int = 100,
 ) -> Matching:
     """RRWM on the pairwise affinity (:func:`~matchers.pairwise.pairwise_affinity`, ``sigma2``
-    0.5, or a precomputed ``affinity`` in the a = i*m + j convention), then Hungarian.
+    0.5 or relative ``sigma_scale``, ``pairwise`` "positions" | "image", as for
+    :func:`matchers.sm.sm`; or a precomputed ``affinity`` in the a = i*m + j convention), then
+    Hungarian.
 
     Defaults are the original code's: ``jump`` 0.8 (weight on the reweighted jump), ``beta`` 30,
     ``max_iter`` 300, ``tol`` 1e-25, conflicting entries zeroed; ``sinkhorn_iter`` 100 (ours;
@@ -101,7 +105,7 @@ def rrwm(
     check_range("tol", tol, 0.0, np.inf)
     check_count("sinkhorn_iter", sinkhorn_iter)
     n, m = problem.n1, problem.n2
-    affinity = resolve_affinity(problem, affinity, sigma2)
+    affinity = resolve_affinity(problem, affinity, sigma2, sigma_scale, pairwise)
     x, iterations, converged = reweighted_walk(
         affinity, n, m, jump, beta, max_iter, tol, bool(zero_conflicts), sinkhorn_iter
     )

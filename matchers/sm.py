@@ -43,7 +43,9 @@ def sm(
     threshold: float | None = None,
     *,
     affinity: np.ndarray | None = None,
-    sigma2: float = 0.5,
+    sigma2: float | None = None,
+    sigma_scale: float | None = None,
+    pairwise: str = "positions",
     max_iter: int = 200,
     tol: float = 1e-8,
 ) -> Matching:
@@ -51,7 +53,10 @@ def sm(
 
     Options: ``affinity`` — a precomputed (nm, nm) matrix in the a = i*m + j convention
     (default: :func:`~matchers.pairwise.pairwise_affinity` with ``sigma2``, 0.5, in squared
-    position units); ``max_iter`` (200) and ``tol`` (1e-8) of the power iteration.
+    position units, or ``sigma_scale``, the kernel width sigma as a multiple of the problem's
+    median within-view distance; ``pairwise`` "positions" (default) or "image" — edge lengths
+    between box centres, pixels1/pixels2); ``max_iter`` (200) and ``tol`` (1e-8) of the power
+    iteration.
     Scores: eigenvector divided by its maximum. Deterministic (uniform start; seed unused).
     """
     started = time.perf_counter()
@@ -60,7 +65,7 @@ def sm(
     check_count("max_iter", max_iter)
     check_range("tol", tol, 0.0, np.inf, open_low=True)
     n, m = problem.n1, problem.n2
-    affinity = resolve_affinity(problem, affinity, sigma2)
+    affinity = resolve_affinity(problem, affinity, sigma2, sigma_scale, pairwise)
     x, iterations, converged = spectral_vector(affinity, max_iter, tol)
     scores = max_normalised(x, n, m)
     return finish("sm", scores, threshold, started, iterations, {"converged": converged})
