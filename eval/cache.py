@@ -7,7 +7,7 @@ reader never sees half a file and an interrupted sweep leaves only complete entr
 
 The code version in every key is a SHA-256 over the source of everything that shapes a run's
 result: the ``matchers`` and ``cadsim`` packages (matchers, dataset reading, depth noise,
-detection) and ``eval/tasks.py`` — any edit there invalidates the cache.
+detection), ``eval/tasks.py`` and ``eval/thinning.py`` — any edit there invalidates the cache.
 """
 
 from __future__ import annotations
@@ -53,7 +53,8 @@ def _source_files() -> list[tuple[str, Path]]:
             name = p.relative_to(root.parent).as_posix()
             if not name.startswith(_NOT_RESULT_SHAPING):
                 files.append((name, p))
-    files.append(("eval/tasks.py", Path(__file__).with_name("tasks.py")))
+    for name in ("tasks.py", "thinning.py"):
+        files.append((f"eval/{name}", Path(__file__).with_name(name)))
     return files
 
 
@@ -88,6 +89,7 @@ def _spec_from_dict(d: dict) -> RunSpec:
         noise_rate=None if d["noise_rate"] is None else float(d["noise_rate"]),
         code_version=d["code_version"],
         limit=None if d.get("limit") is None else int(d["limit"]),
+        keep=None if d.get("keep") is None else float(d["keep"]),
     )
 
 

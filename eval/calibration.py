@@ -1,7 +1,7 @@
 """Acceptance thresholds τ: calibrated per matcher on validation runs, applied to cached scores.
 
 A matcher's prediction at τ is its Hungarian assignment with the pairs scoring below τ dropped
-(``matchers.discretise``). :func:`calibrate` picks the τ that maximises the mean per-pair F1 over
+(``matchers.discretise``; :func:`predictions` applies it to the cached assignment). :func:`calibrate` picks the τ that maximises the mean per-pair F1 over
 the validation frame pairs of all given runs (every seed pooled). F1 is piecewise constant in τ,
 changing only at assigned scores; τ is put in the middle of the best interval (between the best
 candidate score and the next lower one), so it does not sit on a validation score; ties go to the
@@ -18,7 +18,6 @@ import numpy as np
 
 from eval.metrics import RankedAssignments, candidate_thresholds, metrics_at_thresholds
 from eval.tasks import PairOutcome, RunResult
-from matchers.discretise import discretise
 
 
 @dataclass(frozen=True)
@@ -87,5 +86,11 @@ def check_disjoint(val_runs: Iterable[RunResult], test_runs: Iterable[RunResult]
 
 
 def predictions(outcome: PairOutcome, tau: float | None) -> np.ndarray:
-    """(k, 2) predicted pairs of `outcome` at acceptance threshold `tau` (None: all assigned)."""
-    return discretise(outcome.scores, tau)
+    """(k, 2) predicted pairs of `outcome` at acceptance threshold `tau` (None: all assigned):
+    the matcher's own assignment with the pairs scoring below τ dropped. For every matcher that
+    discretises with ``matchers.discretise`` this is ``discretise(scores, tau)``; a matcher whose
+    assignment is smaller (``none`` declares nothing) keeps its own."""
+    assigned = np.asarray(outcome.assigned, dtype=np.int64).reshape(-1, 2)
+    if tau is None:
+        return assigned
+    return assigned[outcome.assigned_scores >= tau]

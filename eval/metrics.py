@@ -6,7 +6,12 @@ indexing view 1 (n objects) and j indexing view 2 (m objects).
 - precision = TP / |M|; 1 when |M| = 0 = |G|, 0 when |M| = 0 < |G|.
 - recall = TP / |G|; 1 when |G| = 0 (nothing to retrieve, nothing missed).
 - accuracy = fraction of the n + m objects whose decision is right: a covisible object matched to
-  its true partner, or a non-covisible object left unmatched; 1 when n + m = 0.
+  its true partner, or a non-covisible object left unmatched; 1 when n + m = 0. It rewards
+  abstention in proportion to the non-covisible share: declaring nothing scores that share.
+- balanced accuracy = ½ · (share of the 2|G| covisible objects of both views matched to their true
+  partner, which equals recall, + share of the n + m − 2|G| non-covisible objects left unmatched).
+  A pair with only one of the two classes takes that class's share alone; 1 when n + m = 0.
+  Declaring nothing scores exactly ½ and a perfect matching 1, whatever the non-covisible share.
 - F1 = 2PR / (P + R), 0 when P + R = 0.
 
 Per frame pair first, then as the paper aggregates: per-run mean over frame pairs, then mean ± std
@@ -26,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-METRICS = ("accuracy", "precision", "recall", "f1")
+METRICS = ("accuracy", "balanced_accuracy", "precision", "recall", "f1")
 
 
 def _pairs_array(name: str, pairs, n1: int, n2: int) -> np.ndarray:
@@ -68,6 +73,19 @@ def _f1(precision, recall):
     return np.where(total > 0, 2 * precision * recall / np.where(total > 0, total, 1), 0.0)
 
 
+def _balanced_accuracy(tp, n_gt, negatives_right, n_negatives):
+    """Mean of the covisible share (TP / |G|, the recall) and the non-covisible share
+    (negatives_right / n_negatives) over the classes a pair has; 1 when it has neither."""
+    tp, n_gt, right, n_neg = np.broadcast_arrays(
+        *(np.asarray(a, dtype=float) for a in (tp, n_gt, negatives_right, n_negatives))
+    )
+    has_pos, has_neg = n_gt > 0, n_neg > 0
+    positive = np.where(has_pos, tp / np.maximum(n_gt, 1), 0.0)
+    negative = np.where(has_neg, right / np.maximum(n_neg, 1), 0.0)
+    classes = has_pos.astype(float) + has_neg
+    return np.where(classes > 0, (positive + negative) / np.maximum(classes, 1), 1.0)
+
+
 def _accuracy(correct, n_objects):
     correct, n_objects = np.broadcast_arrays(
         np.asarray(correct, dtype=float), np.asarray(n_objects, dtype=float)
@@ -87,6 +105,7 @@ class PairMetrics:
     tp: int
     correct: int
     accuracy: float
+    balanced_accuracy: float
     precision: float
     recall: float
     f1: float
@@ -105,6 +124,7 @@ def pair_metrics(predicted, ground_truth, n1: int, n2: int) -> PairMetrics:
     unmatched_negative1 = n1 - len(np.union1d(pred[:, 0], gt[:, 0]))
     unmatched_negative2 = n2 - len(np.union1d(pred[:, 1], gt[:, 1]))
     correct = 2 * tp + unmatched_negative1 + unmatched_negative2
+    negatives = n1 + n2 - 2 * len(gt)
     precision = float(_precision(tp, len(pred), len(gt)))
     recall = float(_recall(tp, len(gt)))
     return PairMetrics(
@@ -115,6 +135,9 @@ def pair_metrics(predicted, ground_truth, n1: int, n2: int) -> PairMetrics:
         tp=int(tp),
         correct=int(correct),
         accuracy=float(_accuracy(correct, n1 + n2)),
+        balanced_accuracy=float(
+            _balanced_accuracy(tp, len(gt), unmatched_negative1 + unmatched_negative2, negatives)
+        ),
         precision=precision,
         recall=recall,
         f1=float(_f1(precision, recall)),
@@ -196,7 +219,7 @@ def _kept_counts(ranked: RankedAssignments, weights: np.ndarray, thresholds: np.
 def metrics_at_thresholds(ranked: RankedAssignments, thresholds) -> dict[str, np.ndarray]:
     """Every frame pair's metrics when keeping the assigned pairs with score ≥ τ, for each τ.
 
-    Returns (P, T) arrays keyed 'accuracy', 'precision', 'recall', 'f1', 'tp', 'n_pred'.
+    Returns (P, T) arrays keyed by every name of :data:`METRICS`, 'tp' and 'n_pred'.
     """
     t = np.asarray(thresholds, dtype=float).reshape(-1)
     n_pred = _kept_counts(ranked, np.ones_like(ranked.score), t)
@@ -204,11 +227,13 @@ def metrics_at_thresholds(ranked: RankedAssignments, thresholds) -> dict[str, np
     kept_negative1 = _kept_counts(ranked, ~ranked.cov1, t)
     kept_negative2 = _kept_counts(ranked, ~ranked.cov2, t)
     n1, n2, n_gt = (a[:, None].astype(float) for a in (ranked.n1, ranked.n2, ranked.n_gt))
-    correct = 2 * tp + (n1 - n_gt - kept_negative1) + (n2 - n_gt - kept_negative2)
+    negatives_right = (n1 - n_gt - kept_negative1) + (n2 - n_gt - kept_negative2)
+    correct = 2 * tp + negatives_right
     precision = _precision(tp, n_pred, n_gt)
     recall = _recall(tp, n_gt)
     return {
         "accuracy": _accuracy(correct, n1 + n2),
+        "balanced_accuracy": _balanced_accuracy(tp, n_gt, negatives_right, n1 + n2 - 2 * n_gt),
         "precision": precision,
         "recall": recall,
         "f1": _f1(precision, recall),
@@ -263,17 +288,19 @@ def average_precision(curve: PRCurve) -> float:
 def summarise_runs(per_pair: pd.DataFrame, by: Sequence[str], run: str = "seed") -> pd.DataFrame:
     """Aggregate as the paper does: per-run mean over frame pairs, then mean and std over runs.
 
-    per_pair: one row per (run, frame pair) with the :data:`METRICS` columns and the `by` and
-    `run` columns. Returns one row per `by` group with `<metric>_mean`, `<metric>_std` (sample
-    std over runs, ddof=1; 0 for a single run) and `runs`.
+    per_pair: one row per (run, frame pair) with the `by` and `run` columns and metric columns
+    (those of :data:`METRICS` it has; files written before a metric existed lack it). Returns one
+    row per `by` group with `<metric>_mean`, `<metric>_std` (sample std over runs, ddof=1; 0 for
+    a single run) and `runs`.
     """
-    missing = [c for c in (*by, run, *METRICS) if c not in per_pair.columns]
+    metrics = [m for m in METRICS if m in per_pair.columns]
+    missing = [c for c in (*by, run) if c not in per_pair.columns] or ([] if metrics else METRICS)
     if missing:
-        raise ValueError(f"per_pair: missing columns {missing}")
-    per_run = per_pair.groupby([*by, run], sort=False)[list(METRICS)].mean()
+        raise ValueError(f"per_pair: missing columns {list(missing)}")
+    per_run = per_pair.groupby([*by, run], sort=False)[metrics].mean()
     grouped = per_run.groupby(level=list(range(len(by))), sort=False)
     mean = grouped.mean().add_suffix("_mean")
     std = grouped.std(ddof=1).fillna(0.0).add_suffix("_std")
     runs = grouped.size().rename("runs")
     out = pd.concat([mean, std, runs], axis=1).reset_index()
-    return out[[*by, *(f"{m}_{s}" for m in METRICS for s in ("mean", "std")), "runs"]]
+    return out[[*by, *(f"{m}_{s}" for m in metrics for s in ("mean", "std")), "runs"]]

@@ -35,10 +35,17 @@ class RunRequest:
     seed: int
     noise_rate: float | None = None
     limit: int | None = None
+    keep: float | None = None
 
     def spec(self, version: str) -> RunSpec:
         return RunSpec(
-            self.dataset_checksum, self.matcher, self.seed, self.noise_rate, version, self.limit
+            self.dataset_checksum,
+            self.matcher,
+            self.seed,
+            self.noise_rate,
+            version,
+            self.limit,
+            self.keep,
         )
 
 
@@ -61,12 +68,15 @@ def requests_for(
     seeds: Iterable[int],
     noise_rates: Iterable[float | None] = (None,),
     limit: int | None = None,
+    keep: float | None = None,
 ) -> list[RunRequest]:
     """Every combination of (dataset dir, checksum) × matcher × seed × noise rate (first `limit`
-    frame pairs of each dataset; None: all)."""
+    frame pairs of each dataset; None: all; non-covisible detections thinned to level `keep`,
+    where 1 and None both mean no thinning and share the untouched runs)."""
     matchers, seeds, noise_rates = list(matchers), list(seeds), list(noise_rates)
+    keep = None if keep is None or float(keep) == 1.0 else float(keep)
     return [
-        RunRequest(d, c, m, s, r, limit)
+        RunRequest(d, c, m, s, r, limit, keep)
         for d, c in datasets
         for r in noise_rates
         for s in seeds
@@ -78,11 +88,18 @@ def _group(missing: Sequence[RunRequest], version: str) -> list[RunTask]:
     groups: dict[tuple, list[MatcherSpec]] = {}
     for req in missing:
         shared = req.noise_rate is not None
-        key = (req.dataset_dir, req.dataset_checksum, req.seed, req.noise_rate, req.limit)
+        key = (
+            req.dataset_dir,
+            req.dataset_checksum,
+            req.seed,
+            req.noise_rate,
+            req.limit,
+            req.keep,
+        )
         key = key if shared else (*key, req.matcher)
         groups.setdefault(key, []).append(req.matcher)
     return [
-        RunTask(k[0], k[1], k[2], k[3], tuple(dict.fromkeys(ms)), version, k[4])
+        RunTask(k[0], k[1], k[2], k[3], tuple(dict.fromkeys(ms)), version, k[4], k[5])
         for k, ms in groups.items()
     ]
 

@@ -1,9 +1,11 @@
 """Pure, self-describing experiment tasks and their results.
 
 A *run* is (dataset, matcher with options, run seed, noise rate or None = the stored detections;
-optionally only the dataset's first N frame pairs).
+optionally only the dataset's first N frame pairs, optionally with its non-covisible detections
+thinned to a keep level, :mod:`eval.thinning`).
 Its identity, :class:`RunSpec`, holds everything that determines the result — dataset checksum,
-matcher name and options, seed, noise rate, code version — and hashes to the cache key. A
+matcher name and options (tuned parameters and protocol options such as ``pairwise="image"``
+are options), seed, noise rate, keep level, code version — and hashes to the cache key. A
 :class:`RunTask` is the unit of work handed to an executor: one dataset, seed and noise rate and
 one or more matchers, which then share the (costly) re-detection of every frame pair. Tasks carry
 only plain data (paths, names, numbers), so any executor, local or remote, gives the same result.
@@ -22,6 +24,8 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
+
+from eval.thinning import thin_pair
 
 
 @dataclass(frozen=True)
@@ -53,6 +57,7 @@ class RunSpec:
     noise_rate: float | None
     code_version: str
     limit: int | None = None  # only the first `limit` frame pairs (None: all)
+    keep: float | None = None  # thinning level of non-covisible detections (None: no thinning)
 
     def key(self) -> str:
         """Hex SHA-256 of the canonical JSON of the fields."""
@@ -71,11 +76,18 @@ class RunTask:
     matchers: tuple[MatcherSpec, ...]
     code_version: str
     limit: int | None = None
+    keep: float | None = None
 
     def specs(self) -> list[RunSpec]:
         return [
             RunSpec(
-                self.dataset_checksum, m, self.seed, self.noise_rate, self.code_version, self.limit
+                self.dataset_checksum,
+                m,
+                self.seed,
+                self.noise_rate,
+                self.code_version,
+                self.limit,
+                self.keep,
             )
             for m in self.matchers
         ]
@@ -153,6 +165,8 @@ def execute(task: RunTask) -> list[RunResult]:
         pair = dataset[k]
         if task.noise_rate is not None:
             pair = pair.redetect(task.noise_rate, seed=task.seed)
+        if task.keep is not None:
+            pair = thin_pair(pair, task.keep)
         problem = pair.problem()
         gt = np.asarray(pair.gt_pairs, dtype=np.int64).reshape(-1, 2)
         for spec, fn, result in zip(task.matchers, functions, results, strict=True):

@@ -28,6 +28,8 @@ BASE = RunSpec(
         dataclasses.replace(BASE, noise_rate=0.01),
         dataclasses.replace(BASE, code_version="c0df"),
         dataclasses.replace(BASE, limit=10),
+        dataclasses.replace(BASE, keep=0.5),
+        dataclasses.replace(BASE, keep=0.0),
     ],
 )
 def test_key_changes_with_every_input(changed):
@@ -60,7 +62,7 @@ def test_code_version_changes_when_a_source_file_changes(tmp_path, monkeypatch):
 def test_real_code_version_covers_matchers_detection_and_tasks():
     names = [name for name, _ in cache_module._source_files()]
     assert "matchers/discretise.py" in names
-    assert "eval/tasks.py" in names
+    assert "eval/tasks.py" in names and "eval/thinning.py" in names
     assert any(n.startswith("cadsim/dataset/") for n in names)
 
 
@@ -97,6 +99,9 @@ def test_store_and_load_round_trip_exactly(tmp_path):
                 np.testing.assert_array_equal(x, y)
             else:
                 assert x == y, field.name
+    thinned = dataclasses.replace(BASE, keep=0.25, limit=3)
+    store.store(_result(thinned))
+    assert store.load(thinned).spec == thinned
 
 
 def test_missing_corrupt_and_foreign_entries_are_reported(tmp_path):

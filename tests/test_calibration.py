@@ -77,6 +77,14 @@ def test_predictions_match_the_shared_discretisation_and_the_sweep():
         for tau in (0.0, 0.3, 0.7, 1.0):
             expected = o.assigned[o.assigned_scores >= tau]
             np.testing.assert_array_equal(calibration.predictions(o, tau), expected)
+            np.testing.assert_array_equal(calibration.predictions(o, tau), discretise(scores, tau))
+        np.testing.assert_array_equal(calibration.predictions(o, None), discretise(scores))
+
+
+def test_a_matcher_that_assigns_nothing_predicts_nothing_even_without_tau():
+    o = _outcome(0, 1, np.zeros((3, 4)), [[0, 0]], assigned=np.zeros((0, 2), np.int64))
+    assert calibration.predictions(o, None).shape == (0, 2)
+    assert calibration.predictions(o, 0.0).shape == (0, 2)
 
 
 def test_check_disjoint_refuses_shared_frames_or_simulation_seeds():

@@ -68,6 +68,38 @@ def test_accuracy_differs_from_recall_when_negatives_are_left_unmatched():
     assert m.accuracy == pytest.approx((2 + 1 + 2) / 7)
 
 
+@pytest.mark.parametrize(("n1", "n2", "covisible"), [(3, 4, 2), (17, 17, 5), (30, 4, 1)])
+def test_declaring_nothing_scores_half_balanced_accuracy_whatever_the_distractor_share(
+    n1, n2, covisible
+):
+    gt = np.stack([np.arange(covisible), np.arange(covisible)], axis=1)
+    m = pair_metrics([], gt, n1=n1, n2=n2)
+    assert m.balanced_accuracy == 0.5
+    # Plain accuracy instead awards the non-covisible share.
+    assert m.accuracy == pytest.approx((n1 + n2 - 2 * covisible) / (n1 + n2))
+
+
+def test_balanced_accuracy_by_hand():
+    # Two covisible, one found (covisible share 2/4 objects); the 3 non-covisible objects unmatched.
+    m = pair_metrics([[0, 0]], [[0, 0], [1, 1]], n1=3, n2=4)
+    assert m.balanced_accuracy == pytest.approx(0.5 * (2 / 4 + 3 / 3))
+    # One right, one swapped partner, non-covisible view-1 object 3 matched (0 of 1 left alone).
+    m = pair_metrics([[0, 0], [1, 2], [3, 1]], [[0, 0], [1, 1], [2, 2]], n1=4, n2=3)
+    assert m.balanced_accuracy == pytest.approx(0.5 * (2 / 6 + 0 / 1))
+    # A perfect partial matching scores 1.
+    assert pair_metrics([[0, 2], [3, 0]], [[0, 2], [3, 0]], n1=5, n2=3).balanced_accuracy == 1.0
+
+
+def test_balanced_accuracy_without_non_covisible_objects_is_the_covisible_share():
+    gt = [[0, 1], [1, 0], [2, 2]]
+    m = pair_metrics([[0, 1], [1, 2], [2, 0]], gt, n1=3, n2=3)
+    assert m.balanced_accuracy == pytest.approx(1 / 3) == pytest.approx(m.recall)
+    assert pair_metrics([], gt, n1=3, n2=3).balanced_accuracy == 0.0
+    # Without covisible objects it is the non-covisible share; empty views score 1.
+    assert pair_metrics([[0, 0]], [], n1=2, n2=3).balanced_accuracy == pytest.approx(3 / 5)
+    assert pair_metrics([], [], n1=0, n2=0).balanced_accuracy == 1.0
+
+
 @pytest.mark.parametrize(
     ("pairs", "message"),
     [
@@ -131,7 +163,7 @@ def test_threshold_sweep_equals_per_pair_metrics_of_the_kept_pairs(frame_list):
     for f, (assigned, scores, gt, n1, n2) in enumerate(frame_list):
         for t, tau in enumerate(thresholds):
             m = pair_metrics(assigned[scores >= tau], gt, n1, n2)
-            for name in ("accuracy", "precision", "recall", "f1"):
+            for name in ("accuracy", "balanced_accuracy", "precision", "recall", "f1"):
                 assert swept[name][f, t] == pytest.approx(getattr(m, name)), (name, f, tau)
             assert swept["tp"][f, t] == m.tp and swept["n_pred"][f, t] == m.n_pred
 

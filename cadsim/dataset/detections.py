@@ -83,6 +83,20 @@ class ViewDetections:
             pixels=arrays[f"{prefix}_pixels"],
         )
 
+    def take(self, rows) -> ViewDetections:
+        """The detections at `rows` (integer indices, in that order) as a new ``ViewDetections``."""
+        rows = np.asarray(rows, dtype=np.int64).reshape(-1)
+        if rows.size and (rows.min() < 0 or rows.max() >= len(self)):
+            raise ValueError(f"rows: index out of range for {len(self)} detections")
+        return ViewDetections(
+            positions=self.positions[rows],
+            boxes=self.boxes[rows],
+            features=self.features[rows] if len(self) else self.features,
+            object_ids=[self.object_ids[r] for r in rows],
+            classes=[self.classes[r] for r in rows],
+            pixels=self.pixels[rows],
+        )
+
     def equals(self, other: ViewDetections) -> bool:
         """Exact equality of every field."""
         return (

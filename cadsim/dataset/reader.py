@@ -161,6 +161,23 @@ class FramePair:
             meta={"pair": self.index, "name": self.name, "noise_rate": self.noise_rate},
         )
 
+    def select(self, rows1, rows2) -> FramePair:
+        """This pair with only the detections at `rows1` of view 1 and `rows2` of view 2 (integer
+        indices, in that order); ground truth follows the kept objects. Images are shared."""
+        views = (self.view1.take(rows1), self.view2.take(rows2))
+        return self._with_views(views, self.noise_rate)
+
+    def _with_views(
+        self, views: tuple[ViewDetections, ViewDetections], noise_rate: float
+    ) -> FramePair:
+        pair = FramePair(
+            self.path, self.index, self._entry, self._noise, self._detection, views, noise_rate
+        )
+        for name in ("record", "color1", "color2", "_depth", "_instance", "objects", "cameras"):
+            if name in self.__dict__:
+                pair.__dict__[name] = self.__dict__[name]
+        return pair
+
     def redetect(self, noise_rate: float, seed: int) -> FramePair:
         """This pair re-detected at depth-noise rate ``noise_rate`` (σ = noise_rate · d²): noise
         seeded by (seed, episode, slot, view) applied to the stored clean depth, then detection;
@@ -183,19 +200,7 @@ class FramePair:
             noisy = apply_depth_noise(depth, noise_cfg, rng)
             det = detect(RenderedView(color, depth, instance), noisy, self.objects, camera, det_cfg)
             views.append(ViewDetections.from_detections(det))
-        pair = FramePair(
-            self.path,
-            self.index,
-            self._entry,
-            self._noise,
-            self._detection,
-            tuple(views),
-            noise_rate,
-        )
-        for name in ("record", "color1", "color2", "_depth", "_instance", "objects", "cameras"):
-            if name in self.__dict__:
-                pair.__dict__[name] = self.__dict__[name]
-        return pair
+        return self._with_views(tuple(views), noise_rate)
 
 
 class Dataset(Sequence[FramePair]):
