@@ -16,7 +16,7 @@ from cadsim.dataset import layout
 from cadsim.dataset.atomic_writer import write_file_atomic
 from cadsim.dataset.checksum import dataset_checksum
 from cadsim.dataset.encoding import json_bytes
-from cadsim.dataset.record_format import FORMAT_VERSION, jsonable
+from cadsim.dataset.record_format import FORMAT_VERSION, READABLE_VERSIONS, jsonable
 from cadsim.provenance import git_state, package_versions
 
 FORMAT_NAME = "cadsim-frame-pairs"
@@ -73,6 +73,7 @@ def generation_config(scenario, seed: int, pairs_per_episode: int, criteria: dic
         "noise": _plain(scenario.noise),
         "detection": _plain(scenario.detection),
         "sampling": _plain(scenario.sampling),
+        "localisation": _plain(getattr(scenario, "localisation", {})),
     }
 
 
@@ -123,10 +124,10 @@ def read_manifest(dataset_dir: Path) -> dict:
         raise DatasetError(f"{path}: unreadable manifest ({exc})") from exc
     if not isinstance(manifest, dict) or manifest.get("format") != FORMAT_NAME:
         raise DatasetError(f"{path}: 'format' is not {FORMAT_NAME!r}")
-    if manifest.get("format_version") != FORMAT_VERSION:
+    if manifest.get("format_version") not in READABLE_VERSIONS:
         raise DatasetError(
             f"{path}: format_version {manifest.get('format_version')!r}, this cadsim reads "
-            f"{FORMAT_VERSION}"
+            f"{', '.join(map(str, READABLE_VERSIONS))}"
         )
     for key in ("complete", "records", "checksum", "generation", "scenario", "seeds"):
         if key not in manifest:

@@ -5,13 +5,17 @@ Files of ``pairs/eEEEEE_sSS/`` (see docs/dataset.md for every field):
 (H, W) float32 metres along the optical axis, 0 = no hit; ``instance.npz`` ``instance1``/
 ``instance2`` (H, W) int32 index into ``record.json``'s ``objects``, -1 = none; ``detections.npz``
 ``view{1,2}_{positions,boxes,features,object_ids,classes,pixels}`` at the scenario's noise
-config; ``record.json`` cameras, observers, seeds, snapshot time and objects, ground truth.
+config; ``record.json`` cameras, observers, seeds, snapshot time and objects, ground truth, and
+the localisation prior's parameters (``prior``; the error itself is drawn at read time).
+
+Records of imported data (``cadsim import``) have no images: ``detections.npz`` and ``record.json``
+only, the prior's world positions stored as ``view{1,2}_world`` (see docs/dataset.md).
 """
 
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -19,16 +23,21 @@ from cadsim.camera import Camera
 from cadsim.dataset import layout
 from cadsim.dataset.detections import ViewDetections, ground_truth_pairs
 from cadsim.dataset.encoding import json_bytes, npz_bytes, png_bytes
+from cadsim.sensing.localisation import LocalisationConfig
 from cadsim.world import WorldObject
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+READABLE_VERSIONS = (1, 2)
+"""Version 2 added the localisation prior (``prior``, ``observers[v].localisation_seed``) and
+records without images (imported data); version-1 datasets still read, without a prior."""
 
 
 @dataclass(frozen=True, eq=False)
 class ViewCapture:
     """One observer's view: camera, the id of the object carrying it ("" for none), the rendered
     colour (H, W, 3) uint8 RGB, clean depth (H, W) float32 metres, instance ids (H, W) int32, the
-    detections at the scenario's noise config, and the seed of that noise."""
+    detections at the scenario's noise config, the seed of that noise, and the seed of the
+    observer's localisation error (drawn at read time, ``cadsim.sensing.localisation``)."""
 
     camera: Camera
     observer_id: str
@@ -37,11 +46,14 @@ class ViewCapture:
     instance: np.ndarray
     detections: ViewDetections
     noise_seed: int
+    localisation_seed: int = 0
 
 
 @dataclass(frozen=True, eq=False)
 class PairRecord:
-    """One accepted frame pair. Identity: (episode, slot). time: simulation seconds."""
+    """One accepted frame pair. Identity: (episode, slot). time: simulation seconds.
+    localisation: the scenario's ``[localisation]`` table (``position_sigma_m``,
+    ``yaw_sigma_deg``; missing keys take ``LocalisationConfig``'s defaults)."""
 
     episode: int
     slot: int
@@ -51,6 +63,7 @@ class PairRecord:
     view1: ViewCapture
     view2: ViewCapture
     meta: dict = field(default_factory=dict)
+    localisation: dict = field(default_factory=dict)
 
 
 def jsonable(value):
@@ -92,9 +105,15 @@ def encode_record(rec: PairRecord) -> dict[str, bytes]:
         "sim_seed": int(rec.sim_seed),
         "time": float(rec.time),
         "observers": [
-            {"id": v.observer_id, "camera": v.camera.as_dict(), "noise_seed": int(v.noise_seed)}
+            {
+                "id": v.observer_id,
+                "camera": v.camera.as_dict(),
+                "noise_seed": int(v.noise_seed),
+                "localisation_seed": int(v.localisation_seed),
+            }
             for v in views
         ],
+        "prior": {"kind": "pose_error", **asdict(LocalisationConfig(**rec.localisation))},
         "objects": [o.as_dict() for o in rec.objects],
         "ground_truth": [{"object_id": ids1[i], "i": int(i), "j": int(j)} for i, j in gt],
         "counts": {

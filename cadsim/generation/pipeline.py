@@ -55,7 +55,7 @@ from cadsim.dataset.manifest import (
     write_manifest,
 )
 from cadsim.dataset.record_format import PairRecord, ViewCapture, encode_record
-from cadsim.dataset.seeds import noise_seed, simulation_seed
+from cadsim.dataset.seeds import localisation_seed, noise_seed, simulation_seed
 from cadsim.generation.executor import Executor, report_progress
 from cadsim.generation.executors import make_executor
 
@@ -306,8 +306,9 @@ def _try_pair(
         if len(det) < crit.min_covisible + crit.min_exclusive:
             return None  # cannot pass, whatever the other view sees
         capture = ViewCapture(
-            camera, observer, rendered.color, rendered.depth, rendered.instance, det, seed
-        )
+            camera, observer, rendered.color, rendered.depth, rendered.instance, det, seed,
+            localisation_seed(task.root_seed, task.episode, slot, v),
+        )  # fmt: skip
         views.append(capture)
     if not is_acceptable_pair(
         views[0].detections, views[1].detections, crit.min_covisible, crit.min_exclusive
@@ -317,6 +318,7 @@ def _try_pair(
     return PairRecord(
         task.episode, slot, simulation_seed(task.root_seed, task.episode), float(snapshot.time),
         list(snapshot.objects), views[0], views[1], meta,
+        dict(getattr(task.scenario, "localisation", {})),
     )  # fmt: skip
 
 
