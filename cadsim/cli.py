@@ -23,6 +23,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "summarise a dataset (objects, covisibility, classes, depths)",
     ),
     "show": ("cadsim.commands.show", "draw one frame pair with boxes and ground-truth lines"),
+    "import": ("cadsim.commands.import_", "write external data (DMGM CAD pairs) as a dataset"),
     "evaluate": ("eval.commands.evaluate", "run matchers on datasets (cached, parallel)"),
     "sweep-noise": (
         "eval.commands.sweep_noise",

@@ -150,8 +150,11 @@ def write_qualitative(out_dir: str | Path) -> list[Path]:
     if missing:
         log.warning("qualitative figure skipped: datasets not found: %s", ", ".join(missing))
         return []
-    methods = sorted({m for d in datasets for m in spec[d]["methods"]}, key=matcher_order)
     pairs = {d: Dataset(spec[d]["dataset_dir"])[spec[d]["pair"]] for d in datasets}
+    datasets = [d for d in datasets if pairs[d].has_images]  # imported data: no images to draw
+    if not datasets:
+        return []
+    methods = sorted({m for d in datasets for m in spec[d]["methods"]}, key=matcher_order)
     first = pairs[datasets[0]]
     canvas, _ = side_by_side(first.color1, first.color2)
     aspect = canvas.shape[0] / canvas.shape[1]

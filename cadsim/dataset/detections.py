@@ -93,9 +93,9 @@ class ViewDetections:
         features = arrays[f"{prefix}_features"]
         scale = arrays.get(f"{prefix}_features_scale")
         if scale is not None:
-            if features.dtype != np.uint8 or np.shape(scale) != ():
-                raise ValueError(f"{what}: {prefix}_features_scale needs uint8 features, a scalar")
-            features = features.astype(np.float32) * np.float32(scale)
+            if features.dtype != np.uint8 or np.size(scale) != 1:
+                raise ValueError(f"{what}: {prefix}_features_scale needs uint8 features, one scale")
+            features = features.astype(np.float32) * np.float32(np.ravel(scale)[0])
         return cls(
             positions=arrays[f"{prefix}_positions"],
             boxes=arrays[f"{prefix}_boxes"],
