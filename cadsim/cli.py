@@ -29,6 +29,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "eval.commands.sweep_noise",
         "re-detect at several depth-noise rates and evaluate",
     ),
+    "sweep-regime": (
+        "eval.commands.sweep_regime",
+        "thin non-covisible detections level by level and evaluate",
+    ),
     "table": ("eval.commands.table", "re-render tables and figures from cached results"),
     "synthetic": ("eval.validation.synthetic", "published synthetic benchmarks (BCAGM protocols)"),
 }

@@ -3,6 +3,9 @@
 - ``fig4.png/.pdf``: accuracy, precision, recall against the depth-noise rate, one line per matcher
   (mean over runs) with a ±std band (from ``noise_runs.csv``);
 - ``pr_curves.png``: pooled precision–recall curves per dataset (from ``pr_curves.csv``);
+- ``fig_regime.png/.pdf``: F1 and balanced accuracy against the achieved non-covisible share of
+  the regime sweep, one line per matcher, one row of panels per dataset (from
+  ``regime_sweep.csv``);
 - ``qualitative.png/.pdf``: paper Fig. 3 style — one pair per dataset, both views side by side,
   lines for RRWHM, MOS and maximin: green correct, red wrong, yellow dashed missed (from
   ``qualitative.json`` and the dataset's images).
@@ -90,6 +93,50 @@ def write_fig4(out_dir: str | Path) -> list[Path]:
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 9), fontsize=8)
     return _save(fig, out_dir / "fig4")
+
+
+REGIME_PANELS = (("f1_mean", "F1"), ("balanced_accuracy_mean", "Balanced accuracy"))
+
+
+def write_fig_regime(out_dir: str | Path) -> list[Path]:
+    """The regime-sweep figure from ``regime_sweep.csv``; none without the CSV."""
+    out_dir = Path(out_dir)
+    path = out_dir / "regime_sweep.csv"
+    if not path.is_file():
+        return []
+    sweep = pd.read_csv(path, keep_default_na=False, na_values=[""])
+    if sweep.empty:
+        return []
+    datasets = sorted(sweep["dataset"].unique(), key=dataset_order)
+    matchers = sorted(sweep["matcher"].unique(), key=matcher_order)
+    colors = _colors(matchers)
+    fig, axes = _figure(10, 3.4 * len(datasets) + 0.6, ncols=2, nrows=len(datasets))
+    for row, dataset in enumerate(datasets):
+        rows = sweep[sweep["dataset"] == dataset]
+        for col, (column, title) in enumerate(REGIME_PANELS):
+            ax = axes[row, col]
+            for matcher in matchers:
+                c = rows[rows["matcher"] == matcher].sort_values("share")
+                if c.empty:
+                    continue
+                style = {"lw": 2.2} if matcher == "maximin" else {"lw": 1.2}
+                ax.plot(
+                    100 * c["share"],
+                    100 * c[column],
+                    marker="o",
+                    ms=3,
+                    color=colors[matcher],
+                    label=method_name(matcher),
+                    **style,
+                )
+            ax.set_xlabel("non-covisible share of all objects (%)")
+            ax.set_ylabel(f"{title} (%)")
+            ax.set_title(f"{dataset}: {title.lower()} against the share of distractors")
+            ax.set_ylim(-2, 102)
+            ax.grid(alpha=0.3)
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 6), fontsize=8)
+    return _save(fig, out_dir / "fig_regime")
 
 
 def write_pr_curves(out_dir: str | Path) -> list[Path]:
@@ -196,4 +243,9 @@ def write_qualitative(out_dir: str | Path) -> list[Path]:
 
 def render_all(out_dir: str | Path) -> list[Path]:
     """Every figure whose inputs are in `out_dir`."""
-    return write_fig4(out_dir) + write_pr_curves(out_dir) + write_qualitative(out_dir)
+    return (
+        write_fig4(out_dir)
+        + write_pr_curves(out_dir)
+        + write_fig_regime(out_dir)
+        + write_qualitative(out_dir)
+    )

@@ -1,10 +1,13 @@
-"""``make reproduce`` = ``python -m eval.reproduce``: Table I, Fig. 4, the PR curves, the
+"""``make reproduce`` = ``python -m eval.reproduce``: Table I (tuned, untuned, paper protocol),
+paired differences, regime cards, the regime sweep, dataset spread, Fig. 4, the PR curves, the
 qualitative figure and the run record, from nothing but the repository.
 
 Stages (each cached, so a second run only re-renders): generate every scenario's test dataset
 (the scenario's seed) and validation dataset (seed + VAL_SEED_OFFSET: other simulation seeds) under
-``--data``; evaluate all matchers × runs on both (τ calibrated on validation only); the CAD noise
-sweep (re-detection on stored clean depth); tables and figures; run record. Ends by printing
+``--data``, and for the default CAD two more test datasets (seed + SPREAD_SEED_OFFSETS); evaluate
+all matchers × runs (parameters tuned and τ calibrated on validation only; the untuned table
+beside); the paper's protocol; the CAD noise sweep (re-detection on stored clean depth); the regime
+sweep on every dataset; the dataset spread; tables and figures; run record. Ends by printing
 Table I beside the paper's.
 
 Tiny run (the test suite's): ``python -m eval.reproduce --pairs 2 --matchers sm,maximin
@@ -14,39 +17,60 @@ Tiny run (the test suite's): ``python -m eval.reproduce --pairs 2 --matchers sm,
 from __future__ import annotations
 
 import argparse
+import json
 import logging
 import sys
 import time
 from dataclasses import asdict
 from pathlib import Path
 
+import pandas as pd
+
 from eval.cache import ResultCache, code_version
 from eval.commands.evaluate import (
     DEFAULT_CACHE,
+    chosen_specs,
     dataset_label,
     evaluate,
     open_entry,
     parse_matchers,
 )
 from eval.commands.sweep_noise import DEFAULT_RATES, parse_rates, sweep
+from eval.commands.sweep_regime import DEFAULT_KEEP, parse_keep, sweep_regime, write_sweep
 from eval.executor import add_scheduler_argument, make_executor
 from eval.figures import render_all
+from eval.protocol import PAPER_OPTIONS
 from eval.readme_results import update_readme
 from eval.run_record import StageTimer, scenario_file, write_run_record
 from eval.runner import Runner
-from eval.tables import PAPER_CSV, write_table1
+from eval.spread import spread_rows
+from eval.tables import PAPER_CSV, write_tables
 
 log = logging.getLogger("eval.reproduce")
 
 ROOT = Path(__file__).resolve().parents[1]
-SCENARIOS = ("scenarios/cad-intersection.toml", "scenarios/mrc-arena.toml")
+SCENARIOS = (
+    "scenarios/cad-intersection.toml",
+    "scenarios/mrc-arena.toml",
+    "scenarios/cad-dense.toml",
+)
 VAL_SEED_OFFSET = 1000
 DEFAULT_VAL_PAIRS = 25
-# The noise sweep is lighter than Table I to keep a cold `make reproduce` within ~15 minutes on two
-# cores: the first SWEEP_PAIRS test pairs, SWEEP_RUNS seeds (docs/evaluation.md).
+# The sweeps are lighter than Table I to keep a cold `make reproduce` within 15 minutes on two
+# cores (docs/evaluation.md). Noise: the first SWEEP_PAIRS test pairs, SWEEP_RUNS seeds.
 SWEEP_PAIRS = 25
 SWEEP_RUNS = 4
 SWEEP_DATASET = "CAD"
+# Regime sweep: every dataset, the first REGIME_PAIRS test pairs × REGIME_RUNS seeds per level, τ
+# recalibrated per level on the thinned validation set with seed 0 alone.
+REGIME_PAIRS = 25
+REGIME_RUNS = 2
+REGIME_VAL_RUNS = 1
+# Dataset spread: the default CAD generated again with these scenario-seed offsets.
+SPREAD_DATASET = "CAD"
+SPREAD_SEED_OFFSETS = (2000, 3000)
+SPREAD_PAIRS = 25
+SPREAD_RUNS = 4
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -88,6 +112,41 @@ def build_parser() -> argparse.ArgumentParser:
         default=SWEEP_PAIRS,
         help=f"sweep the first N test pairs (default {SWEEP_PAIRS}; 0: all)",
     )
+    p.add_argument(
+        "--no-tune",
+        dest="tune",
+        action="store_false",
+        help="skip the parameter search (Table I then runs every matcher with its defaults)",
+    )
+    p.add_argument(
+        "--keep",
+        default=",".join(f"{k:g}" for k in DEFAULT_KEEP),
+        help="keep levels of the regime sweep (empty: no sweep)",
+    )
+    p.add_argument(
+        "--regime-pairs",
+        type=int,
+        default=REGIME_PAIRS,
+        help=f"regime sweep on the first N test pairs (default {REGIME_PAIRS}; 0: all)",
+    )
+    p.add_argument(
+        "--regime-runs",
+        type=int,
+        default=REGIME_RUNS,
+        help=f"runs per keep level (default {REGIME_RUNS})",
+    )
+    p.add_argument(
+        "--spread-pairs",
+        type=int,
+        default=SPREAD_PAIRS,
+        help=f"pairs of each extra {SPREAD_DATASET} dataset (default {SPREAD_PAIRS}; 0: no spread)",
+    )
+    p.add_argument(
+        "--spread-runs",
+        type=int,
+        default=SPREAD_RUNS,
+        help=f"runs on each extra dataset (default {SPREAD_RUNS})",
+    )
     p.add_argument("--out", default="results", help="output directory (default: results)")
     p.add_argument("--data", default="data", help="dataset directory (default: data)")
     p.add_argument(
@@ -127,6 +186,26 @@ def _generate(
     return result
 
 
+def _tuning_record(out: Path) -> dict:
+    """{dataset: {matcher: {"params": chosen options, "val_f1": its validation F1}}} from
+    ``tuning.csv`` (empty without it)."""
+    path = out / "tuning.csv"
+    if not path.is_file():
+        return {}
+    table = pd.read_csv(path, keep_default_na=False, na_values=[""])
+    chosen = table[table["chosen"].astype(str) == "True"]
+    record: dict = {}
+    for row in chosen.itertuples(index=False):
+        record.setdefault(row.dataset, {})[row.matcher] = {
+            "params": json.loads(row.params),
+            "val_f1": float(row.val_f1),
+            "configs": int(
+                (table["dataset"].eq(row.dataset) & table["matcher"].eq(row.matcher)).sum()
+            ),
+        }
+    return record
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     logging.basicConfig(
@@ -151,8 +230,13 @@ def main(argv: list[str] | None = None) -> int:
     sweep_seeds = list(range(args.sweep_runs))
     sweep_pairs = args.sweep_pairs or None
     rates = parse_rates(args.rates)
+    keeps = parse_keep(args.keep) if args.keep.strip() else []
+    regime_seeds = list(range(args.regime_runs))
+    regime_val_seeds = list(range(REGIME_VAL_RUNS))
+    regime_pairs = args.regime_pairs or None
+    spread_seeds = list(range(args.spread_runs))
 
-    entries, datasets_record = [], []
+    entries, datasets_record, spread_sets = [], [], []
     with timer.stage("generate"):
         for path in paths:
             scenario = load_scenario(path)
@@ -172,28 +256,52 @@ def main(argv: list[str] | None = None) -> int:
             made = _generate(path, test_dir, pairs, None, args)
             made_val = _generate(path, val_dir, val_pairs, val_seed, args)
             entries.append(open_entry(test_dir, val_dir))
+            new_records = made.new_records + made_val.new_records
+            if label == SPREAD_DATASET and args.spread_pairs:
+                spread_sets.append((str(test_dir), entries[-1].test_checksum, scenario.seed))
+                spread_pairs = min(args.spread_pairs, pairs)
+                for offset in SPREAD_SEED_OFFSETS:
+                    seed = scenario.seed + offset
+                    extra = data / f"{label.lower()}-seed{seed}"
+                    log.info("[generate] %s spread: %d pairs (seed %d)", label, spread_pairs, seed)
+                    new_records += _generate(path, extra, spread_pairs, seed, args).new_records
+                    checksum = open_entry(extra, None).test_checksum
+                    spread_sets.append((str(extra), checksum, seed))
             datasets_record.append(
                 {"label": label, "scenario": scenario_file(path) | {"path": _shown(path)}}
                 | {"test_dir": str(test_dir), "test_seed": scenario.seed, "test_pairs": pairs}
                 | {"val_dir": str(val_dir), "val_seed": val_seed, "val_pairs": val_pairs}
                 | {"test_checksum": entries[-1].test_checksum}
                 | {"val_checksum": entries[-1].val_checksum}
-                | {"new_records": made.new_records + made_val.new_records}
+                | {"new_records": new_records}
             )
+
+    runs: dict[str, dict] = {}
+
+    def count(stage: str, before: dict) -> None:
+        now = asdict(runner.totals)
+        runs[stage] = {k: v - before.get(k, 0) for k, v in now.items()}
 
     with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(ResultCache(args.cache), executor, progress=progress)
         with timer.stage("evaluate"):
             log.info(
-                "[evaluate] %d matchers × %d runs on %s",
+                "[evaluate] %d matchers × %d runs on %s%s",
                 len(matchers),
                 len(seeds),
                 ", ".join(e.label for e in entries),
+                " (parameters tuned on validation)" if args.tune else "",
             )
-            taus = evaluate(entries, matchers, seeds, runner, out)
-        runs = {"evaluate": asdict(runner.totals)}
+            taus = evaluate(entries, matchers, seeds, runner, out, tune=args.tune)
+        count("evaluate", {})
+        with timer.stage("paper_protocol"):
+            before = asdict(runner.totals)
+            log.info("[paper protocol] image-space pairwise terms, full assignment, no τ")
+            evaluate(entries, matchers, seeds, runner, out, protocol="paper")
+        count("paper_protocol", before)
         sweep_entry = next((e for e in entries if e.label == SWEEP_DATASET), None)
         with timer.stage("noise_sweep"):
+            before = asdict(runner.totals)
             if sweep_entry is None:
                 log.warning("[noise sweep] skipped: no %s dataset", SWEEP_DATASET)
             else:
@@ -204,10 +312,46 @@ def main(argv: list[str] | None = None) -> int:
                     len(sweep_seeds),
                 )
                 sweep(sweep_entry, matchers, sweep_seeds, rates, runner, out, sweep_pairs)
-        runs["noise_sweep"] = {k: v - runs["evaluate"][k] for k, v in asdict(runner.totals).items()}
+        count("noise_sweep", before)
+        with timer.stage("regime_sweep"):
+            before = asdict(runner.totals)
+            (out / "regime_sweep.csv").unlink(missing_ok=True)
+            for entry in entries if keeps else []:
+                log.info(
+                    "[regime sweep] %s: keep %s × %d runs, first %s test pairs",
+                    entry.label,
+                    keeps,
+                    len(regime_seeds),
+                    regime_pairs or "all",
+                )
+                named, _ = chosen_specs(out, entry.label, matchers)
+                rows = sweep_regime(
+                    entry, named, regime_seeds, keeps, runner, regime_pairs, regime_val_seeds
+                )
+                write_sweep(out, rows)
+        count("regime_sweep", before)
+        with timer.stage("dataset_spread"):
+            before = asdict(runner.totals)
+            (out / "dataset_spread.csv").unlink(missing_ok=True)
+            if spread_sets:
+                named, spread_taus = chosen_specs(out, SPREAD_DATASET, matchers)
+                log.info("[dataset spread] %s: %d datasets", SPREAD_DATASET, len(spread_sets))
+                main_set, extra_sets = spread_sets[:1], spread_sets[1:]
+                table = pd.concat(
+                    [
+                        spread_rows(SPREAD_DATASET, main_set, named, spread_taus, seeds, runner),
+                        spread_rows(
+                            SPREAD_DATASET, extra_sets, named, spread_taus, spread_seeds, runner
+                        ),
+                    ],
+                    ignore_index=True,
+                )
+                table.round(6).to_csv(out / "dataset_spread.csv", index=False)
+        count("dataset_spread", before)
 
     with timer.stage("tables_figures"):
-        markdown = write_table1(out, PAPER_CSV)
+        markdown = write_tables(out, PAPER_CSV)
+        _write_regime_cards(out, entries)
         figures = render_all(out)
         log.info("[figures] %s", ", ".join(str(f) for f in figures))
 
@@ -220,8 +364,17 @@ def main(argv: list[str] | None = None) -> int:
         datasets=datasets_record,
         matchers=[m.label for m in matchers],
         seeds=seeds,
+        tuning=_tuning_record(out) if args.tune else {},
+        paper_protocol={"options": PAPER_OPTIONS, "threshold": None, "tuned": False},
         noise_sweep={"dataset": SWEEP_DATASET if sweep_entry else None, "rates": rates}
         | {"seeds": sweep_seeds, "pairs": sweep_pairs},
+        regime_sweep={"datasets": [e.label for e in entries] if keeps else [], "keep": keeps}
+        | {"seeds": regime_seeds, "val_seeds": regime_val_seeds, "pairs": regime_pairs},
+        dataset_spread={
+            "dataset": SPREAD_DATASET if spread_sets else None,
+            "generated": [{"dir": d, "scenario_seed": s} for d, _, s in spread_sets],
+            "seeds": {"main": seeds, "extra": spread_seeds},
+        },
         thresholds=taus,
         runs=runs,
         code_version=code_version(),
@@ -239,6 +392,18 @@ def main(argv: list[str] | None = None) -> int:
         + ", ".join(f"{k} {v:.1f} s" for k, v in timer.seconds.items())
     )
     return 0
+
+
+def _write_regime_cards(out: Path, entries) -> None:
+    """``regime.csv`` for every evaluated test dataset (skipped, with a warning, while the regime
+    function is not in ``cadsim.dataset``)."""
+    from eval.regime_cards import write_regime
+
+    (out / "regime.csv").unlink(missing_ok=True)
+    try:
+        write_regime(out, {e.label: e.test_dir for e in entries})
+    except ImportError as exc:
+        log.warning("[regime cards] skipped: %s", exc)
 
 
 if __name__ == "__main__":

@@ -1,5 +1,6 @@
 """Experiment runner: computes the runs that are not cached yet, in parallel, and stores each as
-it completes, so a re-run computes only what changed and an interrupted sweep resumes.
+it completes, so a re-run computes only what changed and an interrupted sweep resumes. A run of
+the first N frame pairs is read from the cached run of the whole dataset when there is one.
 
 Missing runs are grouped into :class:`eval.tasks.RunTask` s: with a noise rate, all matchers of
 one (dataset, seed, rate) share a task (they share its re-detection); without, each run is its
@@ -10,6 +11,7 @@ datasets), whichever executor runs them (local processes or a Dask cluster, docs
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import traceback
 from collections.abc import Callable, Iterable, Sequence
@@ -140,10 +142,31 @@ class Runner:
             for name in ("cached", "computed", "failed"):
                 setattr(self.totals, name, getattr(self.totals, name) + getattr(self.stats, name))
 
+    def _source(self, spec: RunSpec) -> RunSpec | None:
+        """The cached run `spec` can be read from: itself, or — for a run of the first N frame
+        pairs — the cached run of the whole dataset (frame pairs are computed independently and in
+        dataset order, so the first N outcomes are the same); None when neither is cached."""
+        if spec in self.cache:
+            return spec
+        if spec.limit is not None:
+            full = dataclasses.replace(spec, limit=None)
+            if full in self.cache:
+                return full
+        return None
+
+    def _load(self, spec: RunSpec) -> RunResult:
+        source = self._source(spec)
+        result = self.cache.load(spec if source is None else source)
+        if source is not None and source != spec:
+            outcomes = result.outcomes[: spec.limit]
+            share = len(outcomes) / max(len(result.outcomes), 1)
+            result = RunResult(spec, result.dataset_dir, outcomes, result.wall_s * share)
+        return result
+
     def _run(self, requests: Sequence[RunRequest], desc: str) -> list[RunResult]:
         specs = [req.spec(self.version) for req in requests]
         missing = list(
-            {s: r for s, r in zip(specs, requests, strict=True) if s not in self.cache}.values()
+            {s: r for s, r in zip(specs, requests, strict=True) if self._source(s) is None}.values()
         )
         self.stats = RunStats(cached=len(set(specs)) - len(missing))
         if missing:
@@ -175,4 +198,4 @@ class Runner:
                     f"{len(failures)} of {len(tasks)} tasks failed (the rest are cached; re-run "
                     "to retry only the failed ones):\n" + "\n".join(failures)
                 )
-        return [self.cache.load(spec) for spec in specs]
+        return [self._load(spec) for spec in specs]

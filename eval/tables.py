@@ -1,19 +1,23 @@
-"""Table I: our accuracy, precision, recall (mean ± std over runs), F1, AP, τ and median time per
-pair for every dataset and matcher, beside the paper's numbers; Markdown, CSV and LaTeX.
+"""Table I: our accuracy, balanced accuracy, precision, recall (mean ± std over runs), F1, AP, τ,
+tuned parameters and median time per pair for every dataset and matcher, beside the paper's
+numbers; Markdown, CSV and LaTeX.
 
 Inputs are the CSV files ``cadsim evaluate`` writes into its output directory
-(``metrics_per_pair.csv``, ``average_precision.csv``, ``thresholds.csv``); rates are printed in
-percent, like the paper.
+(``metrics_per_pair.csv``, ``average_precision.csv``, ``thresholds.csv``, each also per variant:
+``_untuned``, ``_paper_protocol``, :mod:`eval.protocol`); rates are printed in percent, like the
+paper. :func:`write_tables` writes every variant present.
 """
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from eval.metrics import METRICS, summarise_runs
+from eval.protocol import MAIN, VARIANTS, variant_path
 
 PAPER_CSV = Path(__file__).parent / "data" / "paper-table1.csv"
 
@@ -28,8 +32,11 @@ PAPER_NAMES = {
     "mos": "MOS",
     "maximin": "Maximin",
 }
-EXTRA_NAMES = {"appearance": "Appearance only"}
+EXTRA_NAMES = {"appearance": "Appearance only", "none": "None (declares nothing)"}
 PAPER_DATASETS = ("MRC", "CAD")
+# Our dataset -> the paper's column shown beside it (a variant of a paper dataset).
+PAPER_COLUMN = {"CAD-dense": "CAD"}
+DATASET_ORDER = ("MRC", "CAD", "CAD-dense")
 
 
 def method_name(matcher: str) -> str:
@@ -47,8 +54,8 @@ def matcher_order(matcher: str) -> tuple[int, str]:
 
 
 def dataset_order(label: str) -> tuple[int, str]:
-    """Sort key: the paper's column order (MRC, CAD), then the rest by name."""
-    return (PAPER_DATASETS.index(label) if label in PAPER_DATASETS else len(PAPER_DATASETS), label)
+    """Sort key: the paper's column order (MRC, CAD, then CAD-dense), then the rest by name."""
+    return (DATASET_ORDER.index(label) if label in DATASET_ORDER else len(DATASET_ORDER), label)
 
 
 def load_paper(path: str | Path = PAPER_CSV) -> pd.DataFrame:
@@ -62,10 +69,17 @@ def load_paper(path: str | Path = PAPER_CSV) -> pd.DataFrame:
     return paper
 
 
-def build_table(out_dir: str | Path, paper_csv: str | Path = PAPER_CSV) -> pd.DataFrame:
-    """One row per (dataset, matcher): our numbers (percent), τ, time and the paper's beside."""
+def build_table(
+    out_dir: str | Path, paper_csv: str | Path = PAPER_CSV, variant: str = MAIN
+) -> pd.DataFrame:
+    """One row per (dataset, matcher) of `variant`: our numbers (percent), τ, parameters, time
+    and the paper's beside."""
     out_dir = Path(out_dir)
-    per_pair = pd.read_csv(out_dir / "metrics_per_pair.csv")
+    per_pair = pd.read_csv(
+        variant_path(out_dir, "metrics_per_pair", variant, ".csv"),
+        keep_default_na=False,
+        na_values=[""],
+    )
     summary = summarise_runs(per_pair, by=["dataset", "matcher"])
     for col in summary.columns:
         if col.rsplit("_", 1)[0] in METRICS and col.endswith(("_mean", "_std")):
@@ -74,22 +88,29 @@ def build_table(out_dir: str | Path, paper_csv: str | Path = PAPER_CSV) -> pd.Da
         frames=("pair", "nunique"), time_median_ms=("time_s", lambda t: 1000 * float(np.median(t)))
     )
     table = summary.merge(sizes.reset_index(), on=["dataset", "matcher"])
-    ap_path = out_dir / "average_precision.csv"
+    if "params" in per_pair.columns:
+        params = per_pair.groupby(["dataset", "matcher"])["params"].first().reset_index()
+        table = table.merge(params, on=["dataset", "matcher"], how="left")
+    ap_path = variant_path(out_dir, "average_precision", variant, ".csv")
     if ap_path.is_file():
         ap = pd.read_csv(ap_path).groupby(["dataset", "matcher"])["ap"]
         ap = pd.DataFrame(
             {"ap_mean": 100 * ap.mean(), "ap_std": 100 * ap.std(ddof=1).fillna(0.0)}
         ).reset_index()
         table = table.merge(ap, on=["dataset", "matcher"], how="left")
-    tau_path = out_dir / "thresholds.csv"
+    tau_path = variant_path(out_dir, "thresholds", variant, ".csv")
     if tau_path.is_file():
         taus = pd.read_csv(tau_path)[["dataset", "matcher", "tau"]]
         table = table.merge(taus, on=["dataset", "matcher"], how="left")
     table.insert(1, "method", table["matcher"].map(method_name))
     paper = load_paper(paper_csv).add_prefix("paper_")
+    table["_paper_dataset"] = table["dataset"].map(lambda d: PAPER_COLUMN.get(d, d))
     table = table.merge(
-        paper, left_on=["dataset", "method"], right_on=["paper_dataset", "paper_method"], how="left"
-    ).drop(columns=["paper_dataset", "paper_method"])
+        paper,
+        left_on=["_paper_dataset", "method"],
+        right_on=["paper_dataset", "paper_method"],
+        how="left",
+    ).drop(columns=["paper_dataset", "paper_method", "_paper_dataset"])
     table["_d"] = table["dataset"].map(dataset_order)
     table["_m"] = table["matcher"].map(matcher_order)
     return table.sort_values(["_d", "_m"]).drop(columns=["_d", "_m"]).reset_index(drop=True)
@@ -101,8 +122,22 @@ def _pm(mean: float, std: float, digits: int = 1) -> str:
     return f"{mean:.{digits}f} ± {std:.{digits}f}"
 
 
-def _cells(row: pd.Series) -> dict[str, str]:
+def params_text(params: object) -> str:
+    """Compact display of a ``params`` JSON cell: ``sigma_scale=0.05``; ``default`` for ``{}``."""
+    if not isinstance(params, str) or not params.strip():
+        return "–"
+    options = json.loads(params)
+    if not options:
+        return "default"
+    return ", ".join(
+        f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in options.items()
+    )
+
+
+def _cells(row: pd.Series, show_params: bool) -> dict[str, str]:
     cells = {"Method": row["method"]}
+    if show_params:
+        cells["Parameters"] = params_text(row.get("params"))
     for metric, title in (
         ("accuracy", "Accuracy"),
         ("precision", "Precision"),
@@ -112,6 +147,10 @@ def _cells(row: pd.Series) -> dict[str, str]:
         cells[f"{title} (paper)"] = _pm(
             row.get(f"paper_{metric}_mean"), row.get(f"paper_{metric}_spread"), 2
         )
+        if metric == "accuracy":
+            cells["Balanced acc."] = _pm(
+                row.get("balanced_accuracy_mean", np.nan), row.get("balanced_accuracy_std", np.nan)
+            )
     cells["F1"] = _pm(row["f1_mean"], row["f1_std"])
     cells["AP"] = _pm(row.get("ap_mean", np.nan), row.get("ap_std", np.nan))
     tau = row.get("tau", np.nan)
@@ -120,16 +159,25 @@ def _cells(row: pd.Series) -> dict[str, str]:
     return cells
 
 
+def _show_params(table: pd.DataFrame) -> bool:
+    """Whether any row ran with options other than the defaults (tuned, or a protocol's)."""
+    if "params" not in table.columns:
+        return False
+    return any(params_text(p) not in ("default", "–") for p in table["params"])
+
+
 def to_markdown(table: pd.DataFrame) -> str:
     """One Markdown table per dataset; ours beside the paper's (percent, mean ± std over runs)."""
     blocks = []
+    show_params = _show_params(table)
     for dataset, rows in table.groupby("dataset", sort=False):
-        cells = [_cells(r) for _, r in rows.iterrows()]
+        cells = [_cells(r, show_params) for _, r in rows.iterrows()]
         header = list(cells[0])
         runs, frames = int(rows["runs"].max()), int(rows["frames"].max())
+        paper = PAPER_COLUMN.get(str(dataset), dataset)
         lines = [
             f"**{dataset}** — {frames} test frame pairs × {runs} runs; percent, mean ± std over "
-            "runs; paper: mean ± its printed spread",
+            f"runs; paper ({paper}): mean ± its printed spread",
             "",
             "| " + " | ".join(header) + " |",
             "|" + "|".join(":---" if h == "Method" else "---:" for h in header) + "|",
@@ -152,16 +200,19 @@ def to_latex(table: pd.DataFrame) -> str:
             r"\centering",
             rf"\caption{{Correspondence identification on {_latex_escape(dataset)} (\%, mean $\pm$ "
             r"std over runs; the paper's numbers in parentheses).}",
-            r"\begin{tabular}{lcccccrr}",
+            r"\begin{tabular}{lccccccrr}",
             r"\toprule",
-            r"Method & Accuracy & Precision & Recall & F1 & AP & $\tau$ & ms/pair \\",
+            r"Method & Accuracy & Bal.\ acc. & Precision & Recall & F1 & AP & $\tau$ & ms/pair \\",
             r"\midrule",
         ]
         for _, r in rows.iterrows():
             cells = [_latex_escape(r["method"])]
-            for metric in ("accuracy", "precision", "recall"):
+            for metric in ("accuracy", "balanced_accuracy", "precision", "recall"):
+                if pd.isna(r.get(f"{metric}_mean", np.nan)):
+                    cells.append("--")
+                    continue
                 ours = f"{r[f'{metric}_mean']:.1f} $\\pm$ {r[f'{metric}_std']:.1f}"
-                paper = r.get(f"paper_{metric}_mean")
+                paper = r.get(f"paper_{metric}_mean", np.nan)
                 cells.append(ours if pd.isna(paper) else f"{ours} ({paper:.1f})")
             cells.append(f"{r['f1_mean']:.1f} $\\pm$ {r['f1_std']:.1f}")
             ap = r.get("ap_mean", np.nan)
@@ -174,12 +225,32 @@ def to_latex(table: pd.DataFrame) -> str:
     return "\n".join(out)
 
 
-def write_table1(out_dir: str | Path, paper_csv: str | Path = PAPER_CSV) -> str:
-    """Write ``table1.md``, ``table1.csv`` and ``table1.tex`` into `out_dir`; returns the Markdown."""
+def write_table1(
+    out_dir: str | Path, paper_csv: str | Path = PAPER_CSV, variant: str = MAIN
+) -> str:
+    """Write ``table1[_variant].md`` and ``.csv`` (and, for the main variant, ``table1.tex``)
+    into `out_dir`; returns the Markdown."""
     out_dir = Path(out_dir)
-    table = build_table(out_dir, paper_csv)
+    table = build_table(out_dir, paper_csv, variant)
     markdown = to_markdown(table)
-    (out_dir / "table1.md").write_text(markdown, encoding="utf-8")
-    table.round(4).to_csv(out_dir / "table1.csv", index=False)
-    (out_dir / "table1.tex").write_text(to_latex(table), encoding="utf-8")
+    variant_path(out_dir, "table1", variant, ".md").write_text(markdown, encoding="utf-8")
+    table.round(4).to_csv(variant_path(out_dir, "table1", variant, ".csv"), index=False)
+    if variant == MAIN:
+        (out_dir / "table1.tex").write_text(to_latex(table), encoding="utf-8")
     return markdown
+
+
+def write_tables(out_dir: str | Path, paper_csv: str | Path = PAPER_CSV) -> str:
+    """Table I of every variant whose per-pair metrics are in `out_dir`, and the paired
+    differences of the main one; returns the main variant's Markdown (else the first written)."""
+    from eval.paired_differences import write_paired_differences
+
+    out_dir = Path(out_dir)
+    written = {
+        v: write_table1(out_dir, paper_csv, v)
+        for v in VARIANTS
+        if variant_path(out_dir, "metrics_per_pair", v, ".csv").is_file()
+    }
+    if MAIN in written:
+        write_paired_differences(out_dir)
+    return written.get(MAIN) or next(iter(written.values()), "")

@@ -5,13 +5,18 @@
     matching.pairs   # (k, 2) int array of (i, j)
     matching.scores  # (n, m) soft scores in [0, 1]
 
-Index convention (a = i * m + j) in :mod:`matchers.indexing`; algorithms and defaults in
+Optional Problem fields: ``pixels1/pixels2`` (box centres, for ``pairwise="image"``) and the
+localisation prior ``world1/world2/world_sigma`` (for the ``pose*`` matchers and
+``maximin_pose``; :func:`requires` names what a matcher needs). Each matcher has a tuning
+grid relative to the problem's own scale, :func:`search_space`.
+
+Index convention (a = i * m + j) in :mod:`matchers.indexing`; algorithms, defaults and grids in
 docs/matchers.md.
 """
 
 from .matching import Matching
 from .problem import Problem
-from .registry import ENTRY_POINT_GROUP, available, get, register
+from .registry import ENTRY_POINT_GROUP, available, get, register, requires, search_space
 from .sparse_tensor import SparseTensor
 from .tensor_build import build_tensor
 
@@ -24,4 +29,6 @@ __all__ = [
     "build_tensor",
     "get",
     "register",
+    "requires",
+    "search_space",
 ]

@@ -115,6 +115,7 @@ def maximin(
     init: str = "uniform",
     normalise: str = "sum",
     sinkhorn_iter: int = 100,
+    first_order: np.ndarray | None = None,
 ) -> Matching:
     """Maximin hypergraph matching, Algorithm 1 (Gao et al., §III-B/C).
 
@@ -130,6 +131,10 @@ def maximin(
     a SparseTensor; ``triangles``, ``neighbours``, ``sigma``; ``seed`` drives triangle sampling
     and the random init). With no tensor entries (fewer than 3 objects in a view) the walk term
     is zero and the result rests on appearance alone.
+
+    ``first_order``: an (n, m) array in [0, 1] used as b instead of the features' cosine
+    similarity (e.g. appearance times a localisation prior, :mod:`matchers.maximin_pose`);
+    default None.
     """
     started = time.perf_counter()
     check_problem(problem)
@@ -147,7 +152,11 @@ def maximin(
     if n == 0 or m == 0:
         return finish("maximin", np.zeros((n, m)), threshold, started, 0, {"converged": True})
     built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma)
-    b = appearance_similarity(problem).reshape(-1)
+    b = (
+        appearance_similarity(problem).reshape(-1)
+        if first_order is None
+        else checked_first_order(first_order, n, m)
+    )
     p = worst_case_tensor(built, b)
     x0 = initial_x(init, b, rng)
     x, iterations, converged = maximin_iterate(
@@ -156,3 +165,14 @@ def maximin(
     scores = max_normalised(x, n, m)
     info = {"converged": converged, "tensor_entries": built.nnz, "tensor": built.info}
     return finish("maximin", scores, threshold, started, iterations, info)
+
+
+def checked_first_order(first_order: np.ndarray, n: int, m: int) -> np.ndarray:
+    """The ``first_order`` option of :func:`maximin` as a flat vector in the a = i*m + j order:
+    an (n, m) array, finite, in [0, 1]; else ValueError naming it."""
+    b = np.asarray(first_order, dtype=float)
+    if b.shape != (n, m):
+        raise ValueError(f"first_order: expected shape ({n}, {m}), got {b.shape}")
+    if not np.all(np.isfinite(b)) or (b.size and (b.min() < 0 or b.max() > 1)):
+        raise ValueError("first_order: entries must be finite and in [0, 1]")
+    return b.reshape(-1)

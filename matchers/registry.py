@@ -2,6 +2,10 @@
 entry-point group (third-party packages), loaded lazily on the first :func:`get`/:func:`available`.
 
 A matcher is any callable ``matcher(problem, seed=0, threshold=None, **options) -> Matching``.
+A matcher that needs optional Problem fields (the localisation prior) names them in a
+``requires`` attribute, :func:`requires`. Each name also has a tuning grid, :func:`search_space`: given to :func:`register`, carried by
+the callable as a ``search_space`` attribute (entry points), or, for the built-ins, from
+:mod:`matchers.search_spaces`.
 """
 
 from __future__ import annotations
@@ -13,6 +17,7 @@ from functools import cache
 from importlib.metadata import EntryPoint, entry_points
 
 from .matching import Matching
+from .search_spaces import BUILTIN_SEARCH_SPACES, check_search_space
 
 log = logging.getLogger(__name__)
 
@@ -26,17 +31,39 @@ _BUILTIN: dict[str, str] = {
     "hgm": "matchers.hgm:hgm",
     "maximin": "matchers.maximin:maximin",
     "mos": "matchers.mos:mos",
+    "none": "matchers.none:none",
+    "pose": "matchers.pose:pose",
+    "pose_appearance": "matchers.pose_appearance:pose_appearance",
+    "pose_refine": "matchers.pose_refine:pose_refine",
+    "consistency": "matchers.consistency:consistency",
+    "maximin_pose": "matchers.maximin_pose:maximin_pose",
     "rrwhm": "matchers.rrwhm:rrwhm",
     "rrwm": "matchers.rrwm:rrwm",
     "sm": "matchers.sm:sm",
     "tm": "matchers.tm:tm",
 }
 _registered: dict[str, Matcher] = {}
+_registered_spaces: dict[str, list[dict]] = {}
 
 
-def register(name: str, fn: Matcher, *, replace: bool = False) -> None:
+def register(
+    name: str,
+    fn: Matcher,
+    *,
+    search_space: list[dict] | None = None,
+    replace: bool = False,
+) -> None:
     """Make ``fn`` available as ``get(name)``. Re-using a taken name (built-in, registered or
-    entry point) raises ValueError unless ``replace=True``."""
+    entry point) raises ValueError unless ``replace=True``.
+
+    ``search_space``: the matcher's tuning grid, a list of at most 12 option dicts (see
+    :func:`search_space`); default: ``fn.search_space`` if the callable carries one, else
+    ``[{}]`` (no scale parameters: one configuration, the defaults).
+
+    >>> register("my_pose", get("pose"), search_space=[{"gate": 3.0}, {"gate": 5.0}], replace=True)
+    >>> search_space("my_pose")
+    [{'gate': 3.0}, {'gate': 5.0}]
+    """
     if not isinstance(name, str) or not name:
         raise ValueError(f"name: expected a non-empty string, got {name!r}")
     if not callable(fn):
@@ -44,7 +71,12 @@ def register(name: str, fn: Matcher, *, replace: bool = False) -> None:
     taken = name in _registered or name in _BUILTIN or name in _entry_points()
     if taken and not replace:
         raise ValueError(f"name: matcher {name!r} already exists; pass replace=True to override")
+    if search_space is None:
+        space = check_search_space(getattr(fn, "search_space", None) or [{}], name)
+    else:
+        space = check_search_space(search_space, name, "search_space")
     _registered[name] = fn
+    _registered_spaces[name] = space
 
 
 def get(name: str) -> Matcher:
@@ -61,6 +93,37 @@ def get(name: str) -> Matcher:
         _registered[name] = fn
         return fn
     raise ValueError(f"unknown matcher {name!r}; available: {', '.join(available())}")
+
+
+def search_space(name: str) -> list[dict]:
+    """The tuning grid of matcher ``name``: a list of 1 to 12 option dicts, each a complete
+    configuration to pass as keyword options (``{}`` = the defaults). Kernel widths in a grid
+    are relative to each problem's own scale (e.g. ``sigma_scale``), so one grid serves every
+    dataset. A matcher without scale parameters has ``[{}]``. Returns a fresh copy.
+
+    >>> search_space("appearance")
+    [{}]
+    """
+    if name in _registered and name in _registered_spaces:  # register()ed
+        space = _registered_spaces[name]
+    elif name in _BUILTIN and name not in _registered:
+        space = BUILTIN_SEARCH_SPACES.get(name, [{}])
+    else:
+        fn = get(name)  # entry point (or ValueError naming the unknown matcher)
+        space = check_search_space(getattr(fn, "search_space", None) or [{}], name)
+    return [dict(config) for config in space]
+
+
+def requires(name: str) -> frozenset[str]:
+    """Names of the optional :class:`~matchers.problem.Problem` fields matcher ``name`` cannot
+    run without (e.g. ``{"world1", "world2", "world_sigma"}`` for the pose matchers; empty for
+    most): the callable's ``requires`` attribute, if it has one. Lets a harness skip a
+    matcher on data that lacks what it needs instead of catching its ValueError.
+
+    >>> sorted(requires("pose"))
+    ['world1', 'world2', 'world_sigma']
+    """
+    return frozenset(getattr(get(name), "requires", ()))
 
 
 def available() -> list[str]:

@@ -3,6 +3,7 @@ fake matcher (the real pipeline is exercised by tests/test_reproduce.py)."""
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import time
 
@@ -180,12 +181,24 @@ def test_serial_executor_isolates_failures():
 def test_limit_runs_only_the_first_frame_pairs_and_is_its_own_run(fake_world, tmp_path):
     runner = _runner(tmp_path)
     data = [("data/cad", "sum-data/cad-100")]
-    (full,) = runner.run(requests_for(data, [MatcherSpec("a")], [0]))
     (first2,) = runner.run(requests_for(data, [MatcherSpec("a")], [0], limit=2))
-    assert runner.stats.computed == 1
+    assert runner.stats.computed == 1 and first2.spec.limit == 2
+    (full,) = runner.run(requests_for(data, [MatcherSpec("a")], [0]))
+    assert runner.stats.computed == 1  # the first two pairs do not make the whole dataset
     assert [o.index for o in full.outcomes] == [0, 1, 2]
     assert [o.index for o in first2.outcomes] == [0, 1]
     np.testing.assert_array_equal(full.outcomes[1].scores, first2.outcomes[1].scores)
+
+
+def test_a_prefix_run_is_read_from_the_cached_whole_dataset_run(fake_world, tmp_path):
+    runner = _runner(tmp_path)
+    data = [("data/cad", "sum-data/cad-100")]
+    (full,) = runner.run(requests_for(data, [MatcherSpec("a")], [0]))
+    (first1,) = runner.run(requests_for(data, [MatcherSpec("a")], [0], limit=1))
+    assert (runner.stats.computed, runner.stats.cached) == (0, 1)
+    assert first1.spec.limit == 1 and first1.spec == dataclasses.replace(full.spec, limit=1)
+    assert [o.index for o in first1.outcomes] == [0]
+    np.testing.assert_array_equal(full.outcomes[0].scores, first1.outcomes[0].scores)
 
 
 def _die_on_three(x: int) -> int:

@@ -173,9 +173,10 @@ class FramePair:
         return self._instance["instance2"]
 
     def problem(self):
-        """The matching problem as ``matchers.Problem``: positions and features of both views,
-        box centres (pixels), and the localisation prior (world positions + stated sigma) when
-        the record has one (:meth:`prior`)."""
+        """The matching problem as ``matchers.Problem``: positions (metres, each camera's frame)
+        and features of both views, the box centres in pixels (``pixels1``/``pixels2``, for
+        matchers that compare objects in the image), and the localisation prior (world positions
+        + stated sigma, :meth:`prior`) when the record has one."""
         from matchers.problem import Problem
 
         prior = self.prior()
@@ -314,7 +315,8 @@ class FramePair:
 
 
 def _box_centres(boxes: np.ndarray) -> np.ndarray:
-    """(k, 2) centres (u, v) of (k, 4) boxes (u0, v0, u1, v1), pixels."""
+    """(k, 2) centres (u, v) in pixels of (k, 4) boxes (u0, v0, u1, v1)."""
+    boxes = np.asarray(boxes, dtype=float).reshape(-1, 4)
     return (boxes[:, :2] + boxes[:, 2:]) / 2
 
 

@@ -3,8 +3,13 @@ dataset's validation dataset, run every matcher on the test dataset with several
 parallel), and write per-pair metrics, AP, PR curves, Table I and the qualitative-figure input.
 
 Each test dataset DIR is paired with a validation dataset from other simulation seeds: ``--val``
-(same order), else ``DIR-val`` when it exists. ``--no-calibration`` reports the full Hungarian
-assignment (τ = none) instead.
+(same order), else ``DIR-val`` when it exists. ``--tune`` first picks each matcher's parameters
+from its declared grid on the validation dataset (:mod:`eval.tuning`); Table I is then the tuned
+one and the untuned one is written beside it (``table1_untuned``). ``--protocol paper`` runs the
+matchers as the paper describes them instead (image-space pairwise terms, full Hungarian
+assignment, no τ, no tuning; ``table1_paper_protocol``, :mod:`eval.protocol`).
+``--no-calibration`` reports the full Hungarian assignment (τ = none) under the calibrated
+protocol's matcher options.
 """
 
 from __future__ import annotations
@@ -12,26 +17,33 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from eval import calibration, tasks
+from eval import calibration, tasks, tuning
 from eval.cache import ResultCache
 from eval.executor import add_scheduler_argument, make_executor
 from eval.metrics import RankedAssignments, average_precision, pair_metrics, pooled_pr_curve
+from eval.protocol import MAIN, PAPER, PROTOCOLS, UNTUNED, check_protocol, paper_spec, variant_path
 from eval.runner import Runner, requests_for
-from eval.tables import PAPER_CSV, write_table1
+from eval.tables import PAPER_CSV, write_tables
 from eval.tasks import MatcherSpec, RunResult
 
 log = logging.getLogger(__name__)
 
-PAPER_ORDER = ("sm", "rrwm", "hgm", "tm", "bcagm", "rrwhm", "mos", "maximin", "appearance")
+PAPER_ORDER = ("sm", "rrwm", "hgm", "tm", "bcagm", "rrwhm", "mos", "maximin", "appearance", "none")
 QUALITATIVE_MATCHERS = ("rrwhm", "mos", "maximin")
 DEFAULT_CACHE = "cache/runs"
+# Scenario name -> table name where the first-word rule (below) does not give the right one.
+DATASET_LABELS = {"cad-dense": "CAD-dense"}
+
+# A table row (the requested matcher's label) -> the spec that runs for it on one dataset (tuned
+# parameters and protocol options make the two differ).
+Named = dict[str, MatcherSpec]
 
 
 @dataclass(frozen=True)
@@ -49,8 +61,9 @@ class DatasetEntry:
 
 
 def dataset_label(scenario_name: str) -> str:
-    """Table name of a scenario: the part before the first '-', upper case (cad-x -> CAD)."""
-    return scenario_name.split("-", 1)[0].upper()
+    """Table name of a scenario: :data:`DATASET_LABELS`, else the part before the first '-',
+    upper case (cad-intersection -> CAD, mrc-arena -> MRC, cad-dense -> CAD-dense)."""
+    return DATASET_LABELS.get(scenario_name) or scenario_name.split("-", 1)[0].upper()
 
 
 def open_entry(test_dir: str | Path, val_dir: str | Path | None) -> DatasetEntry:
@@ -75,12 +88,15 @@ def open_entry(test_dir: str | Path, val_dir: str | Path | None) -> DatasetEntry
 
 
 def parse_matchers(text: str) -> list[MatcherSpec]:
-    """``all`` (every registered matcher, paper order first) or a comma-separated list."""
-    from matchers.registry import available
+    """``all`` or a comma-separated list. ``all``: every registered matcher that needs nothing
+    beyond what every dataset gives (``matchers.requires`` empty; the localisation-prior matchers
+    must be named), paper order first."""
+    from matchers.registry import available, requires
 
     known = list(available())
     if text.strip() == "all":
-        names = [n for n in PAPER_ORDER if n in known] + [n for n in known if n not in PAPER_ORDER]
+        plain = [n for n in known if not requires(n)]
+        names = [n for n in PAPER_ORDER if n in plain] + [n for n in plain if n not in PAPER_ORDER]
     else:
         names = [n.strip() for n in text.split(",") if n.strip()]
         unknown = [n for n in names if n not in known]
@@ -91,53 +107,100 @@ def parse_matchers(text: str) -> list[MatcherSpec]:
     return [MatcherSpec(n) for n in dict.fromkeys(names)]
 
 
-def score_runs(runs: Sequence[RunResult], taus: dict[str, float | None], **columns) -> pd.DataFrame:
-    """One row per (run, frame pair): metrics of the prediction at the matcher's τ, plus the
-    given constant `columns`."""
-    rows = []
+def as_named(matchers: Sequence[MatcherSpec] | Mapping[str, MatcherSpec]) -> Named:
+    """{row label: spec}: a mapping as given, a list of specs under their own labels."""
+    if isinstance(matchers, Mapping):
+        return dict(matchers)
+    return {m.label: m for m in matchers}
+
+
+def run_named(
+    runner: Runner,
+    dataset: tuple[str, str],
+    named: Named,
+    seeds: Sequence[int],
+    desc: str,
+    *,
+    noise_rates: Sequence[float | None] = (None,),
+    limit: int | None = None,
+    keep: float | None = None,
+) -> dict[str, list[RunResult]]:
+    """Runs of every spec of `named` on `dataset` (dir, checksum) × seeds × noise rates, grouped
+    by row label (seed order, then rate order)."""
+    specs = list(dict.fromkeys(named.values()))
+    runs = runner.run(requests_for([dataset], specs, seeds, noise_rates, limit, keep), desc=desc)
+    by_spec: dict[MatcherSpec, list[RunResult]] = {}
     for run in runs:
-        label = run.spec.matcher.label
+        by_spec.setdefault(run.spec.matcher, []).append(run)
+    return {label: by_spec[spec] for label, spec in named.items()}
+
+
+def score_runs(
+    runs: Mapping[str, Sequence[RunResult]], taus: Mapping[str, float | None], **columns
+) -> pd.DataFrame:
+    """One row per (row label, run, frame pair): metrics of the prediction at the label's τ, the
+    run's matcher options (``params``, JSON), plus the given constant `columns`."""
+    rows = []
+    for label, label_runs in runs.items():
         tau = taus.get(label)
-        for o in run.outcomes:
-            m = pair_metrics(calibration.predictions(o, tau), o.gt_pairs, o.n1, o.n2)
-            rows.append(
-                columns
-                | {
-                    "matcher": label,
-                    "seed": run.spec.seed,
-                    "noise_rate": run.spec.noise_rate,
-                    "pair": o.index,
-                    "episode": o.episode,
-                    "sim_seed": o.sim_seed,
-                    "tau": np.nan if tau is None else tau,
-                    **{k: getattr(m, k) for k in ("n1", "n2", "n_gt", "n_pred", "tp", "correct")},
-                    **{k: getattr(m, k) for k in ("accuracy", "precision", "recall", "f1")},
-                    "time_s": o.time_s,
-                }
-            )
+        for run in label_runs:
+            params = tuning.params_json(dict(run.spec.matcher.options))
+            for o in run.outcomes:
+                m = pair_metrics(calibration.predictions(o, tau), o.gt_pairs, o.n1, o.n2)
+                rows.append(
+                    columns
+                    | {
+                        "matcher": label,
+                        "params": params,
+                        "seed": run.spec.seed,
+                        "noise_rate": run.spec.noise_rate,
+                        "keep": run.spec.keep,
+                        "pair": o.index,
+                        "episode": o.episode,
+                        "sim_seed": o.sim_seed,
+                        "tau": np.nan if tau is None else tau,
+                        **{
+                            k: getattr(m, k)
+                            for k in ("n1", "n2", "n_gt", "n_pred", "tp", "correct")
+                        },
+                        **{
+                            k: getattr(m, k)
+                            for k in ("accuracy", "balanced_accuracy", "precision", "recall")
+                        },
+                        "f1": m.f1,
+                        "time_s": o.time_s,
+                    }
+                )
     return pd.DataFrame(rows)
 
 
-def _by_matcher(runs: Sequence[RunResult]) -> dict[str, list[RunResult]]:
-    out: dict[str, list[RunResult]] = {}
-    for run in runs:
-        out.setdefault(run.spec.matcher.label, []).append(run)
-    return out
+def calibrate_named(
+    runs: Mapping[str, Sequence[RunResult]],
+) -> dict[str, calibration.Calibration]:
+    """τ per row label, fitted on its (validation) runs only."""
+    return {label: calibration.calibrate(label_runs) for label, label_runs in runs.items()}
 
 
 def calibrate_entry(
-    entry: DatasetEntry, matchers: Sequence[MatcherSpec], seeds: Sequence[int], runner: Runner
-) -> tuple[list[RunResult], dict[str, calibration.Calibration]]:
-    """Validation runs of `entry` and τ per matcher fitted on them (only on them)."""
+    entry: DatasetEntry,
+    matchers: Sequence[MatcherSpec] | Mapping[str, MatcherSpec],
+    seeds: Sequence[int],
+    runner: Runner,
+    keep: float | None = None,
+) -> tuple[dict[str, list[RunResult]], dict[str, calibration.Calibration]]:
+    """Validation runs of `entry` (non-covisible detections thinned to `keep`) and τ per row
+    label fitted on them (only on them)."""
     if entry.val_dir is None:
-        return [], {}
-    val_runs = runner.run(
-        requests_for([(entry.val_dir, entry.val_checksum)], matchers, seeds),
-        desc=f"{entry.label} validation",
+        return {}, {}
+    val_runs = run_named(
+        runner,
+        (entry.val_dir, entry.val_checksum),
+        as_named(matchers),
+        seeds,
+        f"{entry.label} validation",
+        keep=keep,
     )
-    return val_runs, {
-        label: calibration.calibrate(runs) for label, runs in _by_matcher(val_runs).items()
-    }
+    return val_runs, calibrate_named(val_runs)
 
 
 def representative_pair(runs: Sequence[RunResult]) -> int:
@@ -149,20 +212,21 @@ def representative_pair(runs: Sequence[RunResult]) -> int:
 
 
 def qualitative_entry(
-    entry: DatasetEntry, test_runs: Sequence[RunResult], taus: dict[str, float | None]
+    entry: DatasetEntry,
+    test_runs: Mapping[str, Sequence[RunResult]],
+    taus: Mapping[str, float | None],
 ) -> dict:
     """Predictions of the Fig. 3 matchers (first seed) on the representative test pair."""
-    first_seed = min(r.spec.seed for r in test_runs)
-    runs = [r for r in test_runs if r.spec.seed == first_seed]
-    index = representative_pair(runs)
-    methods = {}
-    for run in runs:
+    all_runs = [r for runs in test_runs.values() for r in runs]
+    first_seed = min(r.spec.seed for r in all_runs)
+    index = representative_pair([r for r in all_runs if r.spec.seed == first_seed])
+    methods, gt = {}, []
+    for label, runs in test_runs.items():
+        run = next(r for r in runs if r.spec.seed == first_seed)
         if run.spec.matcher.name not in QUALITATIVE_MATCHERS:
             continue
         outcome = next(o for o in run.outcomes if o.index == index)
-        methods[run.spec.matcher.label] = calibration.predictions(
-            outcome, taus.get(run.spec.matcher.label)
-        ).tolist()
+        methods[label] = calibration.predictions(outcome, taus.get(label)).tolist()
         gt = outcome.gt_pairs.tolist()
     if not methods:
         return {}
@@ -175,11 +239,13 @@ def qualitative_entry(
     }
 
 
-def ranking_quality(label: str, test_runs: Sequence[RunResult]) -> tuple[list[dict], pd.DataFrame]:
+def ranking_quality(
+    label: str, test_runs: Mapping[str, Sequence[RunResult]]
+) -> tuple[list[dict], pd.DataFrame]:
     """Threshold-free view of dataset `label`: AP rows per (matcher, run), and the PR curves of
     every matcher with its runs pooled."""
     ap_rows, curves = [], []
-    for matcher, runs in _by_matcher(test_runs).items():
+    for matcher, runs in test_runs.items():
         for run in runs:
             curve = pooled_pr_curve(RankedAssignments.from_frames(run.ranking_frames()))
             ap = average_precision(curve)
@@ -196,6 +262,119 @@ def ranking_quality(label: str, test_runs: Sequence[RunResult]) -> tuple[list[di
     return ap_rows, pd.concat(curves, ignore_index=True)
 
 
+@dataclass
+class EntryResult:
+    """One dataset evaluated under one variant: τ and options per row label and the tables."""
+
+    entry: DatasetEntry
+    named: Named
+    taus: dict[str, float | None]
+    fits: dict[str, calibration.Calibration]
+    per_pair: pd.DataFrame
+    ap_rows: list[dict]
+    pr: pd.DataFrame
+    qualitative: dict = field(default_factory=dict)
+
+
+def evaluate_entry(
+    entry: DatasetEntry, named: Named, seeds: Sequence[int], runner: Runner, calibrate: bool
+) -> EntryResult:
+    """Validation runs and τ (when `calibrate`), then the test runs scored at τ."""
+    val_runs, fits = calibrate_entry(entry, named, seeds, runner) if calibrate else ({}, {})
+    test_runs = run_named(
+        runner, (entry.test_dir, entry.test_checksum), named, seeds, f"{entry.label} test"
+    )
+    if val_runs:
+        calibration.check_disjoint(
+            [r for runs in val_runs.values() for r in runs],
+            [r for runs in test_runs.values() for r in runs],
+        )
+    taus = {label: (fits[label].tau if label in fits else None) for label in named}
+    ap_rows, pr = ranking_quality(entry.label, test_runs)
+    return EntryResult(
+        entry=entry,
+        named=named,
+        taus=taus,
+        fits=fits,
+        per_pair=score_runs(test_runs, taus, dataset=entry.label, split="test"),
+        ap_rows=ap_rows,
+        pr=pr,
+        qualitative=qualitative_entry(entry, test_runs, taus),
+    )
+
+
+THRESHOLD_COLUMNS = (
+    "dataset",
+    "matcher",
+    "params",
+    "tau",
+    "val_f1",
+    "val_frames",
+    "val_runs",
+    "val_dir",
+)
+
+
+def _write_variant(
+    out_dir: Path,
+    variant: str,
+    results: Sequence[EntryResult],
+    seeds: Sequence[int],
+    runner: Runner,
+    settings: dict,
+) -> None:
+    """The files of one variant (:func:`eval.protocol.variant_path`); the PR curves and the
+    qualitative-figure input only for the main variant."""
+    tau_rows = [
+        {
+            "dataset": r.entry.label,
+            "matcher": label,
+            "params": tuning.params_json(dict(r.named[label].options)),
+            "tau": fit.tau,
+            "val_f1": fit.val_f1,
+            "val_frames": fit.frames,
+            "val_runs": fit.runs,
+            "val_dir": r.entry.val_dir,
+        }
+        for r in results
+        for label, fit in r.fits.items()
+    ]
+    if variant != PAPER:
+        pd.DataFrame(tau_rows, columns=list(THRESHOLD_COLUMNS)).to_csv(
+            variant_path(out_dir, "thresholds", variant, ".csv"), index=False
+        )
+    pd.concat([r.per_pair for r in results], ignore_index=True).to_csv(
+        variant_path(out_dir, "metrics_per_pair", variant, ".csv"), index=False
+    )
+    pd.DataFrame([a for r in results for a in r.ap_rows]).to_csv(
+        variant_path(out_dir, "average_precision", variant, ".csv"), index=False
+    )
+    if variant == MAIN:
+        pd.concat([r.pr for r in results], ignore_index=True).round(6).to_csv(
+            out_dir / "pr_curves.csv", index=False
+        )
+        qualitative = {r.entry.label: r.qualitative for r in results if r.qualitative}
+        (out_dir / "qualitative.json").write_text(
+            json.dumps(qualitative, indent=1), encoding="utf-8"
+        )
+    record = {
+        "datasets": [asdict(r.entry) for r in results],
+        "matchers": list(results[0].named) if results else [],
+        "seeds": list(seeds),
+        **settings,
+        "thresholds": {r.entry.label: r.taus for r in results},
+        "params": {
+            r.entry.label: {label: dict(spec.options) for label, spec in r.named.items()}
+            for r in results
+        },
+        "code_version": runner.version,
+        "cache": str(runner.cache.root),
+    }
+    variant_path(out_dir, "evaluation", variant, ".json").write_text(
+        json.dumps(record, indent=1), encoding="utf-8"
+    )
+
+
 def evaluate(
     entries: Sequence[DatasetEntry],
     matchers: Sequence[MatcherSpec],
@@ -203,62 +382,84 @@ def evaluate(
     runner: Runner,
     out_dir: str | Path,
     calibrate: bool = True,
+    tune: bool = False,
+    protocol: str = "calibrated",
 ) -> dict:
-    """The whole evaluation; writes thresholds.csv, metrics_per_pair.csv, average_precision.csv,
-    pr_curves.csv, qualitative.json and evaluation.json into `out_dir`. Returns the τ table as
+    """The whole evaluation of one protocol; writes into `out_dir` the variant files of
+    :mod:`eval.protocol` (thresholds, metrics_per_pair, average_precision, evaluation.json; the
+    main variant also pr_curves.csv and qualitative.json; with `tune` also ``tuning.csv`` and the
+    untuned variant). Returns the τ table of the main (or paper) variant as
     {dataset label: {matcher label: τ or None}}."""
+    protocol = check_protocol(protocol)
+    if protocol == "paper" and tune:
+        raise ValueError("--tune: the paper protocol runs every matcher untuned")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     labels = [e.label for e in entries]
     if len(set(labels)) != len(labels):
         raise ValueError(f"datasets: two test datasets of the same scenario kind {labels}")
-    tau_rows, per_pair, ap_rows, pr_rows, qualitative, taus_all = [], [], [], [], {}, {}
+    base = as_named(matchers)
+    calibrate = calibrate and protocol == "calibrated"
+    results: dict[str, list[EntryResult]] = {}
+    choices: list[tuning.TuningChoice] = []
     for entry in entries:
-        if calibrate and entry.val_dir is None:
+        if (calibrate or tune) and entry.val_dir is None:
             raise ValueError(
                 f"{entry.test_dir}: no validation dataset (give --val DIR or create "
                 f"{entry.test_dir}-val), or pass --no-calibration"
             )
-        val_runs, fits = calibrate_entry(entry, matchers, seeds, runner) if calibrate else ([], {})
-        test_runs = runner.run(
-            requests_for([(entry.test_dir, entry.test_checksum)], matchers, seeds),
-            desc=f"{entry.label} test",
-        )
-        if val_runs:
-            calibration.check_disjoint(val_runs, test_runs)
-        taus = {m.label: (fits[m.label].tau if m.label in fits else None) for m in matchers}
-        taus_all[entry.label] = taus
-        for label, fit in fits.items():
-            tau_rows.append(
-                {"dataset": entry.label, "matcher": label, "tau": fit.tau, "val_f1": fit.val_f1}
-                | {"val_frames": fit.frames, "val_runs": fit.runs, "val_dir": entry.val_dir}
+        if protocol == "paper":
+            named = {label: paper_spec(spec) for label, spec in base.items()}
+            results.setdefault(PAPER, []).append(
+                evaluate_entry(entry, named, seeds, runner, calibrate=False)
             )
-        per_pair.append(score_runs(test_runs, taus, dataset=entry.label, split="test"))
-        ap, pr = ranking_quality(entry.label, test_runs)
-        ap_rows += ap
-        pr_rows.append(pr)
-        q = qualitative_entry(entry, test_runs, taus)
-        if q:
-            qualitative[entry.label] = q
-    pd.DataFrame(
-        tau_rows,
-        columns=["dataset", "matcher", "tau", "val_f1", "val_frames", "val_runs", "val_dir"],
-    ).to_csv(out_dir / "thresholds.csv", index=False)
-    pd.concat(per_pair, ignore_index=True).to_csv(out_dir / "metrics_per_pair.csv", index=False)
-    pd.DataFrame(ap_rows).to_csv(out_dir / "average_precision.csv", index=False)
-    pd.concat(pr_rows, ignore_index=True).round(6).to_csv(out_dir / "pr_curves.csv", index=False)
-    (out_dir / "qualitative.json").write_text(json.dumps(qualitative, indent=1), encoding="utf-8")
-    record = {
-        "datasets": [asdict(e) for e in entries],
-        "matchers": [m.label for m in matchers],
-        "seeds": list(seeds),
-        "calibrated": calibrate,
-        "thresholds": taus_all,
-        "code_version": runner.version,
-        "cache": str(runner.cache.root),
-    }
-    (out_dir / "evaluation.json").write_text(json.dumps(record, indent=1), encoding="utf-8")
-    return taus_all
+            continue
+        if tune:
+            chosen = tuning.tune_entry(entry, list(base.values()), runner)
+            choices += chosen.values()
+            named = {label: chosen[label].spec for label in base}
+            results.setdefault(UNTUNED, []).append(
+                evaluate_entry(entry, base, seeds, runner, calibrate)
+            )
+            results.setdefault(MAIN, []).append(
+                evaluate_entry(entry, named, seeds, runner, calibrate)
+            )
+        else:
+            results.setdefault(MAIN, []).append(
+                evaluate_entry(entry, base, seeds, runner, calibrate)
+            )
+    for variant, variant_results in results.items():
+        settings = {
+            "protocol": protocol,
+            "calibrated": calibrate,
+            "tuned": tune and variant == MAIN,
+        }
+        _write_variant(out_dir, variant, variant_results, seeds, runner, settings)
+    if tune:
+        pd.DataFrame(tuning.tuning_rows(choices)).to_csv(out_dir / "tuning.csv", index=False)
+    main = results.get(PAPER if protocol == "paper" else MAIN, [])
+    return {r.entry.label: r.taus for r in main}
+
+
+def chosen_specs(
+    out_dir: str | Path, label: str, matchers: Sequence[MatcherSpec]
+) -> tuple[Named, dict[str, float | None]]:
+    """The spec (tuned parameters included) and τ of each matcher on dataset `label`, as the
+    main variant's ``thresholds.csv`` in `out_dir` records them; a matcher it lacks runs as
+    requested with no τ (None)."""
+    named, taus = as_named(matchers), {}
+    path = Path(out_dir) / "thresholds.csv"
+    if not path.is_file():
+        return named, {m: None for m in named}
+    table = pd.read_csv(path, keep_default_na=False, na_values=[""])
+    table = table[table["dataset"] == label]
+    for row in table.itertuples(index=False):
+        if row.matcher not in named:
+            continue
+        params = json.loads(row.params) if "params" in table.columns and row.params else {}
+        named[row.matcher] = MatcherSpec.of(named[row.matcher].name, **params)
+        taus[row.matcher] = None if pd.isna(row.tau) else float(row.tau)
+    return named, {m: taus.get(m) for m in named}
 
 
 def add_runner_arguments(parser: argparse.ArgumentParser) -> None:
@@ -281,7 +482,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--no-calibration", action="store_true", help="report full assignments (no τ)"
     )
-    parser.add_argument("--paper", default=str(PAPER_CSV), help="the paper's Table I (CSV)")
+    parser.add_argument(
+        "--tune",
+        action="store_true",
+        help="pick each matcher's parameters from its grid on the validation datasets first",
+    )
+    parser.add_argument(
+        "--protocol",
+        choices=PROTOCOLS,
+        default="calibrated",
+        help="calibrated (default: τ from validation) or paper (image-space pairwise terms, "
+        "full assignment, no tuning)",
+    )
+    parser.add_argument(
+        "--paper-table", default=str(PAPER_CSV), help="the paper's Table I (CSV) shown beside ours"
+    )
     add_runner_arguments(parser)
 
 
@@ -298,13 +513,24 @@ def val_dirs(datasets: Sequence[str], given: Sequence[str] | None) -> list[str |
 def run(args: argparse.Namespace) -> int:
     if args.runs < 1:
         raise SystemExit("--runs: expected ≥ 1")
-    vals = [None] * len(args.datasets) if args.no_calibration else val_dirs(args.datasets, args.val)
+    paper = args.protocol == "paper"
+    no_val = (args.no_calibration or paper) and not args.tune
+    vals = [None] * len(args.datasets) if no_val else val_dirs(args.datasets, args.val)
     entries = [open_entry(d, v) for d, v in zip(args.datasets, vals, strict=True)]
     matchers = parse_matchers(args.matchers)
     with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(ResultCache(args.cache), executor)
-        evaluate(entries, matchers, range(args.runs), runner, args.out, not args.no_calibration)
-    markdown = write_table1(args.out, args.paper)
+        evaluate(
+            entries,
+            matchers,
+            range(args.runs),
+            runner,
+            args.out,
+            calibrate=not args.no_calibration,
+            tune=args.tune,
+            protocol=args.protocol,
+        )
+    markdown = write_tables(args.out, args.paper_table)
     from eval.figures import render_all
 
     render_all(args.out)

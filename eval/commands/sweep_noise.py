@@ -3,9 +3,9 @@ accuracy, precision and recall against the depth-noise rate.
 
 Each (rate, seed) re-applies noise to the stored clean depth and re-detects
 (``FramePair.redetect``; nothing is re-rendered); all matchers of that run see the same detections.
-Predictions use the matchers' calibrated τ from ``DIR/thresholds.csv`` (written by ``cadsim
-evaluate``; noise-free calibration, as deployed) or, without it, τ fitted here on the validation
-dataset's stored detections.
+Predictions use the matchers' parameters and calibrated τ from ``DIR/thresholds.csv`` (written by
+``cadsim evaluate``, tuned when it tuned; noise-free calibration, as deployed) or, for a matcher it
+lacks, the defaults and τ fitted here on the validation dataset's stored detections.
 """
 
 from __future__ import annotations
@@ -19,16 +19,19 @@ import pandas as pd
 from eval.cache import ResultCache
 from eval.commands.evaluate import (
     DatasetEntry,
+    Named,
     add_runner_arguments,
     calibrate_entry,
+    chosen_specs,
     open_entry,
     parse_matchers,
+    run_named,
     score_runs,
     val_dirs,
 )
 from eval.executor import make_executor
 from eval.metrics import METRICS
-from eval.runner import Runner, requests_for
+from eval.runner import Runner
 from eval.tasks import MatcherSpec
 
 # Fig. 4's default x axis: σ = rate · d² (metres) — at 20 m depth, 0.12 m … 40 m. On CAD, 3e-4 has
@@ -48,19 +51,15 @@ def parse_rates(text: str) -> list[float]:
 
 def thresholds_for(
     out_dir: Path, entry: DatasetEntry, matchers: Sequence[MatcherSpec], seeds, runner: Runner
-) -> dict[str, float | None]:
-    """τ per matcher: from out_dir/thresholds.csv for this dataset, else calibrated here."""
-    path = out_dir / "thresholds.csv"
-    taus: dict[str, float | None] = {}
-    if path.is_file():
-        table = pd.read_csv(path)
-        table = table[table["dataset"] == entry.label]
-        taus = dict(zip(table["matcher"], table["tau"].astype(float), strict=True))
-    missing = [m for m in matchers if m.label not in taus]
+) -> tuple[Named, dict[str, float | None]]:
+    """Spec and τ per matcher: from out_dir/thresholds.csv for this dataset, else the requested
+    spec calibrated here."""
+    named, taus = chosen_specs(out_dir, entry.label, matchers)
+    missing = {label: spec for label, spec in named.items() if taus[label] is None}
     if missing and entry.val_dir is not None:
         _, fits = calibrate_entry(entry, missing, seeds, runner)
         taus |= {label: fit.tau for label, fit in fits.items()}
-    return {m.label: taus.get(m.label) for m in matchers}
+    return named, taus
 
 
 def sweep(
@@ -76,15 +75,25 @@ def sweep(
     (per-run means over the frame pairs) and return it."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    taus = thresholds_for(out_dir, entry, matchers, seeds, runner)
-    runs = runner.run(
-        requests_for([(entry.test_dir, entry.test_checksum)], matchers, seeds, rates, limit),
-        desc=f"{entry.label} noise sweep",
+    named, taus = thresholds_for(out_dir, entry, matchers, seeds, runner)
+    runs = run_named(
+        runner,
+        (entry.test_dir, entry.test_checksum),
+        named,
+        seeds,
+        f"{entry.label} noise sweep",
+        noise_rates=rates,
+        limit=limit,
     )
     per_pair = score_runs(runs, taus, dataset=entry.label)
     per_run = (
         per_pair.groupby(["dataset", "matcher", "noise_rate", "seed"], sort=False)
-        .agg(**{m: (m, "mean") for m in METRICS}, frames=("pair", "size"), tau=("tau", "first"))
+        .agg(
+            **{m: (m, "mean") for m in METRICS},
+            frames=("pair", "size"),
+            tau=("tau", "first"),
+            params=("params", "first"),
+        )
         .reset_index()
     )
     per_run.to_csv(out_dir / "noise_runs.csv", index=False)

@@ -1,27 +1,37 @@
-"""``cadsim table DIR``: re-render Table I and every figure from the CSV/JSON files an evaluation
-wrote into DIR (no matcher is run, no cache is needed; the qualitative figure needs the dataset)."""
+"""``cadsim table DIR``: re-render Table I (every variant present: tuned, untuned, paper protocol),
+the paired differences, the crossovers and every figure from the CSV/JSON files an evaluation wrote
+into DIR (no matcher is run, no cache is needed; the qualitative figure needs the dataset)."""
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
 
+from eval.crossovers import write_crossovers
 from eval.figures import render_all
-from eval.tables import PAPER_CSV, write_table1
+from eval.protocol import VARIANTS, variant_path
+from eval.tables import PAPER_CSV, write_tables
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("dir", metavar="DIR", help="output directory of `cadsim evaluate`")
-    parser.add_argument("--paper", default=str(PAPER_CSV), help="the paper's Table I (CSV)")
+    parser.add_argument(
+        "--paper-table", default=str(PAPER_CSV), help="the paper's Table I (CSV) shown beside ours"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
     out = Path(args.dir)
-    if not (out / "metrics_per_pair.csv").is_file() and not (out / "noise_runs.csv").is_file():
+    evaluated = any(variant_path(out, "metrics_per_pair", v, ".csv").is_file() for v in VARIANTS)
+    swept = any((out / n).is_file() for n in ("noise_runs.csv", "regime_sweep.csv"))
+    if not evaluated and not swept:
         raise SystemExit(
-            f"{out}: no metrics_per_pair.csv or noise_runs.csv (run `cadsim evaluate`)"
+            f"{out}: no metrics_per_pair*.csv, noise_runs.csv or regime_sweep.csv "
+            "(run `cadsim evaluate`)"
         )
-    markdown = write_table1(out, args.paper) if (out / "metrics_per_pair.csv").is_file() else ""
+    markdown = write_tables(out, args.paper_table) if evaluated else ""
+    if (out / "regime_sweep.csv").is_file():
+        print(write_crossovers(out))
     for path in render_all(out):
         print(path)
     print(markdown)

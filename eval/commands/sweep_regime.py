@@ -1,0 +1,168 @@
+"""``cadsim sweep-regime DATASET --val VAL --keep 1,0.75,0.5,0.25,0 --out DIR``: every matcher
+against the share of non-covisible objects, from the dataset's natural share down to 0.
+
+At each keep level every non-covisible detection of every frame pair (validation and test alike)
+stays with that probability (:mod:`eval.thinning`: seeded per frame pair, nested levels), τ is
+recalibrated on the thinned validation set, and the matchers run on the thinned test set. The
+matchers run with the parameters ``DIR/thresholds.csv`` records for this dataset (tuned when the
+evaluation was; else their defaults). Level 1 is the untouched dataset and shares its cached runs.
+
+Writes (rows of other datasets already there are kept, this dataset's replaced):
+``regime_sweep.csv`` (:data:`SWEEP_COLUMNS`), ``crossovers.csv`` (:mod:`eval.crossovers`) and
+``fig_regime.png/.pdf``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+from pathlib import Path
+
+import pandas as pd
+
+from eval.cache import ResultCache
+from eval.commands.evaluate import (
+    DatasetEntry,
+    Named,
+    add_runner_arguments,
+    calibrate_entry,
+    chosen_specs,
+    open_entry,
+    parse_matchers,
+    run_named,
+    score_runs,
+    val_dirs,
+)
+from eval.crossovers import write_crossovers
+from eval.executor import make_executor
+from eval.keyed_csv import upsert_csv
+from eval.runner import Runner
+from eval.thinning import check_keep, noncovisible_share
+
+DEFAULT_KEEP = (1.0, 0.75, 0.5, 0.25, 0.0)
+SWEEP_COLUMNS = (
+    "dataset",
+    "keep",
+    "share",
+    "matcher",
+    "f1_mean",
+    "f1_std",
+    "balanced_accuracy_mean",
+    "recall_mean",
+    "tau",
+    "pairs",
+    "runs",
+)
+
+
+def parse_keep(text: str) -> list[float]:
+    """Comma-separated keep levels in [0, 1], returned descending without repeats."""
+    try:
+        levels = [check_keep(float(k)) for k in text.split(",") if k.strip()]
+    except ValueError as exc:
+        raise ValueError(
+            f"--keep: expected comma-separated numbers in [0, 1], got {text!r}"
+        ) from exc
+    if not levels:
+        raise ValueError(f"--keep: expected at least one level, got {text!r}")
+    return sorted(set(levels), reverse=True)
+
+
+def summarise_level(per_pair: pd.DataFrame, dataset: str, keep: float) -> pd.DataFrame:
+    """Rows of ``regime_sweep.csv`` for one level: per matcher, per-run means over the frame
+    pairs, then mean (and std of F1) over runs; ``share`` is the achieved non-covisible share of
+    the thinned test pairs (objects pooled)."""
+    pairs = per_pair.drop_duplicates("pair")
+    share = noncovisible_share(pairs["n1"], pairs["n2"], pairs["n_gt"])
+    per_run = per_pair.groupby(["matcher", "seed"], sort=False)[
+        ["f1", "balanced_accuracy", "recall"]
+    ].mean()
+    grouped = per_run.groupby(level=0, sort=False)
+    out = pd.DataFrame(
+        {
+            "f1_mean": grouped["f1"].mean(),
+            "f1_std": grouped["f1"].std(ddof=1).fillna(0.0),
+            "balanced_accuracy_mean": grouped["balanced_accuracy"].mean(),
+            "recall_mean": grouped["recall"].mean(),
+            "tau": per_pair.groupby("matcher", sort=False)["tau"].first(),
+            "pairs": per_pair.groupby("matcher", sort=False)["pair"].nunique(),
+            "runs": grouped.size(),
+        }
+    ).reset_index(names="matcher")
+    out.insert(0, "share", share)
+    out.insert(0, "keep", keep)
+    out.insert(0, "dataset", dataset)
+    return out[list(SWEEP_COLUMNS)]
+
+
+def sweep_regime(
+    entry: DatasetEntry,
+    named: Named,
+    seeds: Sequence[int],
+    keeps: Sequence[float],
+    runner: Runner,
+    limit: int | None = None,
+    val_seeds: Sequence[int] | None = None,
+) -> pd.DataFrame:
+    """The sweep's rows for `entry`: for each keep level, τ recalibrated on the thinned
+    validation dataset (runs `val_seeds`, default `seeds`), then the thinned test dataset's first
+    `limit` frame pairs (None: all) with `seeds`."""
+    if entry.val_dir is None:
+        raise ValueError(f"{entry.test_dir}: the regime sweep needs a validation dataset (--val)")
+    rows = []
+    for keep in keeps:
+        keep_or_none = None if keep == 1.0 else keep
+        _, fits = calibrate_entry(entry, named, list(val_seeds or seeds), runner, keep=keep_or_none)
+        taus = {label: fits[label].tau for label in named}
+        test_runs = run_named(
+            runner,
+            (entry.test_dir, entry.test_checksum),
+            named,
+            seeds,
+            f"{entry.label} keep {keep:g}",
+            limit=limit,
+            keep=keep_or_none,
+        )
+        per_pair = score_runs(test_runs, taus, dataset=entry.label)
+        rows.append(summarise_level(per_pair, entry.label, keep))
+    return pd.concat(rows, ignore_index=True)
+
+
+def write_sweep(out_dir: str | Path, rows: pd.DataFrame) -> list[Path]:
+    """Merge `rows` into ``regime_sweep.csv``, then rewrite ``crossovers.csv`` and the figure
+    from the whole table; returns the written paths."""
+    from eval.figures import write_fig_regime
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    upsert_csv(out_dir / "regime_sweep.csv", rows.round(6))
+    return [out_dir / "regime_sweep.csv", write_crossovers(out_dir), *write_fig_regime(out_dir)]
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("dataset", metavar="DATASET_DIR", help="test dataset")
+    parser.add_argument("--val", default=None, help="validation dataset (default: DATASET_DIR-val)")
+    parser.add_argument(
+        "--keep",
+        default=",".join(f"{k:g}" for k in DEFAULT_KEEP),
+        help="keep levels of non-covisible detections (default 1,0.75,0.5,0.25,0)",
+    )
+    parser.add_argument("--pairs", type=int, default=None, help="only the first N test pairs")
+    parser.add_argument(
+        "--val-runs", type=int, default=None, help="validation runs for τ (default: --runs)"
+    )
+    add_runner_arguments(parser)
+
+
+def run(args: argparse.Namespace) -> int:
+    (val,) = val_dirs([args.dataset], [args.val] if args.val else None)
+    entry = open_entry(args.dataset, val)
+    named, _ = chosen_specs(args.out, entry.label, parse_matchers(args.matchers))
+    keeps = parse_keep(args.keep)
+    val_seeds = range(args.val_runs) if args.val_runs else None
+    with make_executor(args.workers, args.scheduler) as executor:
+        runner = Runner(ResultCache(args.cache), executor)
+        rows = sweep_regime(entry, named, range(args.runs), keeps, runner, args.pairs, val_seeds)
+    for path in write_sweep(args.out, rows):
+        print(path)
+    return 0

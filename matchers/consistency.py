@@ -1,0 +1,133 @@
+"""``consistency``: robust data association without any prior — the largest set of candidate
+matches whose within-view distances all agree (the maximum-clique / CLIPPER family).
+
+Two candidate matches a = (i, j) and b = (k, l), i != k and j != l, are *consistent* when the
+3-D distance between objects i and k in view 1 and between j and l in view 2 differ by at most
+a tolerance eps: a rigid motion preserves distances, so the true matches are all mutually
+consistent, while a wrong match agrees with the others only by chance. Edge weights
+
+    W[a, b] = exp(-2 (d1_ik - d2_jl)^2 / eps^2)  if |d1_ik - d2_jl| <= eps,  else 0
+
+(0 between matches sharing an object). The densest consistent set is sought as CLIPPER does —
+a leading-eigenvector relaxation, then a consistent set extracted from it — vectorised:
+
+1. u = principal eigenvector of W (power iteration, as Spectral Matching);
+2. from each of the ``starts`` candidates with the largest u, grow a clique greedily: add the
+   candidate of largest u that is consistent with every member so far (all starts at once,
+   as boolean masks);
+3. keep the largest clique S (ties: the largest total weight W inside it).
+
+Scores: s_a = sum_{b in S, b != a} W[a, b] / (|S| - 1) in [0, 1] — the share of the consistent
+set that agrees with candidate a (members close to 1; 0 everywhere when no two candidates are
+consistent); then the shared Hungarian + threshold.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from scipy.spatial.distance import cdist
+
+from .matching import Matching
+from .options import check_count, check_problem, check_range, rng_from_seed
+from .problem import Problem
+from .result import finish
+from .scale import median_spacing
+from .sm import spectral_vector
+
+
+def consistency_weights(problem: Problem, tolerance: float) -> np.ndarray:
+    """Dense (nm, nm) consistency weights W (module docstring) in the a = i*m + j convention,
+    for a distance ``tolerance`` eps in the units of the positions."""
+    n, m = problem.n1, problem.n2
+    if n == 0 or m == 0:
+        return np.zeros((n * m, n * m))
+    d1 = cdist(problem.points1, problem.points1)
+    d2 = cdist(problem.points2, problem.points2)
+    diff = np.abs(d1[:, None, :, None] - d2[None, :, None, :])  # [i, j, k, l]
+    weights = np.where(diff <= tolerance, np.exp(-2.0 * (diff / tolerance) ** 2), 0.0)
+    same_i = np.eye(n, dtype=bool)[:, None, :, None]
+    same_j = np.eye(m, dtype=bool)[None, :, None, :]
+    weights[np.broadcast_to(same_i | same_j, weights.shape)] = 0.0
+    return weights.reshape(n * m, n * m)
+
+
+def greedy_cliques(adjacent: np.ndarray, priority: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """(len(starts), N) bool membership of one clique grown from each start: repeatedly add the
+    vertex of highest ``priority`` adjacent to every member, until none is left."""
+    count, size = len(starts), adjacent.shape[0]
+    members = np.zeros((count, size), dtype=bool)
+    rows = np.arange(count)
+    members[rows, starts] = True
+    allowed = adjacent[starts].copy()
+    while allowed.any():
+        ranked = np.where(allowed, priority[None, :], -np.inf)
+        best = ranked.argmax(axis=1)
+        growing = allowed[rows, best]
+        members[rows[growing], best[growing]] = True
+        allowed[growing] &= adjacent[best[growing]]
+        allowed[rows, best] = False
+    return members
+
+
+def consistent_set(weights: np.ndarray, starts: int = 64) -> np.ndarray:
+    """Bool mask of the densest consistent set found (steps 1-3 of the module docstring)."""
+    size = weights.shape[0]
+    adjacent = weights > 0
+    if not adjacent.any():
+        return np.zeros(size, dtype=bool)
+    u, _, _ = spectral_vector(weights)
+    has_edge = adjacent.any(axis=1)
+    order = np.argsort(-np.where(has_edge, u, -1.0), kind="stable")
+    first = order[: min(starts, int(has_edge.sum()))]
+    cliques = greedy_cliques(adjacent, u, first)
+    sizes = cliques.sum(axis=1)
+    inside = np.einsum("ka,ab,kb->k", cliques.astype(float), weights, cliques.astype(float))
+    best = np.lexsort((-inside, -sizes))[0]
+    return cliques[best]
+
+
+def consistency(
+    problem: Problem,
+    seed: int | None = 0,
+    threshold: float | None = None,
+    *,
+    tolerance_scale: float = 0.1,
+    tolerance: float | None = None,
+    starts: int = 64,
+) -> Matching:
+    """Largest mutually consistent set of candidate matches, then Hungarian (module docstring).
+
+    Options: ``tolerance_scale`` (0.1) — eps as a multiple of the problem's median within-view
+    distance (:func:`~matchers.scale.median_spacing`); or ``tolerance`` — eps in position units
+    (metres), which replaces it; ``starts`` (64) — clique growths from the candidates of largest
+    eigenvector weight. Needs no features and no prior (ignores both). Deterministic; ``seed``
+    unused. Memory (nm)^2 like the pairwise matchers.
+
+    >>> rng = np.random.default_rng(1)
+    >>> pts = rng.uniform(0, 30, (6, 3))
+    >>> other = np.vstack([pts[:4][::-1] + 5.0, rng.uniform(0, 30, (3, 3))])
+    >>> consistency(Problem(pts, other), threshold=0.5).pairs.tolist()
+    [[0, 3], [1, 2], [2, 1], [3, 0]]
+    """
+    started = time.perf_counter()
+    check_problem(problem)
+    rng_from_seed(seed)
+    check_count("starts", starts)
+    if tolerance is None:
+        scale = check_range("tolerance_scale", tolerance_scale, 0.0, np.inf, open_low=True)
+        eps = scale * median_spacing(problem.points1, problem.points2)
+    else:
+        eps = check_range("tolerance", tolerance, 0.0, np.inf, open_low=True)
+    n, m = problem.n1, problem.n2
+    weights = consistency_weights(problem, eps)
+    members = consistent_set(weights, starts)
+    size = int(members.sum())
+    if size >= 2:
+        support = weights[:, members].sum(axis=1) / (size - 1)
+        scores = np.clip(support, 0.0, 1.0).reshape(n, m)
+    else:
+        scores = np.zeros((n, m))
+    info = {"tolerance": float(eps), "clique": size}
+    return finish("consistency", scores, threshold, started, 0, info)

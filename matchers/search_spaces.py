@@ -1,0 +1,100 @@
+"""Tuning grids: which options of each built-in matcher a tuner may set, and to which values.
+
+A grid is a list of at most ``MAX_CONFIGS`` (12) option dicts, each a complete configuration
+(``{}`` = the matcher's defaults). Every kernel width of a matcher is in its grid, and every
+width is *relative* to the problem itself — a multiple of the median within-view distance
+(``sigma_scale``), of the prior's stated uncertainty (``spread``, ``gate``) or scale-free by
+construction (Eq. (1)'s ``sigma`` on angle cosines) — so one grid serves a 2 m robot arena
+and an 18 m road junction. The defaults are always a candidate, so tuning can only confirm
+or improve on them on the validation data. docs/matchers.md says why each grid is what it is.
+
+Imports nothing from ``cadsim`` or ``eval``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+
+MAX_CONFIGS = 12
+
+_PAIRWISE_WIDTHS = (0.02, 0.05, 0.1, 0.2, 0.5)  # sigma / median within-view distance
+_TENSOR_WIDTHS = (0.1, 0.2, 1.0, 2.0)  # Eq. (1) sigma on summed cosine differences (0.5 default)
+_SPREADS = (1.0, 2.0, 3.0, 4.0)  # prior likelihood width / stated world_sigma (2 default)
+
+
+def _hypergraph() -> list[dict]:
+    """Third-order matchers: Eq. (1)'s bandwidth, default 0.5 first."""
+    return [{}] + [{"sigma": s} for s in _TENSOR_WIDTHS]
+
+
+def _pairwise() -> list[dict]:
+    """SM / RRWM: the default absolute sigma2 = 0.5, then relative kernel widths."""
+    return [{}] + [{"sigma_scale": s} for s in _PAIRWISE_WIDTHS]
+
+
+def _prior_and_evidence() -> list[dict]:
+    """pose_appearance / maximin_pose: likelihood width, the prior as stated or refined, gate."""
+    return (
+        [{}]
+        + [{"spread": s} for s in _SPREADS if s != 2.0]
+        + [{"spread": s, "refine": True} for s in _SPREADS]
+        + [{"gate": 4.0}, {"gate": 12.0}]
+    )
+
+
+BUILTIN_SEARCH_SPACES: dict[str, list[dict]] = {
+    "appearance": [{}],
+    "none": [{}],
+    "sm": _pairwise(),
+    "rrwm": _pairwise(),
+    "mos": [{}] + [{"sigma_scale": s, "sigma": t} for s in _PAIRWISE_WIDTHS for t in (0.2, 0.5)],
+    "tm": _hypergraph(),
+    "hgm": _hypergraph(),
+    "bcagm": _hypergraph(),
+    "rrwhm": _hypergraph(),
+    "maximin": _hypergraph(),
+    "pose": [{}]
+    + [
+        {"spread": s, "gate": g} for s in _SPREADS for g in (4.0, 8.0, 12.0) if (s, g) != (2.0, 8.0)
+    ],
+    "pose_refine": [{}]
+    + [{"spread": s} for s in _SPREADS if s != 2.0]
+    + [{"spread": s, "tighten": 1.0} for s in _SPREADS]
+    + [{"spread": s, "rotation": True} for s in _SPREADS if s != 1.0],
+    "pose_appearance": _prior_and_evidence(),
+    "consistency": [{}] + [{"tolerance_scale": s} for s in (0.03, 0.05, 0.15, 0.2, 0.3)],
+    "maximin_pose": _prior_and_evidence(),
+}
+
+
+def check_search_space(space: object, name: str, field: str = "search_space") -> list[dict]:
+    """``space`` as a list of option dicts, or ValueError naming ``field`` and the matcher:
+    a non-empty sequence of at most 12 mappings whose keys are option names (identifiers) and
+    whose values are JSON scalars (numbers, strings, booleans, None) or lists/tuples of them —
+    so that a chosen configuration can be written to a results table."""
+    where = f"{field} of matcher {name!r}"
+    if isinstance(space, str | bytes | Mapping) or not isinstance(space, Sequence):
+        raise ValueError(f"{where}: expected a list of option dicts, got {type(space).__name__}")
+    if not 1 <= len(space) <= MAX_CONFIGS:
+        raise ValueError(f"{where}: expected 1 to {MAX_CONFIGS} configurations, got {len(space)}")
+    configs = []
+    for config in space:
+        if not isinstance(config, Mapping):
+            raise ValueError(f"{where}: expected option dicts, got {config!r}")
+        for key, value in config.items():
+            if not isinstance(key, str) or not key.isidentifier():
+                raise ValueError(f"{where}: option names must be identifiers, got {key!r}")
+            values = value if isinstance(value, list | tuple) else [value]
+            if not all(_is_scalar(v) for v in values):
+                raise ValueError(f"{where}: option {key}={value!r} is not a JSON scalar or list")
+        configs.append(dict(config))
+    if len({repr(sorted(c.items())) for c in configs}) != len(configs):
+        raise ValueError(f"{where}: repeats a configuration")
+    return configs
+
+
+def _is_scalar(value: object) -> bool:
+    if isinstance(value, float):
+        return math.isfinite(value)
+    return value is None or isinstance(value, bool | int | str)
