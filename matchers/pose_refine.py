@@ -2,17 +2,20 @@
 
 Each agent's pose error moves all of its objects by one rigid motion of the ground plane,
 while positions within a view are precise. So the relative error of the two priors is one 2-D
-rigid motion, which the confident matches reveal:
+rigid motion, which the confident matches reveal (ground plane: x, y of the world frame, z up):
 
-    L = prior likelihood (ground plane, x, y; z up), matches = Hungarian on L, kept if >= confident
+    L = prior likelihood;  t0 = consensus translation over the pairs L allows (a vote: every
+        candidate pair proposes the shift that would align it; the proposal that aligns most
+        objects wins — immune to a confident wrong pair, unlike a mean or median)
+    L = likelihood of xy2 + t0 with width and gate x tighten;  matches = Hungarian on L, >= confident
     repeat (at most max_iter):
-        (R, t) = robust weighted Procrustes fit of view 2's matched positions onto view 1's
-                 (weights L of the matches; Tukey biweight, cutoff = the tightened gate)
-        L = likelihood of the corrected positions R xy2 + t with width and gate x tighten
-        matches' = Hungarian on L, kept if >= confident;  stop when matches' == matches
+        (R, t) = robust weighted Procrustes fit of view 2's matched positions onto view 1's,
+                 from the current motion (weights L; Tukey biweight, cutoff = tightened gate)
+        L = likelihood of R xy2 + t with width and gate x tighten
+        matches' = Hungarian on L, >= confident;  stop when matches' == matches
 
-The motion is always fitted from the uncorrected prior (not composed), so each round only
-re-decides which pairs support it.
+Every fit starts from the uncorrected prior's coordinates (the motion is re-estimated, not
+composed), so each round only re-decides which pairs support it.
 """
 
 from __future__ import annotations
@@ -27,7 +30,7 @@ from .options import check_count, check_problem, check_range, rng_from_seed
 from .prior import PRIOR_FIELDS, check_prior_options, prior_likelihood, require_prior
 from .problem import Problem
 from .result import finish
-from .rigid2d import robust_rigid_2d
+from .rigid2d import consensus_translation, robust_rigid_2d
 
 
 def refined_prior(
@@ -44,19 +47,36 @@ def refined_prior(
     """(n, m) likelihood of the prior after removing the relative rigid error (see the module
     docstring), and info: ``rounds`` (fits made), ``converged``, ``yaw_deg`` and
     ``shift_m`` (the correction applied to view 2), ``support`` (pairs in the last fit).
-    Without any confident pair the prior is returned uncorrected (``rounds`` 0)."""
+    When no pair is within the gate the prior is returned uncorrected; when none is confident
+    after the consensus shift, it is returned with that shift alone (``rounds`` 0)."""
     likelihood = prior_likelihood(xy1, xy2, sigma, spread, gate)
-    pairs = discretise(likelihood, confident)
     info = {"rounds": 0, "converged": True, "yaw_deg": 0.0, "shift_m": [0.0, 0.0], "support": 0}
+    if not likelihood.any():
+        return likelihood, info
     cutoff = gate * tighten * sigma
+    top = np.argsort(-likelihood, axis=None, kind="stable")[: min(256, int((likelihood > 0).sum()))]
+    candidates = np.zeros(likelihood.size, dtype=bool)
+    candidates[top] = True
+    motion = (
+        np.eye(2),
+        consensus_translation(xy2, xy1, candidates.reshape(likelihood.shape), cutoff),
+    )
+
+    def aligned(turn: np.ndarray, shift: np.ndarray) -> np.ndarray:
+        return prior_likelihood(xy1, xy2 @ turn.T + shift, sigma, spread * tighten, gate * tighten)
+
+    likelihood = aligned(*motion)
+    pairs = discretise(likelihood, confident)
+    info["shift_m"] = [float(v) for v in motion[1]]
     for rounds in range(1, max_iter + 1):
         if not len(pairs):
             break
         i, j = pairs[:, 0], pairs[:, 1]
-        turn, shift, _ = robust_rigid_2d(xy2[j], xy1[i], likelihood[i, j], cutoff, with_rotation)
-        likelihood = prior_likelihood(
-            xy1, xy2 @ turn.T + shift, sigma, spread * tighten, gate * tighten
+        turn, shift, _ = robust_rigid_2d(
+            xy2[j], xy1[i], likelihood[i, j], cutoff, with_rotation, start=motion
         )
+        motion = (turn, shift)
+        likelihood = aligned(turn, shift)
         info |= {
             "rounds": rounds,
             "yaw_deg": float(np.degrees(np.arctan2(turn[1, 0], turn[0, 0]))),

@@ -60,6 +60,42 @@ def weighted_median(values: np.ndarray, weights: np.ndarray) -> np.ndarray:
     return sorted_values[first, np.arange(values.shape[1])]
 
 
+def biweight(residual: np.ndarray, cutoff: float) -> np.ndarray:
+    """Tukey's biweight (1 - (r / cutoff)^2)^2 for r < cutoff, 0 beyond: full trust in small
+    residuals, none in gross ones."""
+    u = np.asarray(residual, dtype=float) / cutoff
+    return np.where(u < 1.0, (1.0 - u**2) ** 2, 0.0)
+
+
+def consensus_translation(
+    source: np.ndarray,
+    target: np.ndarray,
+    candidates: np.ndarray,
+    cutoff: float,
+    limit: int = 256,
+) -> np.ndarray:
+    """The translation t (2,) that brings most of ``source`` (m, 2) onto ``target`` (n, 2).
+
+    Every candidate pair (i, j) (True in the (n, m) mask ``candidates``; at most ``limit`` of
+    them, in row-major order) proposes t = target_i - source_j; each proposal is scored by
+    sum_i max_j biweight(|target_i - source_j - t|, cutoff) — how many targets it brings a
+    source point close to — and the best one wins (ties: the first). A vote among hypotheses,
+    so pairs that are wrong, however confident, cannot pull it as they would pull a mean or
+    a median. Vectorised: (proposals, n, m) residuals. No candidate gives t = 0.
+    """
+    source = np.asarray(source, dtype=float).reshape(-1, 2)
+    target = np.asarray(target, dtype=float).reshape(-1, 2)
+    rows, cols = np.nonzero(candidates)
+    if not len(rows):
+        return np.zeros(2)
+    rows, cols = rows[:limit], cols[:limit]
+    proposals = target[rows] - source[cols]  # (H, 2)
+    offsets = target[:, None, :] - source[None, :, :]  # (n, m, 2)
+    residual = np.linalg.norm(offsets[None] - proposals[:, None, None, :], axis=-1)
+    support = biweight(residual, cutoff).max(axis=2).sum(axis=1)
+    return proposals[int(np.argmax(support))]
+
+
 def robust_rigid_2d(
     source: np.ndarray,
     target: np.ndarray,
@@ -67,24 +103,28 @@ def robust_rigid_2d(
     cutoff: float,
     with_rotation: bool = True,
     max_iter: int = 20,
+    start: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Rigid motion source -> target that ignores gross outliers: (R, t, inlier mask).
 
-    Starts at R = I and t = the weighted median of (target - source) per axis (robust while
-    fewer than half the weight is wrong), then iteratively reweighted least squares with
-    Tukey's biweight: weight w_k (1 - (r_k / cutoff)^2)^2 for residual r_k < ``cutoff`` (same
-    units as the points), 0 beyond, each round solved by :func:`procrustes_2d`, until the motion
-    stops changing (1e-9) or ``max_iter`` rounds. The rotation is fitted only while at least
-    two points carry weight. Inliers: residual < cutoff under the final motion.
+    Starts at ``start`` = (R, t) or, by default, at R = I and t = the weighted median of
+    (target - source) per axis (robust while less than half the weight is wrong); then
+    iteratively reweighted least squares with Tukey's biweight: weight w_k biweight(r_k,
+    ``cutoff``) (r_k the residual, same units as the points), each round solved by
+    :func:`procrustes_2d`, until the motion stops changing (1e-9) or ``max_iter`` rounds. The
+    rotation is fitted only while at least two points carry weight. Inliers: residual < cutoff
+    under the final motion.
     """
     source = np.asarray(source, dtype=float).reshape(-1, 2)
     target = np.asarray(target, dtype=float).reshape(-1, 2)
     weights = np.asarray(weights, dtype=float).reshape(-1)
-    turn, shift = np.eye(2), weighted_median(target - source, weights)
+    if start is None:
+        turn, shift = np.eye(2), weighted_median(target - source, weights)
+    else:
+        turn, shift = np.asarray(start[0], dtype=float), np.asarray(start[1], dtype=float)
     for _ in range(max_iter):
         residual = np.linalg.norm(source @ turn.T + shift - target, axis=1)
-        u = residual / cutoff
-        robust = weights * np.where(u < 1.0, (1.0 - u**2) ** 2, 0.0)
+        robust = weights * biweight(residual, cutoff)
         if not robust.sum() > 0:
             break
         rotate = with_rotation and np.count_nonzero(robust) >= 2

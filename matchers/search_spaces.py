@@ -43,6 +43,11 @@ def _prior_and_evidence() -> list[dict]:
     )
 
 
+def _maximin_prior() -> list[dict]:
+    """maximin_pose: the prior's grid plus two values of Eq. (1)'s bandwidth."""
+    return _prior_and_evidence() + [{"sigma": 0.2}, {"sigma": 1.0}]
+
+
 BUILTIN_SEARCH_SPACES: dict[str, list[dict]] = {
     "appearance": [{}],
     "none": [{}],
@@ -60,11 +65,11 @@ BUILTIN_SEARCH_SPACES: dict[str, list[dict]] = {
     ],
     "pose_refine": [{}]
     + [{"spread": s} for s in _SPREADS if s != 2.0]
-    + [{"spread": s, "tighten": 1.0} for s in _SPREADS]
-    + [{"spread": s, "rotation": True} for s in _SPREADS if s != 1.0],
+    + [{"tighten": 0.25}, {"tighten": 1.0}, {"gate": 4.0}, {"gate": 12.0}, {"confident": 0.3}]
+    + [{"rotation": True}, {"rotation": True, "spread": 4.0}],
     "pose_appearance": _prior_and_evidence(),
     "consistency": [{}] + [{"tolerance_scale": s} for s in (0.03, 0.05, 0.15, 0.2, 0.3)],
-    "maximin_pose": _prior_and_evidence(),
+    "maximin_pose": _maximin_prior(),
 }
 
 

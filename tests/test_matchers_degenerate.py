@@ -8,9 +8,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from matchers import Problem, available, get
+from matchers import Problem, available, get, requires
 
-NAMES = ["appearance", "bcagm", "hgm", "maximin", "mos", "rrwhm", "rrwm", "sm", "tm"]
+NAMES = ["appearance", "bcagm", "consistency", "hgm", "maximin", "mos", "rrwhm", "rrwm", "sm", "tm"]
+# with the localisation prior, and `none`: tests/test_matchers_degenerate_prior.py
 
 
 def check_valid(matching, n, m, threshold):
@@ -82,5 +83,8 @@ def test_problem_rejects_nan_with_the_array_name():
 
 
 def test_every_listed_matcher_handles_an_empty_problem():
+    empty = np.zeros((0, 3))
+    prior = {"world1": empty, "world2": empty, "world_sigma": 1.0}
     for name in available():
-        check_valid(get(name)(Problem(np.zeros((0, 3)), np.zeros((0, 3)))), 0, 0, None)
+        fields = prior if requires(name) else {}
+        check_valid(get(name)(Problem(empty, empty, **fields)), 0, 0, None)

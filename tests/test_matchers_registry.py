@@ -16,9 +16,15 @@ def test_available_lists_the_builtins_sorted():
     assert set(names) >= {
         "appearance",
         "bcagm",
+        "consistency",
         "hgm",
         "maximin",
+        "maximin_pose",
         "mos",
+        "none",
+        "pose",
+        "pose_appearance",
+        "pose_refine",
         "rrwhm",
         "rrwm",
         "sm",
@@ -56,10 +62,13 @@ def test_entry_point_group_is_discovered_lazily(tmp_path, monkeypatch):
             import numpy as np
             from matchers import Matching
 
-            def flipped(problem, seed=0, threshold=None):
+            def flipped(problem, seed=0, threshold=None, *, width=1.0):
                 n = min(problem.n1, problem.n2)
                 pairs = np.stack([np.arange(n), np.arange(n)[::-1]], axis=1)
                 return Matching(pairs, np.zeros((problem.n1, problem.n2)), "flipped")
+
+            flipped.search_space = [{}, {"width": 2.0}]
+            flipped.requires = ("world1", "world2", "world_sigma")
             """
         )
     )
@@ -80,6 +89,8 @@ def test_entry_point_group_is_discovered_lazily(tmp_path, monkeypatch):
         fn = get("flipped")
         result = fn(Problem(np.zeros((3, 2)), np.zeros((3, 2))))
         assert result.pairs.tolist() == [[0, 2], [1, 1], [2, 0]]
+        assert matchers.search_space("flipped") == [{}, {"width": 2.0}]
+        assert matchers.requires("flipped") == {"world1", "world2", "world_sigma"}
     finally:
         registry._entry_points.cache_clear()
         sys.modules.pop("third_party_matcher", None)
