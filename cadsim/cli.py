@@ -33,6 +33,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "eval.commands.sweep_regime",
         "thin non-covisible detections level by level and evaluate",
     ),
+    "sweep-localisation": (
+        "eval.commands.sweep_localisation",
+        "re-draw the localisation prior at several position errors and evaluate",
+    ),
     "table": ("eval.commands.table", "re-render tables and figures from cached results"),
     "synthetic": ("eval.validation.synthetic", "published synthetic benchmarks (BCAGM protocols)"),
 }

@@ -28,8 +28,9 @@ from cadsim.config_tables import check_number, config_from_table
 
 MIN_STATED_SIGMA_M = 0.5
 """Floor of the prior's stated uncertainty (``Problem.world_sigma``), metres. With an exact pose
-the prior still carries each detection's own position error (depth, box centre: 0.3–0.9 m at
-CAD's distances), and a matcher told "0 m" would gate every true pair out."""
+the prior still carries each detection's own position error (depth, box centre): on CAD, matched
+objects placed through exact poses differ by 0.34 m median, 1.2 m at the 90th percentile, and a
+matcher told "0 m" would gate every true pair out."""
 
 
 @dataclass(frozen=True)
