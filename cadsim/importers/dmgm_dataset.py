@@ -173,7 +173,13 @@ def import_dmgm(
     wanted = None if sequences is None else {str(s) for s in sequences}
     _check_out(out)
     records, counts, ids = [], {}, []
-    with tqdm(total=_pair_count(src), unit="pair", desc="import dmgm", disable=not progress) as bar:
+    with tqdm(
+        total=_pair_count(src),
+        unit="pair",
+        desc="import dmgm",
+        disable=not progress or None,
+        leave=False,
+    ) as bar:
         for pair in iter_pairs(src):
             bar.update(1)
             if wanted is not None and pair.sequence not in wanted:

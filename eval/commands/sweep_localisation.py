@@ -6,8 +6,9 @@ run seed, every frame pair's localisation prior is re-drawn (``FramePair.localis
 nothing is re-rendered or re-detected; for one seed the error scales with s) and every matcher of
 that run sees the same prior. τ is calibrated per sigma on the validation dataset re-drawn at
 the same sigma (a deployed system knows its stated uncertainty); the matchers' parameters are
-those ``DIR/thresholds.csv`` records (tuned when ``cadsim evaluate --tune`` ran), else the
-defaults. Writes ``localisation_sweep.csv`` (dataset, position_sigma_m, yaw_sigma_deg, matcher,
+those ``DIR/thresholds.csv`` records (tuned when ``cadsim evaluate --tune`` ran); a matcher it
+lacks is tuned here on the validation dataset with the records' own prior (:mod:`eval.tuning`,
+seed 0; ``--no-tune``: its defaults). Writes ``localisation_sweep.csv`` (dataset, position_sigma_m, yaw_sigma_deg, matcher,
 f1_mean, f1_std: mean and sample std over runs of the per-run mean per-pair F1) and
 ``fig_localisation.png/.pdf``.
 
@@ -23,6 +24,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from eval import tuning
 from eval.cache import ResultCache
 from eval.commands.evaluate import (
     DatasetEntry,
@@ -60,6 +62,23 @@ def parse_sigmas(text: str) -> list[float]:
 def localisation_of(sigma: float) -> tuple[float, float]:
     """(position sigma m, yaw sigma deg) of sweep point `sigma`."""
     return float(sigma), float(sigma) * YAW_PER_METRE
+
+
+def sweep_specs(
+    out_dir: str | Path,
+    entry: DatasetEntry,
+    matchers: Sequence[MatcherSpec],
+    runner: Runner,
+    tune: bool = True,
+) -> dict[str, MatcherSpec]:
+    """{label: spec}: the parameters ``out_dir/thresholds.csv`` records for `entry`; matchers it
+    lacks tuned on `entry`'s validation dataset (record's own prior, seed 0) when `tune`."""
+    named, taus = chosen_specs(out_dir, entry.label, matchers)
+    missing = [named[label] for label, tau in taus.items() if tau is None]
+    if tune and missing and entry.val_dir is not None:
+        chosen = tuning.tune_entry(entry, missing, runner)
+        named |= {label: choice.spec for label, choice in chosen.items()}
+    return named
 
 
 def _runs(
@@ -154,6 +173,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="comma-separated position sigmas, metres (yaw sigma = 0.2° per 1.2 m)",
     )
     parser.add_argument("--pairs", type=int, default=None, help="only the first N test pairs")
+    parser.add_argument(
+        "--no-tune",
+        dest="tune",
+        action="store_false",
+        help="matchers without a recorded choice run with their defaults (no parameter search)",
+    )
     add_runner_arguments(parser)
     parser.set_defaults(matchers=DEFAULT_MATCHERS)
 
@@ -161,10 +186,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     (val,) = val_dirs([args.dataset], [args.val] if args.val else None)
     entry = open_entry(args.dataset, val)
-    named, _ = chosen_specs(args.out, entry.label, parse_matchers(args.matchers))
+    matchers = parse_matchers(args.matchers)
     sigmas = parse_sigmas(args.sigmas)
     with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(ResultCache(args.cache), executor)
+        named = sweep_specs(args.out, entry, matchers, runner, args.tune)
         rows = sweep_localisation(entry, named, range(args.runs), sigmas, runner, args.pairs)
     write_sweep(args.out, rows)
     from eval.figures import write_fig_localisation
