@@ -82,9 +82,13 @@ def perturbed_world(world: np.ndarray, pivot: np.ndarray, error: PoseError) -> n
     dyaw about the vertical through ``pivot`` (the camera centre, world metres), then shifted by
     (dx, dy); z unchanged."""
     world = np.asarray(world, dtype=float).reshape(-1, 3)
-    c, s = np.cos(error.dyaw), np.sin(error.dyaw)
-    rel = world[:, :2] - np.asarray(pivot, dtype=float)[:2]
     out = world.copy()
-    out[:, 0] = c * rel[:, 0] - s * rel[:, 1] + pivot[0] + error.dx
-    out[:, 1] = s * rel[:, 0] + c * rel[:, 1] + pivot[1] + error.dy
+    if error.dyaw != 0.0:  # (no heading error: no round trip through the pivot, exact)
+        pivot = np.asarray(pivot, dtype=float)[:2]
+        c, s = np.cos(error.dyaw), np.sin(error.dyaw)
+        rel = world[:, :2] - pivot
+        out[:, 0] = c * rel[:, 0] - s * rel[:, 1] + pivot[0]
+        out[:, 1] = s * rel[:, 0] + c * rel[:, 1] + pivot[1]
+    out[:, 0] += error.dx
+    out[:, 1] += error.dy
     return out
