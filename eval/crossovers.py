@@ -43,11 +43,10 @@ def find_crossovers(sweep: pd.DataFrame) -> pd.DataFrame:
     rows = []
     for dataset, group in sweep.groupby("dataset", sort=False):
         for a, b in PAIRS:
-            ca = group[group["matcher"] == a].set_index("keep")
-            cb = group[group["matcher"] == b].set_index("keep")
+            ca, cb = group[group["matcher"] == a], group[group["matcher"] == b]
             if ca.empty or cb.empty:
                 continue
-            joined = ca.join(cb, rsuffix="_b", how="inner").sort_values("share")
+            joined = ca.merge(cb, on="keep", suffixes=("", "_b")).sort_values("share")
             for metric, column in METRICS:
                 found = crossings(joined["share"], joined[column] - joined[f"{column}_b"])
                 base = {"dataset": dataset, "matcher_a": a, "matcher_b": b, "metric": metric}

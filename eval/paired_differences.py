@@ -88,11 +88,11 @@ def paired_differences(
     means = per_pair_means(per_pair, metrics)
     rows = []
     for dataset, group in means.groupby("dataset", sort=False):
-        ref = group[group["matcher"] == reference].set_index("pair")
+        ref = group[group["matcher"] == reference]
         if ref.empty:
             continue
         for other, rest in group[group["matcher"] != reference].groupby("matcher", sort=False):
-            joined = ref.join(rest.set_index("pair"), rsuffix="_b", how="inner")
+            joined = ref.merge(rest, on="pair", suffixes=("", "_b"))
             for metric in metrics:
                 d = 100 * (joined[metric] - joined[f"{metric}_b"]).to_numpy()
                 diff, low, high = episode_bootstrap(

@@ -114,6 +114,8 @@ def build_table(
     if tau_path.is_file():
         taus = pd.read_csv(tau_path)[["dataset", "matcher", "tau"]]
         table = table.merge(taus, on=["dataset", "matcher"], how="left")
+    else:
+        table["tau"] = np.nan
     table.insert(1, "method", table["matcher"].map(method_name))
     paper = load_paper(paper_csv).add_prefix("paper_")
     table["_paper_dataset"] = table["dataset"].map(lambda d: PAPER_COLUMN.get(d, d))

@@ -37,3 +37,65 @@ def test_readme_without_markers_is_left_alone(tmp_path):
     readme.write_text("# no markers\n")
     assert not update_readme(readme, tmp_path)
     assert readme.read_text() == "# no markers\n"
+
+
+def _table_row(dataset, matcher, f1, accuracy, balanced):
+    return {"dataset": dataset, "matcher": matcher, "method": matcher, "f1_mean": f1} | {
+        "accuracy_mean": accuracy,
+        "balanced_accuracy_mean": balanced,
+        "params": "{}",
+    }
+
+
+def test_agreement_is_written_from_the_tables(tmp_path):
+    import pandas as pd
+
+    results = tmp_path / "results"
+    results.mkdir()
+    (results / "table1.md").write_text("| Method | F1 |\n|---|---|\n| Maximin | 40.0 |\n")
+    (results / "run_record.json").write_text(json.dumps({"tuning": {"CAD": {}}}))
+    pd.DataFrame(
+        [
+            _table_row("CAD", "maximin", 40.0, 30.0, 60.0),
+            _table_row("CAD", "mos", 45.0, 65.0, 62.0),
+            _table_row("CAD", "sm", 10.0, 70.0, 45.0),
+            _table_row("CAD", "none", 0.0, 71.0, 50.0),
+        ]
+    ).to_csv(results / "table1.csv", index=False)
+    pd.DataFrame(
+        [
+            {"dataset": "CAD", "matcher_a": "maximin", "matcher_b": "mos", "metric": m}
+            | {"diff": -5.0, "ci_low": -9.5, "ci_high": 1.25, "pairs": 50, "episodes": 5}
+            for m in ("f1", "balanced_accuracy", "recall")
+        ]
+    ).to_csv(results / "paired_differences.csv", index=False)
+    pd.DataFrame(
+        [
+            {"dataset": "CAD", "objects_per_view": 17.0, "covisible": 4.8}
+            | {"noncovisible_share": 0.71, "covisible_share_of_smaller": 0.33}
+            | {"appearance_auc": 0.88, "position_error_median_m": 0.4}
+        ]
+    ).to_csv(results / "regime.csv", index=False)
+    sweep = [
+        {"dataset": "CAD", "keep": k, "share": s, "matcher": m, "f1_mean": f}
+        for k, s, fa, fb in ((1.0, 0.7, 0.40, 0.45), (0.0, 0.0, 0.9, 0.8))
+        for m, f in (("maximin", fa), ("mos", fb))
+    ]
+    pd.DataFrame(sweep).to_csv(results / "regime_sweep.csv", index=False)
+    pd.DataFrame(
+        [
+            {"dataset": "CAD", "matcher_a": "maximin", "matcher_b": "mos", "metric": "f1"}
+            | {"crossing_share": 0.35, "direction": "a_loses"}
+        ]
+    ).to_csv(results / "crossovers.csv", index=False)
+    readme = tmp_path / "README.md"
+    readme.write_text(f"{BEGIN}\n{END}\n")
+    assert update_readme(readme, results)
+    text = readme.read_text()
+    assert "### Regime of each dataset" in text and "| CAD | 17.0 | 4.8 | 71 % | 33 % |" in text
+    assert "| CAD | MOS | -5.0 [-9.5, +1.2] |" in text  # the paired-differences table
+    assert "maximin ranks 2 of 3 of the paper's methods by F1" in text
+    assert "71 % non-covisible, appearance AUC 0.88" in text
+    assert "an interval that includes 0" in text and "unlike the paper" in text
+    assert "accuracy 71.0 (above 3 of 3 methods), balanced accuracy 50.0, 1 method below 50" in text
+    assert "maximin leads MOS below 35 % and trails above" in text

@@ -1,6 +1,6 @@
 """A tiny end-to-end ``make reproduce`` on the real pipeline (simulation, rendering, detection,
-matchers): 2 pairs per dataset, 2 matchers, 2 noise rates. Every output file appears, and a second
-run generates and computes nothing."""
+matchers): 2 pairs per dataset, 2 matchers and the `none` baseline, 2 noise rates, 2 keep levels.
+Every output file appears, and a second run generates and computes nothing."""
 
 from __future__ import annotations
 
@@ -29,14 +29,27 @@ OUTPUTS = (
     "noise_runs.csv",
     "qualitative.json",
     "evaluation.json",
+    "tuning.csv",
+    "table1_untuned.md",
+    "table1_untuned.csv",
+    "table1_paper_protocol.md",
+    "table1_paper_protocol.csv",
+    "paired_differences.csv",
+    "regime_sweep.csv",
+    "crossovers.csv",
+    "fig_regime.png",
+    "fig_regime.pdf",
+    "dataset_spread.csv",
 )
+MATCHERS = ["maximin", "none", "sm"]
 
 
 @pytest.mark.slow
 @pytest.mark.render
 def test_tiny_reproduce_writes_every_output_and_reruns_from_cache(tmp_path, capsys):
     out, data, cache = tmp_path / "results", tmp_path / "data", tmp_path / "cache"
-    argv = ["--pairs", "2", "--val-pairs", "2", "--matchers", "sm,maximin", "--rates", "0,0.01"]
+    argv = ["--pairs", "2", "--val-pairs", "2", "--matchers", "sm,maximin,none"]
+    argv += ["--rates", "0,0.01", "--keep", "1,0", "--regime-runs", "1", "--spread-runs", "1"]
     argv += ["--runs", "2", "--out", str(out), "--data", str(data), "--cache", str(cache)]
     argv += ["--sweep-runs", "2", "--workers", "2", "--quiet"]
     assert reproduce.main(argv) == 0
@@ -47,65 +60,93 @@ def test_tiny_reproduce_writes_every_output_and_reruns_from_cache(tmp_path, caps
         assert (out / name).is_file() and (out / name).stat().st_size > 0, name
     labels = [d["label"] for d in json.loads((out / "run_record.json").read_text())["datasets"]]
     expected = [
-        s
-        for s in ("CAD", "MRC")
-        if any(s.lower() in f for f in reproduce.SCENARIOS if (reproduce.ROOT / f).is_file())
+        label
+        for path, label in zip(reproduce.SCENARIOS, ("CAD", "MRC", "CAD-dense"), strict=True)
+        if (reproduce.ROOT / path).is_file()
     ]
     assert labels == expected
 
     table = pd.read_csv(out / "table1.csv")
-    assert sorted(table["matcher"].unique()) == ["maximin", "sm"]
+    assert sorted(table["matcher"].unique()) == MATCHERS
     assert set(table["dataset"]) == set(labels)
     assert (table["frames"] == 2).all() and (table["runs"] == 2).all()
-    assert table["paper_accuracy_mean"].notna().all()  # the paper's numbers are beside ours
+    paper_rows = table[table["matcher"] != "none"]
+    assert paper_rows["paper_accuracy_mean"].notna().all()  # the paper's numbers are beside ours
+    assert (table.loc[table["matcher"] == "none", "balanced_accuracy_mean"] == 50).all()
     per_pair = pd.read_csv(out / "metrics_per_pair.csv")
-    assert len(per_pair) == len(labels) * 2 * 2 * 2  # datasets × matchers × runs × pairs
-    assert per_pair[["accuracy", "precision", "recall", "f1"]].stack().between(0, 1).all()
+    assert len(per_pair) == len(labels) * 3 * 2 * 2  # datasets × matchers × runs × pairs
+    metrics = ["accuracy", "balanced_accuracy", "precision", "recall", "f1"]
+    assert per_pair[metrics].stack().between(0, 1).all()
     noise = pd.read_csv(out / "noise_runs.csv")
     assert sorted(noise["noise_rate"].unique()) == [0.0, 0.01]
-    assert len(noise) == 2 * 2 * 2  # matchers × runs × rates
+    assert len(noise) == 3 * 2 * 2  # matchers × runs × rates
+    regime = pd.read_csv(out / "regime_sweep.csv")
+    assert set(regime["dataset"]) == set(labels) and sorted(regime["keep"].unique()) == [0.0, 1.0]
+    assert (regime.loc[regime["keep"] == 0, "share"] == 0).all()
+    assert len(pd.read_csv(out / "table1_paper_protocol.csv")) == len(labels) * 3
+    tuning = pd.read_csv(out / "tuning.csv")
+    assert set(tuning["dataset"]) == set(labels)
+    assert (tuning.groupby(["dataset", "matcher"])["chosen"].sum() == 1).all()
 
     record = json.loads((out / "run_record.json").read_text())
     assert set(record["thresholds"]) == set(labels)
     for taus in record["thresholds"].values():
-        assert set(taus) == {"sm", "maximin"} and all(t is not None for t in taus.values())
+        assert set(taus) == set(MATCHERS) and all(t is not None for t in taus.values())
+    assert set(record["tuning"]) == set(labels)
     assert record["seeds"] == [0, 1] and record["noise_sweep"]["rates"] == [0.0, 0.01]
-    assert {"generate", "evaluate", "noise_sweep", "tables_figures", "total"} <= set(
-        record["wall_s"]
-    )
+    stages = {"generate", "evaluate", "paper_protocol", "noise_sweep", "regime_sweep"}
+    assert stages | {"dataset_spread", "tables_figures", "total"} <= set(record["wall_s"])
     assert record["packages"]["numpy"] and "commit" in record["git"]
     for d in record["datasets"]:
         assert d["test_seed"] != d["val_seed"] and d["scenario"]["text"]
-    assert record["runs"]["evaluate"]["computed"] == len(labels) * 2 * 2 * 2  # val + test
+    # Tuning: each grid configuration once on validation seed 0; then the untuned runs (the
+    # defaults' seed-0 validation run is shared), then the chosen configuration's other runs.
+    per_dataset = 0
+    for _, rows in tuning.groupby(["dataset", "matcher"]):
+        default_chosen = json.loads(rows.loc[rows["chosen"], "params"].item()) == {}
+        per_dataset += len(rows) + (1 + 2) + (0 if default_chosen else 1 + 2)
+    assert record["runs"]["evaluate"]["computed"] == per_dataset
 
     # Everything cached: nothing generated, nothing computed, same table.
     before = (out / "table1.csv").read_text()
     assert reproduce.main(argv) == 0
     again = json.loads((out / "run_record.json").read_text())
     assert all(d["new_records"] == 0 for d in again["datasets"])
-    assert again["runs"]["evaluate"]["computed"] == 0
-    assert again["runs"]["noise_sweep"]["computed"] == 0
+    assert all(r["computed"] == 0 for r in again["runs"].values())
     assert (out / "table1.csv").read_text() == before
 
     # `cadsim table` re-renders tables and figures from the CSVs alone.
-    for name in ("table1.md", "table1.tex", "fig4.png", "qualitative.png", "pr_curves.png"):
+    rendered = ("table1.md", "table1.tex", "table1_paper_protocol.md", "fig4.png")
+    rendered += ("qualitative.png", "pr_curves.png", "fig_regime.png", "crossovers.csv")
+    for name in rendered:
         (out / name).unlink()
     assert cli.main(["table", str(out)]) == 0
-    assert all(
-        (out / n).is_file() for n in ("table1.md", "table1.tex", "fig4.png", "qualitative.png")
-    )
+    assert all((out / n).is_file() for n in rendered)
     assert (out / "table1.csv").read_text() == before
 
     # The standalone commands reuse the same cache: nothing is computed again.
     datasets = [str(data / d["label"].lower()) for d in record["datasets"]]
     other = tmp_path / "other"
-    common = ["--matchers", "sm,maximin", "--runs", "2", "--cache", str(cache), "--workers", "1"]
-    assert cli.main(["evaluate", *datasets, "--out", str(other), *common]) == 0
+    common = ["--matchers", ",".join(MATCHERS), "--runs", "2", "--cache", str(cache)]
+    common += ["--workers", "1"]
+    assert cli.main(["evaluate", *datasets, "--tune", "--out", str(other), *common]) == 0
     assert (other / "table1.csv").read_text() == before
+    paper = ["evaluate", *datasets, "--protocol", "paper", "--out", str(other), *common]
+    assert cli.main(paper) == 0
+    assert (other / "table1_paper_protocol.csv").read_text() == (
+        out / "table1_paper_protocol.csv"
+    ).read_text()
     if "CAD" in labels:
         cad = str(data / "cad")
         assert (
             cli.main(["sweep-noise", cad, "--rates", "0,0.01", "--out", str(other), *common]) == 0
         )
         swept = pd.read_csv(other / "noise_runs.csv")
-        assert len(swept) == 2 * 2 * 2 and (other / "fig4.pdf").is_file()
+        assert len(swept) == 3 * 2 * 2 and (other / "fig4.pdf").is_file()
+        regime = ["sweep-regime", cad, "--keep", "1,0", "--val-runs", "1", "--out", str(other)]
+        assert cli.main([*regime, *common[:2], "--runs", "1", *common[4:]]) == 0
+        order = ["keep", "matcher"]
+        mine = pd.read_csv(other / "regime_sweep.csv").sort_values(order, ignore_index=True)
+        theirs = pd.read_csv(out / "regime_sweep.csv")
+        theirs = theirs[theirs["dataset"] == "CAD"].sort_values(order, ignore_index=True)
+        pd.testing.assert_frame_equal(mine, theirs)

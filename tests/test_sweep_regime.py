@@ -1,0 +1,115 @@
+"""The regime sweep: thinning levels on validation and test alike, τ recalibrated per level, the
+achieved share falls to 0; crossovers between two matchers' curves; regime cards as a table."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from frame_pair_fakes import make_dataset
+
+from eval import calibration, regime_cards, tasks
+from eval.cache import ResultCache
+from eval.commands.evaluate import open_entry
+from eval.commands.sweep_regime import parse_keep, sweep_regime, write_sweep
+from eval.crossovers import crossings, find_crossovers
+from eval.executor import SerialExecutor
+from eval.runner import Runner
+from eval.tasks import MatcherSpec
+
+
+@pytest.fixture
+def world(monkeypatch):
+    datasets = {
+        "data/cad": make_dataset(100, 4, only1=8, only2=7),
+        "data/cad-val": make_dataset(900, 3, only1=8, only2=7),
+    }
+    monkeypatch.setattr(tasks, "open_dataset", lambda path: datasets[path])
+    return datasets
+
+
+def test_sweep_thins_validation_and_test_and_the_share_falls_to_zero(world, tmp_path, monkeypatch):
+    calibrated = []
+    real = calibration.calibrate
+
+    def spy(runs):
+        calibrated.append(runs)
+        return real(runs)
+
+    monkeypatch.setattr(calibration, "calibrate", spy)
+    runner = Runner(ResultCache(tmp_path / "cache"), SerialExecutor(), version="v", progress=False)
+    entry = open_entry("data/cad", "data/cad-val")
+    named = {"appearance": MatcherSpec("appearance"), "none": MatcherSpec("none")}
+    rows = sweep_regime(entry, named, [0], [1.0, 0.5, 0.0], runner, limit=3)
+
+    shares = rows.drop_duplicates("keep").set_index("keep")["share"]
+    pairs = world["data/cad"][:3]
+    total = sum(len(p.view1) + len(p.view2) for p in pairs)
+    expected = sum(len(p.view1) + len(p.view2) - 2 * len(p.gt_pairs) for p in pairs) / total
+    assert shares[1.0] == pytest.approx(expected)
+    assert shares[1.0] > shares[0.5] > shares[0.0] == 0.0
+    assert (rows["pairs"] == 3).all() and set(rows["matcher"]) == {"appearance", "none"}
+    # τ is refitted per level on validation runs thinned the same way (keep in each run's spec).
+    keeps = [{r.spec.keep for r in runs} for runs in calibrated]
+    assert keeps == [{None}, {None}, {0.5}, {0.5}, {0.0}, {0.0}]
+    assert all(r.dataset_dir == "data/cad-val" for runs in calibrated for r in runs)
+    none = rows[rows["matcher"] == "none"].set_index("keep")
+    assert none.loc[1.0, "balanced_accuracy_mean"] == 0.5 and none.loc[0.0, "f1_mean"] == 0.0
+
+    written = write_sweep(tmp_path / "out", rows)
+    assert [p.name for p in written[:2]] == ["regime_sweep.csv", "crossovers.csv"]
+    assert (tmp_path / "out" / "fig_regime.png").is_file()
+    # Another dataset's rows are kept when one dataset is swept again.
+    other = rows.assign(dataset="MRC")
+    write_sweep(tmp_path / "out", other)
+    write_sweep(tmp_path / "out", rows)
+    table = pd.read_csv(tmp_path / "out" / "regime_sweep.csv")
+    assert sorted(table["dataset"].unique()) == ["CAD", "MRC"] and len(table) == 2 * len(rows)
+
+
+def test_parse_keep():
+    assert parse_keep("1,0.5,0,0.5") == [1.0, 0.5, 0.0]
+    with pytest.raises(ValueError, match="--keep"):
+        parse_keep("1,2")
+
+
+def test_crossings_are_interpolated_and_directed():
+    share = np.array([0.0, 0.2, 0.4, 0.6])
+    assert crossings(share, np.array([-2.0, -1.0, 1.0, 3.0])) == [(pytest.approx(0.3), "a_gains")]
+    assert crossings(share, np.array([1.0, 0.0, -1.0, -1.0])) == [(0.2, "a_loses")]
+    assert crossings(share, np.array([1.0, 2.0, 3.0, 1.0])) == []
+
+
+def test_crossovers_table_has_a_row_per_pair_and_metric_even_without_crossing():
+    rows = []
+    for keep, share in ((1.0, 0.6), (0.5, 0.4), (0.0, 0.0)):
+        for matcher, f1 in (("maximin", 0.5 + share), ("mos", 0.8), ("rrwhm", 0.1)):
+            rows.append(
+                {"dataset": "CAD", "keep": keep, "share": share, "matcher": matcher}
+                | {"f1_mean": f1, "balanced_accuracy_mean": f1}
+            )
+    table = find_crossovers(pd.DataFrame(rows))
+    mos = table[(table["matcher_b"] == "mos") & (table["metric"] == "f1")].iloc[0]
+    assert mos["crossing_share"] == pytest.approx(0.3) and mos["direction"] == "a_gains"
+    rrwhm = table[table["matcher_b"] == "rrwhm"]
+    assert len(rrwhm) == 2 and rrwhm["crossing_share"].isna().all()
+
+
+def test_regime_cards_are_written_per_dataset_and_shown_as_markdown(tmp_path, monkeypatch):
+    fields = {
+        "objects_per_view": 9.5,
+        "covisible": 5.25,
+        "noncovisible_share": 0.42,
+        "covisible_share_of_smaller": 0.66,
+        "appearance_auc": 0.913,
+        "position_error_median_m": None,
+    }
+    monkeypatch.setattr(regime_cards, "regime_of", lambda path: fields | {"extra": 1})
+    path = regime_cards.write_regime(tmp_path, {"CAD": "data/cad", "MRC": "data/mrc"})
+    table = pd.read_csv(path)
+    assert list(table.columns) == list(regime_cards.COLUMNS)
+    assert table["dataset"].tolist() == ["CAD", "MRC"]
+    assert table["position_error_median_m"].isna().all()
+    markdown = regime_cards.regime_markdown(path)
+    assert "| MRC | 9.5 | 5.2 | 42 % | 66 % | 0.91 | – |" in markdown
+    assert markdown.index("| MRC") < markdown.index("| CAD")  # the paper's column order
