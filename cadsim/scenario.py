@@ -228,6 +228,34 @@ OBSERVERS = Table(
         "junctions": Field(
             list, [], "junction ids to observe (empty: every usable junction)", item=str
         ),
+        "arm_relations": Field(
+            list,
+            [],
+            'allowed relations of the two observers\' arms by heading difference: "opposite" '
+            '(>= 135°), "adjacent" (45°-135°), "parallel" (< 45°); empty: any',
+            item=str,
+            check=lambda v: (
+                len(set(v)) == len(v) and set(v) <= {"opposite", "adjacent", "parallel"}
+            ),
+            expect='a list of distinct values among "opposite", "adjacent", "parallel"',
+        ),
+        "aim": Field(
+            str,
+            "heading",
+            'camera yaw: "heading" (along the carrying vehicle) or "junction" (towards the centre '
+            "of the junction it approaches)",
+            choices=("heading", "junction"),
+        ),
+        "min_shared_area_m2": Field(
+            float,
+            0.0,
+            "the two cameras' ground footprints (within overlap_range_m) overlap by at least this "
+            "area, m² (0: no requirement)",
+            ge=0,
+        ),
+        "overlap_range_m": Field(
+            float, 50.0, "range of a camera's ground footprint for min_shared_area_m2, metres", gt=0
+        ),
     }
 )
 
@@ -243,6 +271,9 @@ SAMPLING = Table(
         ),
         "max_time": Field(
             float, None, "stop a simulation at this time (s); absent: when its demand ends", gt=0
+        ),
+        "distinct_observers": Field(
+            bool, False, "two observer vehicles give at most one frame pair per episode"
         ),
     }
 )

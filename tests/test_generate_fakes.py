@@ -167,7 +167,10 @@ class FakeDetectionConfig:
     min_pixels: int = 6
 
 
-def detect(view: RenderedView, noisy_depth, objects, camera: Camera, config: FakeDetectionConfig):
+def detect(
+    view: RenderedView, noisy_depth, objects, camera: Camera, config: FakeDetectionConfig,
+    attribute_rng=None,
+):  # fmt: skip
     classes = sorted(_SIZES)
     rows = []
     for idx in np.unique(view.instance[view.instance >= 0]):

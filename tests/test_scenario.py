@@ -48,14 +48,17 @@ def test_default_scenario_loads_with_its_values():
     s = load_scenario(DEFAULT)
     assert s.name == "cad-intersection" and s.seed == 7 and s.pairs == 50
     assert s.text == DEFAULT.read_text()
-    assert s.camera == CameraConfig(640, 480, 90.0, 1.6, 0.0)
+    assert s.camera == CameraConfig(800, 600, 90.0, "roof", 0.0)
     t = s.traffic
     assert t["source"] == "sumo" and t["sumocfg"] is None and t["net"] is None
     assert t["network"]["junctions"] == 1 and t["network"]["traffic_lights"] is True
     # Relative paths resolve against the scenario's folder, to absolute paths.
     assert t["demand"]["vtypes"] == str(ROOT / "scenarios" / "cad-vtypes.add.xml")
     assert s.observers["classes"] == ["car", "van", "bus", "truck"]
+    assert s.observers["arm_relations"] == ["opposite", "adjacent"]
+    assert s.observers["aim"] == "junction" and s.observers["min_shared_area_m2"] == 900.0
     assert s.sampling["warm_up"] == 150.0 and s.sampling["max_time"] is None
+    assert s.sampling["distinct_observers"] is True
     assert s.noise["noise_rate"] == 0.001 and s.detection["min_pixels"] == 40
 
 
@@ -70,7 +73,11 @@ def test_defaults_fill_absent_tables_and_ints_widen_to_floats(tmp_path):
         "pairs_per_snapshot": 1,
         "pairs_per_episode": 10,
         "max_time": None,
+        "distinct_observers": False,
     }
+    # The observer-geometry keys default to today's rule: no relation, area or aim constraint.
+    assert s.observers["arm_relations"] == [] and s.observers["aim"] == "heading"
+    assert s.observers["min_shared_area_m2"] == 0.0
     assert s.traffic["scene"]["buildings"] is True and s.traffic["network"] is None
     assert s.noise == {} and s.detection == {}
 

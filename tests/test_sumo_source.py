@@ -20,7 +20,9 @@ from cadsim.sources.sumo.static_scene import SIGNAL_COLORS
 from cadsim.world import WorldObject
 
 ROOT = Path(__file__).resolve().parents[1]
-DEFAULT = ROOT / "scenarios" / "cad-intersection.toml"
+# The dense CAD scenario: street-level cameras along the vehicles' headings, heavy traffic (the
+# default CAD scenario's observer geometry is checked on generated pairs in test_generate_cad.py).
+DEFAULT = ROOT / "scenarios" / "cad-dense.toml"
 GAME_CROSS = ROOT / "scenarios" / "sumo-game-cross.toml"
 VEHICLES = {"car", "van", "bus", "truck", "bicycle"}
 

@@ -1,5 +1,5 @@
-"""`cadsim info DIR [--json]`: objects per view, covisible and non-covisible counts, class mix and
-object depth ranges of a frame-pair dataset."""
+"""`cadsim info DIR [--json]`: objects per view, covisible and non-covisible counts, class mix,
+object depth ranges and the regime card (``cadsim.dataset.regime``) of a frame-pair dataset."""
 
 from __future__ import annotations
 
@@ -9,6 +9,8 @@ import sys
 from collections import Counter
 
 import numpy as np
+
+from cadsim.dataset.regime import dataset_regime
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -30,8 +32,9 @@ def _stats(values: list[int]) -> dict:
 def summarise(ds) -> dict:
     """The dataset summary ``cadsim info --json`` prints. Depths are detections' z (metres along
     each observer's optical axis, from the stored noisy positions)."""
-    pairs, class_mix, depths = [], Counter(), []
+    pairs, class_mix, depths, frame_pairs = [], Counter(), [], []
     for pair in ds:
+        frame_pairs.append(pair)
         cov = len(pair.gt_pairs)
         z1, z2 = pair.view1.positions[:, 2], pair.view2.positions[:, 2]
         depths.extend([z1, z2])
@@ -74,6 +77,7 @@ def summarise(ds) -> dict:
             "median": float(np.median(all_z)) if all_z.size else None,
             "max": float(all_z.max()) if all_z.size else None,
         },
+        "regime": dataset_regime(frame_pairs),
         "pairs": pairs,
     }
 
@@ -82,6 +86,19 @@ def _fmt(stats: dict) -> str:
     if stats["mean"] is None:
         return "-"
     return f"mean {stats['mean']:.1f}  min {stats['min']:.0f}  max {stats['max']:.0f}"
+
+
+def _regime_text(regime: dict) -> str:
+    def num(key: str, fmt: str) -> str:
+        value = regime.get(key)
+        return "-" if value is None else format(value, fmt)
+
+    return (
+        f"non-covisible share {num('noncovisible_share', '.2f')}, covisible share of the smaller "
+        f"view {num('covisible_share_of_smaller', '.2f')}, appearance AUC "
+        f"{num('appearance_auc', '.3f')}, position error median "
+        f"{num('position_error_median_m', '.2f')} m"
+    )
 
 
 def _text(s: dict) -> str:
@@ -106,6 +123,7 @@ def _text(s: dict) -> str:
         f"  non-covisible per view  {_fmt(s['non_covisible_per_view'])}",
         f"  object depth (m)        {depth}",
         f"  class mix               {mix}",
+        f"  regime                  {_regime_text(s['regime'])}",
         "",
         f"  {'pair':>4}  {'name':<12} {'n1':>3} {'n2':>3} {'cov':>3}  {'depth1 (m)':>12}  {'depth2 (m)':>12}",
     ]

@@ -16,13 +16,14 @@ from cadsim.dataset import layout
 from cadsim.dataset.atomic_writer import write_file_atomic
 from cadsim.dataset.checksum import dataset_checksum
 from cadsim.dataset.encoding import json_bytes
-from cadsim.dataset.record_format import FORMAT_VERSION, READABLE_VERSIONS, jsonable
+from cadsim.dataset.record_format import FORMAT_VERSION, jsonable
 from cadsim.provenance import git_state, package_versions
 
 FORMAT_NAME = "cadsim-frame-pairs"
 SEED_DERIVATION = (
     "numpy SeedSequence(root, spawn_key=(0, episode)) -> simulation seed; "
-    "(1, episode, slot, view) -> depth-noise seed (also FramePair.redetect's, with its seed as root)"
+    "(1, episode, slot, view) -> depth-noise seed (also FramePair.redetect's, with its seed as root); "
+    "(3, episode, slot, view) -> detector-attribute seed (class confusion, size noise; stored per view)"
 )
 # Distributions whose versions shape the records (metadata only: nothing is imported).
 _PACKAGES = (
@@ -124,10 +125,18 @@ def read_manifest(dataset_dir: Path) -> dict:
         raise DatasetError(f"{path}: unreadable manifest ({exc})") from exc
     if not isinstance(manifest, dict) or manifest.get("format") != FORMAT_NAME:
         raise DatasetError(f"{path}: 'format' is not {FORMAT_NAME!r}")
-    if manifest.get("format_version") not in READABLE_VERSIONS:
+    found = manifest.get("format_version")
+    if found != FORMAT_VERSION:
+        older = isinstance(found, int) and found < FORMAT_VERSION
+        remedy = (
+            "regenerate it with `cadsim generate` (docs/dataset.md lists what changed)"
+            if older
+            else "use the cadsim that wrote it"
+        )
         raise DatasetError(
-            f"{path}: format_version {manifest.get('format_version')!r}, this cadsim reads "
-            f"{', '.join(map(str, READABLE_VERSIONS))}"
+            f"{Path(dataset_dir)}: dataset format version {found!r} is "
+            f"{'older than' if older else 'not'} the version {FORMAT_VERSION} this cadsim reads; "
+            + remedy
         )
     for key in ("complete", "records", "checksum", "generation", "scenario", "seeds"):
         if key not in manifest:

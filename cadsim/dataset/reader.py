@@ -24,6 +24,7 @@ from cadsim.dataset.detections import ViewDetections, ground_truth_pairs
 from cadsim.dataset.encoding import decode_png, load_npz
 from cadsim.dataset.manifest import DatasetError, read_manifest
 from cadsim.dataset.seeds import localisation_seed, noise_seed
+from cadsim.observer_pose import ObserverPose, camera_to_world
 from cadsim.sensing.localisation import LocalisationConfig, PoseError, perturbed_world
 from cadsim.world import WorldObject
 
@@ -35,9 +36,11 @@ class FramePair:
     simulation's seed. view1, view2: ``ViewDetections`` (positions in each observer's camera
     frame, metres). gt_pairs: (k, 2) int64 (i, j) indices of the same object in view1/view2.
     cameras: the two ``Camera``s (world frame poses; None for imported records without images).
-    noise_rate: the depth-noise rate the current detections were made at. Images (color1/2, clean
-    depth1/2, instance1/2) load on first use. ``prior()``: the localisation prior, see
-    :meth:`localise`.
+    observer_poses: the two observers' true world poses (``ObserverPose``: body origin, metres,
+    and heading, radians). camera_extrinsics: per view, the 4×4 camera (OpenCV) → observer body
+    transform. camera_to_world: per view, the 4×4 camera (OpenCV) → world transform. noise_rate:
+    the depth-noise rate the current detections were made at. Images (color1/2, clean depth1/2,
+    instance1/2) load on first use. ``prior()``: the localisation prior, see :meth:`localise`.
     """
 
     def __init__(
@@ -116,6 +119,28 @@ class FramePair:
         if any(o.get("camera") is None for o in obs):
             return None
         return Camera.from_dict(obs[0]["camera"]), Camera.from_dict(obs[1]["camera"])
+
+    @cached_property
+    def observer_poses(self) -> tuple[ObserverPose, ObserverPose]:
+        """The two observers' true world poses: the carrying object's bounding-box centre (world
+        metres) and heading (radians CCW from +x); a camera on no object: its own."""
+        obs = self.record["observers"]
+        return ObserverPose.from_dict(obs[0]["pose"]), ObserverPose.from_dict(obs[1]["pose"])
+
+    @cached_property
+    def camera_extrinsics(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per view, the 4×4 transform from the camera's OpenCV frame to its observer's body
+        frame (x forward, y left, z up, origin at the body's centre): the camera mount."""
+        return tuple(
+            pose.camera_extrinsics(cam)
+            for pose, cam in zip(self.observer_poses, self.cameras, strict=True)
+        )
+
+    @cached_property
+    def camera_to_world(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per view, the 4×4 transform from the camera's OpenCV frame to the world frame (true
+        pose): ``camera_to_world[0] @ [p, 1]`` puts a view-1 position into the world."""
+        return camera_to_world(self.cameras[0]), camera_to_world(self.cameras[1])
 
     @property
     def observer_ids(self) -> tuple[str, str]:
@@ -205,7 +230,7 @@ class FramePair:
         """The pose-error parameters and the two views' seeds the prior is drawn with: the
         record's own (its scenario's ``[localisation]`` table, seeds from the dataset's root
         seed), or those given to :meth:`localise`. None when the prior is stored (imported data)
-        or the record has none (format version 1)."""
+        or the record has none (a pair built in memory)."""
         if self._localisation != "record":
             return self._localisation
         if self.view1.world is not None or not (self.path / layout.RECORD_JSON).is_file():
@@ -223,8 +248,9 @@ class FramePair:
         """The localisation prior: (world1 (n, 3), world2 (m, 3), stated sigma in metres) — each
         view's detections in the world frame (x, y horizontal, z up) through that observer's own
         noisy pose — or None when the record has none. Simulated records: the current detections
-        (after any ``redetect``/``select``) through each camera with its pose error
-        (``cadsim.sensing.localisation``); sigma = position sigma, at least 0.5 m. Imported
+        (after any ``redetect``/``select``) through each camera, with its observer's pose error
+        applied about the observer's body origin (``cadsim.sensing.localisation``); sigma =
+        position sigma, at least 0.5 m. Imported
         records: the stored positions and the source's stated sigma."""
         if self.view1.world is not None and self.view2.world is not None:
             return self.view1.world, self.view2.world, float(self.record["prior"]["world_sigma_m"])
@@ -233,10 +259,11 @@ class FramePair:
             return None
         config, seeds = loc
         worlds = []
-        for view, camera, seed in zip((self.view1, self.view2), self.cameras, seeds, strict=True):
+        views = (self.view1, self.view2)
+        for view, camera, pose, seed in zip(views, self.cameras, self.observer_poses, seeds, strict=True):  # fmt: skip
             error = PoseError.draw(config, np.random.default_rng(seed))
             world = camera.camera_to_world(view.positions)
-            worlds.append(perturbed_world(world, np.asarray(camera.position), error))
+            worlds.append(perturbed_world(world, np.asarray(pose.position), error))
         return worlds[0], worlds[1], config.stated_sigma_m
 
     def localise(self, position_sigma_m: float, yaw_sigma_deg: float, seed: int) -> FramePair:
@@ -282,7 +309,9 @@ class FramePair:
             record_files=self._record_files,
             localisation=localisation,
         )
-        for name in ("record", "color1", "color2", "_depth", "_instance", "objects", "cameras"):
+        shared = ("record", "color1", "color2", "_depth", "_instance", "objects", "cameras")
+        shared += ("observer_poses", "camera_extrinsics", "camera_to_world")
+        for name in shared:
             if name in self.__dict__:
                 pair.__dict__[name] = self.__dict__[name]
         return pair
@@ -291,7 +320,8 @@ class FramePair:
         """This pair re-detected at depth-noise rate ``noise_rate`` (σ = noise_rate · d²): noise
         seeded by (seed, episode, slot, view) applied to the stored clean depth, then detection;
         nothing is re-rendered. Same arguments ⇒ identical detections; rate 0 ⇒ clean-depth
-        detections; the dataset's root seed and noise rate ⇒ the stored detections."""
+        detections; the dataset's root seed and noise rate ⇒ the stored detections. The detector's
+        attribute errors are the record's (``attribute_seed``), the same for every call."""
         from cadsim.render.view import RenderedView
         from cadsim.sensing.depth_noise import NoiseConfig, apply_depth_noise
         from cadsim.sensing.detection import DetectionConfig, detect
@@ -309,7 +339,10 @@ class FramePair:
         ):
             rng = np.random.default_rng(noise_seed(seed, self.episode, self.slot, v))
             noisy = apply_depth_noise(depth, noise_cfg, rng)
-            det = detect(RenderedView(color, depth, instance), noisy, self.objects, camera, det_cfg)
+            # The attribute errors are the record's own, whatever ``seed``.
+            attributes = np.random.default_rng(self.record["observers"][v - 1]["attribute_seed"])
+            view = RenderedView(color, depth, instance)
+            det = detect(view, noisy, self.objects, camera, det_cfg, attribute_rng=attributes)
             views.append(ViewDetections.from_detections(det))
         return self._derived(tuple(views), noise_rate, self._localisation)
 

@@ -5,11 +5,17 @@ Files of ``pairs/eEEEEE_sSS/`` (see docs/dataset.md for every field):
 (H, W) float32 metres along the optical axis, 0 = no hit; ``instance.npz`` ``instance1``/
 ``instance2`` (H, W) int32 index into ``record.json``'s ``objects``, -1 = none; ``detections.npz``
 ``view{1,2}_{positions,boxes,features,object_ids,classes,pixels}`` at the scenario's noise
-config; ``record.json`` cameras, observers, seeds, snapshot time and objects, ground truth, and
-the localisation prior's parameters (``prior``; the error itself is drawn at read time).
+config; ``record.json`` cameras, observers (with their true world poses), seeds, snapshot time and
+objects, ground truth, and the localisation prior's parameters (``prior``; the pose error itself is
+drawn at read time from ``observers[].localisation_seed``).
 
 Records of imported data (``cadsim import``) have no images: ``detections.npz`` and ``record.json``
-only, the prior's world positions stored as ``view{1,2}_world`` (see docs/dataset.md).
+only (the manifest's ``record_files``), the prior's world positions stored as ``view{1,2}_world``.
+
+Format versions: 1, the first; 2 adds ``observers[].pose``, ``observers[].attribute_seed``
+(features carry detector-like attributes from then on), the localisation prior (``prior``,
+``observers[].localisation_seed``) and image-less imported records. A change of the record layout
+bumps ``FORMAT_VERSION``; the reader refuses other versions with a message naming both.
 """
 
 from __future__ import annotations
@@ -23,21 +29,20 @@ from cadsim.camera import Camera
 from cadsim.dataset import layout
 from cadsim.dataset.detections import ViewDetections, ground_truth_pairs
 from cadsim.dataset.encoding import json_bytes, npz_bytes, png_bytes
+from cadsim.observer_pose import ObserverPose
 from cadsim.sensing.localisation import LocalisationConfig
 from cadsim.world import WorldObject
 
 FORMAT_VERSION = 2
-READABLE_VERSIONS = (1, 2)
-"""Version 2 added the localisation prior (``prior``, ``observers[v].localisation_seed``) and
-records without images (imported data); version-1 datasets still read, without a prior."""
 
 
 @dataclass(frozen=True, eq=False)
 class ViewCapture:
     """One observer's view: camera, the id of the object carrying it ("" for none), the rendered
     colour (H, W, 3) uint8 RGB, clean depth (H, W) float32 metres, instance ids (H, W) int32, the
-    detections at the scenario's noise config, the seed of that noise, and the seed of the
-    observer's localisation error (drawn at read time, ``cadsim.sensing.localisation``)."""
+    detections at the scenario's noise config, the seed of that noise, the seed of the detector's
+    attribute errors, the observer's true world pose, and the seed of its localisation error
+    (drawn at read time, ``cadsim.sensing.localisation``)."""
 
     camera: Camera
     observer_id: str
@@ -46,6 +51,8 @@ class ViewCapture:
     instance: np.ndarray
     detections: ViewDetections
     noise_seed: int
+    attribute_seed: int
+    pose: ObserverPose
     localisation_seed: int = 0
 
 
@@ -108,7 +115,9 @@ def encode_record(rec: PairRecord) -> dict[str, bytes]:
             {
                 "id": v.observer_id,
                 "camera": v.camera.as_dict(),
+                "pose": v.pose.as_dict(),
                 "noise_seed": int(v.noise_seed),
+                "attribute_seed": int(v.attribute_seed),
                 "localisation_seed": int(v.localisation_seed),
             }
             for v in views

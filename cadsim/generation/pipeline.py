@@ -3,7 +3,9 @@
 Work is split into *episodes*: one simulation each, seeded by (root seed, episode index). An
 episode walks its snapshots in time order, tries the source's candidate observer pairs of each
 snapshot, and keeps at most one pair per snapshot (the first that passes DESIGN §5's acceptance)
-until it has ``pairs_per_episode`` pairs or the simulation ends. Record (episode, slot) is the
+until it has ``pairs_per_episode`` pairs or the simulation ends (with ``[sampling]
+distinct_observers``, a pair of observer vehicles gives at most one record per episode, so a
+queue waiting at a red light does not yield the same view again). Record (episode, slot) is the
 slot-th pair episode ``episode`` accepted; the dataset is the first N records in (episode, slot)
 order. Records therefore do not depend on the number of workers, the order episodes finish in,
 or interruptions: an interrupted run is resumed by running the same command again.
@@ -55,9 +57,10 @@ from cadsim.dataset.manifest import (
     write_manifest,
 )
 from cadsim.dataset.record_format import PairRecord, ViewCapture, encode_record
-from cadsim.dataset.seeds import localisation_seed, noise_seed, simulation_seed
+from cadsim.dataset.seeds import attribute_seed, localisation_seed, noise_seed, simulation_seed
 from cadsim.generation.executor import Executor, report_progress
 from cadsim.generation.executors import make_executor
+from cadsim.observer_pose import ObserverPose
 
 log = logging.getLogger(__name__)
 
@@ -78,7 +81,7 @@ class Stages:
     source(scenario, seed, workdir) -> TrafficSource; renderer(width, height) -> object with
     ``render(snapshot, camera, exclude_ids) -> RenderedView``; noise_config(**scenario.noise);
     apply_noise(depth, config, rng) -> noisy depth; detection_config(**scenario.detection);
-    detect(view, noisy_depth, objects, camera, config) -> Detections.
+    detect(view, noisy_depth, objects, camera, config, attribute_rng=rng) -> Detections.
     """
 
     source: str = "cadsim.sources:make_source"
@@ -95,13 +98,14 @@ class Stages:
 
 @dataclass(frozen=True)
 class Criteria:
-    """Episode size and acceptance. pairs_per_episode, pairs_per_snapshot: from the scenario's
-    ``[sampling]`` table; min_covisible, min_exclusive: DESIGN §5."""
+    """Episode size and acceptance. pairs_per_episode, pairs_per_snapshot, distinct_observers:
+    from the scenario's ``[sampling]`` table; min_covisible, min_exclusive: DESIGN §5."""
 
     pairs_per_episode: int = DEFAULT_PAIRS_PER_EPISODE
     pairs_per_snapshot: int = 1
     min_covisible: int = MIN_COVISIBLE
     min_exclusive: int = MIN_EXCLUSIVE
+    distinct_observers: bool = False
 
     @classmethod
     def from_sampling(cls, sampling: dict | None) -> Criteria:
@@ -109,6 +113,7 @@ class Criteria:
         crit = cls(
             pairs_per_episode=int(s.get("pairs_per_episode", DEFAULT_PAIRS_PER_EPISODE)),
             pairs_per_snapshot=int(s.get("pairs_per_snapshot", 1)),
+            distinct_observers=bool(s.get("distinct_observers", False)),
         )
         for key in ("pairs_per_episode", "pairs_per_snapshot"):
             if getattr(crit, key) < 1:
@@ -207,11 +212,31 @@ def _existing_prefix(out: Path, episode: int) -> tuple[int, tuple[float, int] | 
     return count, (float(record["time"]), int(record["meta"]["candidate"]))
 
 
-def _observe(stages, noise_cfg, det_cfg, renderer, snapshot, camera, exclude_id, seed):
-    """Render one camera, add depth noise with ``seed``, detect."""
+def _observer_key(pair) -> frozenset:
+    """The two observers of a candidate pair, unordered (``distinct_observers``)."""
+    return frozenset((pair.observer1_id, pair.observer2_id))
+
+
+def _used_observers(out: Path, episode: int, slots: int) -> set[frozenset]:
+    """Observer keys of the first ``slots`` records of ``episode`` on disk (a resumed episode
+    must not repeat them)."""
+    records = layout.existing_records(out)
+    used = set()
+    for s in range(slots):
+        record = json.loads((records[(episode, s)] / layout.RECORD_JSON).read_text())
+        used.add(frozenset(o["id"] for o in record["observers"]))
+    return used
+
+
+def _observe(stages, noise_cfg, det_cfg, renderer, snapshot, camera, exclude_id, seed, attr_seed):
+    """Render one camera, add depth noise with ``seed``, detect with attribute errors seeded by
+    ``attr_seed``."""
     rendered = renderer.render(snapshot, camera, [exclude_id] if exclude_id else [])
     noisy = stages["apply_noise"](rendered.depth, noise_cfg, np.random.default_rng(seed))
-    det = stages["detect"](rendered, noisy, snapshot.objects, camera, det_cfg)
+    attribute_rng = np.random.default_rng(attr_seed)
+    det = stages["detect"](
+        rendered, noisy, snapshot.objects, camera, det_cfg, attribute_rng=attribute_rng
+    )
     return rendered, ViewDetections.from_detections(det)
 
 
@@ -235,6 +260,7 @@ def run_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
     }
     noise_cfg = stages["noise_config"](**(scenario.noise or {}))
     det_cfg = stages["detection_config"](**(scenario.detection or {}))
+    used = _used_observers(out, e, slot) if crit.distinct_observers else set()
     # The work folder is shared by all episodes: sources cache networks there (atomically).
     with stages["source"](scenario, sim_seed, out / layout.WORK_DIR) as source:
         for snapshot in source.snapshots():
@@ -252,8 +278,10 @@ def run_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
             for index in range(first, len(candidates)):
                 if taken >= crit.pairs_per_snapshot or slot >= task.max_slots:
                     break
-                result.candidates += 1
                 pair = candidates[index]
+                if crit.distinct_observers and _observer_key(pair) in used:
+                    continue
+                result.candidates += 1
                 record = _try_pair(
                     task, stages, noise_cfg, det_cfg, snapshot, pair, index, slot, result
                 )
@@ -263,6 +291,7 @@ def run_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
                     result.new_records += 1
                 slot += 1
                 taken += 1
+                used.add(_observer_key(pair))
                 if on_record is not None:
                     on_record()
             if slot >= task.max_slots:
@@ -294,20 +323,24 @@ def _try_pair(
     """Render, noise and detect both views of a candidate; the record if it is acceptable."""
     crit = task.criteria
     views = []
+    carriers = snapshot.by_id()
     for v, camera, observer in ((1, pair.camera1, pair.observer1_id), (2, pair.camera2, pair.observer2_id)):  # fmt: skip
         renderer = _renderer(task.stages, camera.width, camera.height)
         seed = noise_seed(task.root_seed, task.episode, slot, v)
+        attr_seed = attribute_seed(task.root_seed, task.episode, slot, v)
         t = time.perf_counter()
         rendered, det = _observe(
-            stages, noise_cfg, det_cfg, renderer, snapshot, camera, observer, seed
+            stages, noise_cfg, det_cfg, renderer, snapshot, camera, observer, seed, attr_seed
         )
         result.render_seconds += time.perf_counter() - t
         result.views += 1
         if len(det) < crit.min_covisible + crit.min_exclusive:
             return None  # cannot pass, whatever the other view sees
+        carrier = carriers.get(observer) if observer else None
+        pose = ObserverPose.of_carrier(carrier) if carrier else ObserverPose.of_camera(camera)
         capture = ViewCapture(
             camera, observer, rendered.color, rendered.depth, rendered.instance, det, seed,
-            localisation_seed(task.root_seed, task.episode, slot, v),
+            attr_seed, pose, localisation_seed(task.root_seed, task.episode, slot, v),
         )  # fmt: skip
         views.append(capture)
     if not is_acceptable_pair(

@@ -15,7 +15,11 @@ camera frame (OpenCV, metres). That point lies on the visible surface, in front 
 centre; with ``surface_to_center`` it is pushed along the ray by ``centre_offset_along`` (the mean
 depth of a box's visible surface in front of its centre, from the object's 3-D box: an oracle box
 size and heading, as a 3-D detector would estimate them). Features:
-``cadsim.sensing.features``. The ground-truth object id is kept beside the features, never in them.
+``cadsim.sensing.features``, whose attribute block (class, size) is what the view's detector
+reports: with ``attribute_rng`` given, the true class is confused with probability
+``class_confusion`` and the size carries relative noise ``size_noise``
+(``cadsim.sensing.attribute_noise``); without it, the simulator's truth. The ground-truth object
+id and class are kept beside the features, never in them.
 """
 
 from __future__ import annotations
@@ -29,6 +33,7 @@ from scipy import ndimage
 from cadsim.camera import Camera
 from cadsim.config_tables import check_number, config_from_table
 from cadsim.render.view import RenderedView
+from cadsim.sensing.attribute_noise import perceived_attributes
 from cadsim.sensing.box_projection import projected_box_areas
 from cadsim.sensing.features import FEATURE_DIM, object_features
 from cadsim.world import WorldObject
@@ -36,7 +41,12 @@ from cadsim.world import WorldObject
 
 @dataclass(frozen=True)
 class DetectionConfig:
-    """The ``[detection]`` table of a scenario file (see the module docstring for each filter)."""
+    """The ``[detection]`` table of a scenario file (see the module docstring for each filter).
+
+    class_confusion: probability that a view's detector reports another class of the object's
+    confusion group (per view; 0.0075 makes the two views disagree on ≈ 1.5 % of covisible
+    objects, the rate of the paper group's CAD data). size_noise: relative (log-normal) error of
+    each reported size dimension."""
 
     min_pixels: int = 40
     border_margin_px: int = 2
@@ -44,6 +54,8 @@ class DetectionConfig:
     min_visible_fraction: float = 0.15
     max_depth_m: float = 80.0
     surface_to_center: bool = True
+    class_confusion: float = 0.0075
+    size_noise: float = 0.1
 
     def __post_init__(self) -> None:
         check_number("[detection]", "min_pixels", self.min_pixels, minimum=1, integer=True)
@@ -59,6 +71,10 @@ class DetectionConfig:
             maximum=1.0,
         )
         check_number("[detection]", "max_depth_m", self.max_depth_m, minimum=0.0)
+        check_number(
+            "[detection]", "class_confusion", self.class_confusion, minimum=0.0, maximum=1.0
+        )
+        check_number("[detection]", "size_noise", self.size_noise, minimum=0.0, maximum=2.0)
         if not isinstance(self.surface_to_center, bool):
             raise TypeError(
                 f"[detection] surface_to_center must be true or false, got {self.surface_to_center!r}"
@@ -113,11 +129,13 @@ def detect(
     objects: Sequence[WorldObject],
     camera: Camera,
     config: DetectionConfig,
+    attribute_rng: np.random.Generator | None = None,
 ) -> Detections:
     """Detections of the ``target`` objects visible in ``view`` (see the module docstring).
 
     objects: the snapshot's object list, which ``view.instance`` indexes. noisy_depth: (H, W)
-    metres, the view's depth after ``apply_depth_noise``."""
+    metres, the view's depth after ``apply_depth_noise``. attribute_rng: the view's attribute
+    stream (class confusion, size noise); None: features carry the true class and size."""
     h, w = view.shape
     noisy = np.asarray(noisy_depth)
     if noisy.shape != (h, w):
@@ -134,6 +152,12 @@ def detect(
     candidates = [i for i in range(n) if objects[i].target and counts[i + 1] >= config.min_pixels]
     if not candidates:
         return Detections.empty()
+    if attribute_rng is None:
+        seen_cls, seen_size = [o.cls for o in objects], [o.size for o in objects]
+    else:
+        seen_cls, seen_size = perceived_attributes(
+            objects, config.class_confusion, config.size_noise, attribute_rng
+        )
     # Pixels of every object, grouped: a stable sort by label, split at the cumulative counts.
     order = np.argsort(inst, kind="stable")
     starts = np.concatenate([[0], np.cumsum(counts)])
@@ -164,7 +188,8 @@ def detect(
             p = p + centre_offset_along(obj, R @ ray) * ray
         mask_crop = np.zeros((y1 - y0, x1 - x0), dtype=np.uint8)
         mask_crop[v - y0, u - x0] = 255
-        out_feat.append(object_features(view.color, (x0, y0, x1, y1), mask_crop, obj.cls, obj.size))
+        box = (x0, y0, x1, y1)
+        out_feat.append(object_features(view.color, box, mask_crop, seen_cls[i], seen_size[i]))
         out_pos.append(p)
         out_box.append((x0, y0, x1, y1))
         out_ids.append(obj.id)

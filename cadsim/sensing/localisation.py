@@ -2,10 +2,9 @@
 own GPS-like localisation reports it, and the object positions that noisy pose puts in the world.
 
 An observer's pose error is a ground-plane translation (dx, dy) ~ N(0, position_sigma_m²) per axis
-and a heading error dψ ~ N(0, yaw_sigma_deg²), drawn once per view and applied to the camera's
-pose about its own optical centre c (the camera is rigid on the vehicle, so this is the vehicle's
-pose error up to the mount offset — a 0.2° heading error moves the pivot by millimetres). An
-object seen at world position w (through the true pose) is reported at
+and a heading error dψ ~ N(0, yaw_sigma_deg²), drawn once per view and applied to the observer's
+body pose (origin c: the carrying vehicle's centre; the camera is rigid on it). An object seen at
+world position w (through the true pose) is reported at
 
     w' = R_z(dψ) (w − c) + c + (dx, dy, 0),
 
@@ -79,8 +78,8 @@ class PoseError:
 
 def perturbed_world(world: np.ndarray, pivot: np.ndarray, error: PoseError) -> np.ndarray:
     """(k, 3) world positions (metres, z up) as seen through a pose with ``error``: rotated by
-    dyaw about the vertical through ``pivot`` (the camera centre, world metres), then shifted by
-    (dx, dy); z unchanged."""
+    dyaw about the vertical through ``pivot`` (the observer's body origin, world metres), then
+    shifted by (dx, dy); z unchanged."""
     world = np.asarray(world, dtype=float).reshape(-1, 3)
     out = world.copy()
     if error.dyaw != 0.0:  # (no heading error: no round trip through the pivot, exact)

@@ -237,7 +237,8 @@ class HighwaySource(TrafficSource):
         """The shared rule (``cadsim.sources.observer_pairs``), nearest to the junction first, capped at
         ``max_candidates``."""
         cfg = self.config
-        return observer_pairs(snapshot, cfg.camera, cfg.observers)[: cfg.max_candidates]
+        centres = {JUNCTION_ID: self.layout.center} if self.layout is not None else {}
+        return observer_pairs(snapshot, cfg.camera, cfg.observers, centres)[: cfg.max_candidates]
 
 
 def make_highway_source(
