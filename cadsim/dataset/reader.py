@@ -121,16 +121,22 @@ class FramePair:
         return Camera.from_dict(obs[0]["camera"]), Camera.from_dict(obs[1]["camera"])
 
     @cached_property
-    def observer_poses(self) -> tuple[ObserverPose, ObserverPose]:
+    def observer_poses(self) -> tuple[ObserverPose, ObserverPose] | None:
         """The two observers' true world poses: the carrying object's bounding-box centre (world
-        metres) and heading (radians CCW from +x); a camera on no object: its own."""
+        metres) and heading (radians CCW from +x); a camera on no object: its own. None for
+        imported records, which carry no true poses."""
         obs = self.record["observers"]
+        if any(o.get("pose") is None for o in obs):
+            return None
         return ObserverPose.from_dict(obs[0]["pose"]), ObserverPose.from_dict(obs[1]["pose"])
 
     @cached_property
-    def camera_extrinsics(self) -> tuple[np.ndarray, np.ndarray]:
+    def camera_extrinsics(self) -> tuple[np.ndarray, np.ndarray] | None:
         """Per view, the 4×4 transform from the camera's OpenCV frame to its observer's body
-        frame (x forward, y left, z up, origin at the body's centre): the camera mount."""
+        frame (x forward, y left, z up, origin at the body's centre): the camera mount. None
+        without cameras and poses (imported records)."""
+        if self.cameras is None or self.observer_poses is None:
+            return None
         return tuple(
             pose.camera_extrinsics(cam)
             for pose, cam in zip(self.observer_poses, self.cameras, strict=True)
@@ -139,7 +145,10 @@ class FramePair:
     @cached_property
     def camera_to_world(self) -> tuple[np.ndarray, np.ndarray]:
         """Per view, the 4×4 transform from the camera's OpenCV frame to the world frame (true
-        pose): ``camera_to_world[0] @ [p, 1]`` puts a view-1 position into the world."""
+        pose): ``camera_to_world[0] @ [p, 1]`` puts a view-1 position into the world. None
+        without cameras (imported records)."""
+        if self.cameras is None:
+            return None
         return camera_to_world(self.cameras[0]), camera_to_world(self.cameras[1])
 
     @property
