@@ -138,3 +138,24 @@ def to_markdown(table: pd.DataFrame) -> str:
         )
         lines.append(f"| {r['dataset']} | {r['reference']} | {count} | {cell} |")
     return "\n".join(lines) + "\n"
+
+
+def readme_part(results: Path, rel: str) -> list[str]:
+    """README lines for ``agreement.csv`` (none without it or when it is empty)."""
+    path = Path(results) / "agreement.csv"
+    if not path.is_file():
+        return []
+    table = pd.read_csv(path, keep_default_na=False, na_values=[""])
+    if table.empty:
+        return []
+    return [
+        "### Do these rankings hold on external data?",
+        "",
+        to_markdown(table).strip(),
+        "",
+        "Spearman's ρ between the matchers' F1 on each dataset (or the paper's Table I column) "
+        f"and on the external DMGM CAD test pairs, same matchers, none given the localisation "
+        f"prior; 95 % interval from a bootstrap over frame pairs of both sides "
+        f"(`{rel}/agreement.csv`).",
+        "",
+    ]
