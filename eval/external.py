@@ -25,7 +25,7 @@ import pandas as pd
 from eval.commands.evaluate import evaluate, open_entry, parse_matchers
 from eval.metrics import POOLED
 from eval.runner import Runner
-from eval.tables import build_table, method_name, params_text, pooled_text
+from eval.tables import build_table, params_text, pooled_text
 from eval.tasks import MatcherSpec
 
 log = logging.getLogger(__name__)
@@ -211,18 +211,6 @@ def best_pooled(table: pd.DataFrame) -> tuple[str, float]:
     ours = table[table["source"] == "ours"]
     best = ours.loc[ours["f1_pooled"].idxmax()]
     return str(best["method"]), float(best["f1_pooled"])
-
-
-__all__ = [
-    "CALIBRATION_DIR",
-    "DMGM_PUBLISHED",
-    "TEST_DIR",
-    "best_pooled",
-    "evaluate_external",
-    "external_matchers",
-    "method_name",
-    "write_table_external",
-]
 
 
 def findings(table: pd.DataFrame) -> list[str]:
