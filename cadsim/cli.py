@@ -31,6 +31,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "show": ("cadsim.commands.show", "draw one frame pair with boxes and ground-truth lines"),
     "schema": ("cadsim.commands.schema", "print the JSON Schema of scenario files"),
+    "import": ("cadsim.commands.import_", "write external data (DMGM CAD pairs) as a dataset"),
     "evaluate": ("eval.commands.evaluate", "run matchers on datasets (cached, parallel)"),
     "sweep-noise": (
         "eval.commands.sweep_noise",
@@ -39,6 +40,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "sweep-regime": (
         "eval.commands.sweep_regime",
         "thin non-covisible detections level by level and evaluate",
+    ),
+    "sweep-localisation": (
+        "eval.commands.sweep_localisation",
+        "re-draw the localisation prior at several position errors and evaluate",
     ),
     "table": ("eval.commands.table", "re-render tables and figures from cached results"),
     "synthetic": ("eval.validation.synthetic", "published synthetic benchmarks (BCAGM protocols)"),

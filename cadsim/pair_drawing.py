@@ -3,6 +3,11 @@
 Used by ``cadsim show`` (ground-truth correspondences) and by the evaluation's qualitative
 figure (paper Fig. 3 style: green correct, red wrong, yellow missed). Pixel coordinates: (u, v),
 u right, v down, as the detection boxes (u0, v0, u1, v1).
+
+Records without images (imported data) are drawn from above instead (:func:`topdown_figure`):
+each view's detections in its own camera frame's ground plane (x right, z forward, metres), lines
+between corresponding detections, and, when the record has a localisation prior, both views'
+detections in the shared world frame, where the lines show the prior's error.
 """
 
 from __future__ import annotations
@@ -105,8 +110,89 @@ def save_figure(fig, path: str | Path) -> Path:
     return path
 
 
+def topdown_figure(
+    positions1: np.ndarray,
+    positions2: np.ndarray,
+    pairs: np.ndarray,
+    world: tuple[np.ndarray, np.ndarray] | None = None,
+    line_colors: str | Sequence[str] = CORRECT,
+    labels1: Sequence[str] | None = None,
+    labels2: Sequence[str] | None = None,
+    title: str | None = None,
+):
+    """A ``Figure`` seen from above: view 1's and view 2's (k, 3) camera-frame positions
+    (x right, y down, z forward, metres; drawn as x across, z up the page, the camera at the
+    origin) in two panels, a line per row (i, j) of ``pairs`` between them, and, if ``world``
+    = (world1, world2) is given, a third panel with both views in the world frame (x, y)."""
+    from matplotlib.figure import Figure
+    from matplotlib.patches import ConnectionPatch
+
+    p1 = np.asarray(positions1, float).reshape(-1, 3)
+    p2 = np.asarray(positions2, float).reshape(-1, 3)
+    pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
+    if len(pairs) and (pairs[:, 0].max() >= len(p1) or pairs[:, 1].max() >= len(p2)):
+        raise ValueError(f"pairs: index out of range for {len(p1)} and {len(p2)} positions")
+    colors = [line_colors] * len(pairs) if isinstance(line_colors, str) else list(line_colors)
+    if len(colors) != len(pairs):
+        raise ValueError(f"line_colors: {len(colors)} colours for {len(pairs)} pairs")
+    panels = 3 if world is not None else 2
+    fig = Figure(figsize=(4.2 * panels, 4.6), dpi=100)
+    axes = fig.subplots(1, panels)
+    for ax, pts, labels, name, marker in (
+        (axes[0], p1, labels1, "view 1", "o"),
+        (axes[1], p2, labels2, "view 2", "s"),
+    ):
+        ax.scatter(pts[:, 0], pts[:, 2], s=18, marker=marker, color="#38bdf8", zorder=3)
+        ax.scatter([0], [0], marker="^", s=60, color="black", zorder=3)
+        for k, text in enumerate(labels or ()):
+            ax.annotate(text, (pts[k, 0], pts[k, 2]), fontsize=6, xytext=(3, 3),
+                        textcoords="offset points")  # fmt: skip
+        ax.set_title(f"{name}: camera frame from above", fontsize=8)
+        ax.set_xlabel("x (m, right)", fontsize=7)
+        ax.set_ylabel("z (m, forward)", fontsize=7)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.tick_params(labelsize=6)
+    for (i, j), color in zip(pairs, colors, strict=True):
+        fig.add_artist(
+            ConnectionPatch(
+                (p1[i, 0], p1[i, 2]), (p2[j, 0], p2[j, 2]), "data", "data",
+                axesA=axes[0], axesB=axes[1], color=color, linewidth=1.0,
+            )
+        )  # fmt: skip
+    if world is not None:
+        w1 = np.asarray(world[0], float).reshape(-1, 3)
+        w2 = np.asarray(world[1], float).reshape(-1, 3)
+        ax = axes[2]
+        ax.scatter(w1[:, 0], w1[:, 1], s=18, marker="o", color="#2563eb", label="view 1", zorder=3)
+        ax.scatter(w2[:, 0], w2[:, 1], s=18, marker="s", color="#f97316", label="view 2", zorder=3)
+        for (i, j), color in zip(pairs, colors, strict=True):
+            ax.plot([w1[i, 0], w2[j, 0]], [w1[i, 1], w2[j, 1]], color=color, linewidth=1.0)
+        ax.set_title("localisation prior: world frame from above", fontsize=8)
+        ax.set_xlabel("x (m)", fontsize=7)
+        ax.set_ylabel("y (m)", fontsize=7)
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.tick_params(labelsize=6)
+        ax.legend(fontsize=6)
+    if title:
+        fig.suptitle(title, fontsize=9)
+    return fig
+
+
 def draw_pair_from_record(pair, labels: bool = True):
-    """Figure of a dataset ``FramePair``: its boxes and its ground-truth pairs."""
+    """Figure of a dataset ``FramePair``: its boxes and its ground-truth pairs (from above, with
+    the localisation prior, when the record has no images)."""
+    if not pair.has_images:
+        prior = pair.prior()
+        return topdown_figure(
+            pair.view1.positions,
+            pair.view2.positions,
+            pair.gt_pairs,
+            world=None if prior is None else prior[:2],
+            labels1=pair.view1.classes if labels else None,
+            labels2=pair.view2.classes if labels else None,
+            title=f"{pair.name} (pair {pair.index}): {len(pair.view1)} | {len(pair.view2)} "
+            f"detections, {len(pair.gt_pairs)} covisible (ground truth)",
+        )
     title = (
         f"{pair.name} (pair {pair.index}, t = {pair.time:.1f} s): {len(pair.view1)} | "
         f"{len(pair.view2)} detections, {len(pair.gt_pairs)} covisible"

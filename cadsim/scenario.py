@@ -1,14 +1,15 @@
 """Scenario files (TOML): loading and validation.
 
 A scenario file names a traffic source (``[traffic] source = "sumo"``, ...), the cameras, how
-observer pairs are chosen, the depth-noise and detection parameters, the sampling schedule, the
-seed and the number of frame pairs. Every key is checked here, once, so that a typo fails at load
+observer pairs are chosen, the depth-noise, detection and localisation parameters, the sampling
+schedule, the seed and the number of frame pairs. Every key is checked here, once, so that a typo fails at load
 time with a message naming the file, the dotted key and what was expected. The file format is
 documented in docs/scenarios.md.
 
 Each traffic source kind registers the schema of its ``[traffic]`` table with
-:func:`register_source_schema`; the ``[noise]`` and ``[detection]`` tables are checked against
-the fields of ``cadsim.sensing.depth_noise.NoiseConfig`` and ``cadsim.sensing.detection.DetectionConfig``.
+:func:`register_source_schema`; the ``[noise]``, ``[detection]`` and ``[localisation]`` tables are
+checked against the fields of ``cadsim.sensing.depth_noise.NoiseConfig``,
+``cadsim.sensing.detection.DetectionConfig`` and ``cadsim.sensing.localisation.LocalisationConfig``.
 """
 
 from __future__ import annotations
@@ -162,8 +163,9 @@ class CameraConfig:
 class Scenario:
     """A validated scenario file. ``text`` is the file's exact contents (for manifests);
     ``traffic`` is the validated [traffic] table with relative paths resolved to absolute;
-    ``noise`` and ``detection`` are the raw tables (keys checked against NoiseConfig /
-    DetectionConfig); ``observers`` and ``sampling`` have their defaults filled in."""
+    ``noise``, ``detection`` and ``localisation`` are the raw tables (keys checked against
+    NoiseConfig / DetectionConfig / LocalisationConfig); ``observers`` and ``sampling`` have their
+    defaults filled in."""
 
     path: Path
     text: str
@@ -176,6 +178,7 @@ class Scenario:
     noise: dict
     detection: dict
     sampling: dict
+    localisation: dict = dataclasses.field(default_factory=dict)
 
 
 def _set_sumo_home() -> None:
@@ -327,7 +330,7 @@ TOP_LEVEL = {
     "seed": Field(int, 0, "base seed of every random choice", ge=0),
     "pairs": Field(int, 50, "number of frame pairs in a dataset", ge=1, le=MAX_PAIRS),
 }
-TABLES = ("traffic", "camera", "observers", "noise", "detection", "sampling")
+TABLES = ("traffic", "camera", "observers", "noise", "detection", "sampling", "localisation")
 
 # kind -> schema of its [traffic] table; kinds listed in _SCHEMA_MODULES register on first use.
 _SOURCE_SCHEMAS: dict[str, Table] = {}
@@ -341,6 +344,7 @@ _SCHEMA_MODULES: dict[str, str] = {
 _CONFIG_CLASSES: dict[str, tuple[str, str]] = {
     "noise": ("cadsim.sensing.depth_noise", "NoiseConfig"),
     "detection": ("cadsim.sensing.detection", "DetectionConfig"),
+    "localisation": ("cadsim.sensing.localisation", "LocalisationConfig"),
 }
 
 
@@ -407,7 +411,8 @@ def load_scenario(path: str | Path) -> Scenario:
     sampling = validate_table(raw.get("sampling", {}), SAMPLING, ctx, "sampling")
     noise = dict(raw.get("noise", {}))
     detection = dict(raw.get("detection", {}))
-    for key, table in (("noise", noise), ("detection", detection)):
+    localisation = dict(raw.get("localisation", {}))
+    for key, table in (("noise", noise), ("detection", detection), ("localisation", localisation)):
         config_class = _config_class(key)
         if config_class is not None:
             validate_dataclass_table(table, config_class, ctx, key)
@@ -424,6 +429,7 @@ def load_scenario(path: str | Path) -> Scenario:
         noise=noise,
         detection=detection,
         sampling=sampling,
+        localisation=localisation,
     )
 
 

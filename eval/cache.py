@@ -92,6 +92,9 @@ def _spec_from_dict(d: dict) -> RunSpec:
         code_version=d["code_version"],
         limit=None if d.get("limit") is None else int(d["limit"]),
         keep=None if d.get("keep") is None else float(d["keep"]),
+        localisation=None
+        if d.get("localisation") is None
+        else tuple(float(v) for v in d["localisation"]),
     )
 
 

@@ -3,6 +3,8 @@
 - ``fig4.png/.pdf``: accuracy, precision, recall against the depth-noise rate, one line per matcher
   (mean over runs) with a ±std band (from ``noise_runs.csv``);
 - ``pr_curves.png``: pooled precision–recall curves per dataset (from ``pr_curves.csv``);
+- ``fig_localisation.png/.pdf``: F1 against the observers' localisation error, one line per
+  matcher with a ±std band over runs (from ``localisation_sweep.csv``);
 - ``fig_regime.png/.pdf``: F1 and balanced accuracy against the achieved non-covisible share of
   the regime sweep, one line per matcher, one row of panels per dataset (from
   ``regime_sweep.csv``);
@@ -140,6 +142,41 @@ def write_fig_regime(out_dir: str | Path) -> list[Path]:
     return _save(fig, out_dir / "fig_regime")
 
 
+def write_fig_localisation(out_dir: str | Path) -> list[Path]:
+    """F1 against localisation error from ``localisation_sweep.csv``; none without the CSV."""
+    out_dir = Path(out_dir)
+    path = out_dir / "localisation_sweep.csv"
+    if not path.is_file():
+        return []
+    sweep = pd.read_csv(path)
+    if sweep.empty:
+        return []
+    datasets = sorted(sweep["dataset"].unique(), key=dataset_order)
+    matchers = sorted(sweep["matcher"].unique(), key=matcher_order)
+    colors = _colors(matchers)
+    fig, axes = _figure(6.4 * len(datasets), 4.2, ncols=len(datasets))
+    for col, dataset in enumerate(datasets):
+        ax = axes[0, col]
+        rows = sweep[sweep["dataset"] == dataset]
+        for matcher in matchers:
+            c = rows[rows["matcher"] == matcher].sort_values("position_sigma_m")
+            if c.empty:
+                continue
+            x, m, s = c["position_sigma_m"], 100 * c["f1_mean"], 100 * c["f1_std"]
+            ax.plot(x, m, marker="o", ms=3, color=colors[matcher], label=method_name(matcher))
+            ax.fill_between(x, m - s, m + s, color=colors[matcher], alpha=0.15, lw=0)
+        ax.axvline(1.2, color="grey", ls=":", lw=1)
+        ax.text(1.2, 1, " GPS σ of the DMGM data", color="grey", fontsize=7, va="bottom")
+        ax.set_xlabel("position error σ per axis (m); heading σ = 0.2° per 1.2 m")
+        ax.set_ylabel("F1 (%)")
+        ax.set_title(f"{dataset}: F1 against localisation error")
+        ax.set_ylim(-2, 102)
+        ax.grid(alpha=0.3)
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 4), fontsize=8)
+    return _save(fig, out_dir / "fig_localisation")
+
+
 def write_pr_curves(out_dir: str | Path) -> list[Path]:
     """Precision–recall curves from ``pr_curves.csv`` (one panel per dataset)."""
     out_dir = Path(out_dir)
@@ -199,8 +236,11 @@ def write_qualitative(out_dir: str | Path) -> list[Path]:
     if missing:
         log.warning("qualitative figure skipped: datasets not found: %s", ", ".join(missing))
         return []
-    methods = sorted({m for d in datasets for m in spec[d]["methods"]}, key=matcher_order)
     pairs = {d: Dataset(spec[d]["dataset_dir"])[spec[d]["pair"]] for d in datasets}
+    datasets = [d for d in datasets if pairs[d].has_images]  # imported data: no images to draw
+    if not datasets:
+        return []
+    methods = sorted({m for d in datasets for m in spec[d]["methods"]}, key=matcher_order)
     first = pairs[datasets[0]]
     canvas, _ = side_by_side(first.color1, first.color2)
     aspect = canvas.shape[0] / canvas.shape[1]
@@ -246,5 +286,6 @@ def render_all(out_dir: str | Path) -> list[Path]:
         write_fig4(out_dir)
         + write_pr_curves(out_dir)
         + write_fig_regime(out_dir)
+        + write_fig_localisation(out_dir)
         + write_qualitative(out_dir)
     )

@@ -15,7 +15,9 @@ indexing view 1 (n objects) and j indexing view 2 (m objects).
 - F1 = 2PR / (P + R), 0 when P + R = 0.
 
 Per frame pair first, then as the paper aggregates: per-run mean over frame pairs, then mean ± std
-over runs (:func:`summarise_runs`).
+over runs (:func:`summarise_runs`). Pooled over a run's frame pairs instead (DMGM's aggregation,
+:func:`summarise_pooled`): precision_pooled = ΣTP/Σ|M|, recall_pooled = ΣTP/Σ|G|, f1_pooled their
+harmonic mean, then mean ± std over runs; pairs with many objects weigh more.
 
 Threshold sweeps: a matcher's full Hungarian assignment with its scores is ranked once; keeping
 the pairs with score ≥ τ gives the prediction at τ. :func:`metrics_at_thresholds` evaluates every
@@ -304,3 +306,32 @@ def summarise_runs(per_pair: pd.DataFrame, by: Sequence[str], run: str = "seed")
     runs = grouped.size().rename("runs")
     out = pd.concat([mean, std, runs], axis=1).reset_index()
     return out[[*by, *(f"{m}_{s}" for m in metrics for s in ("mean", "std")), "runs"]]
+
+
+POOLED = ("precision_pooled", "recall_pooled", "f1_pooled")
+
+
+def summarise_pooled(per_pair: pd.DataFrame, by: Sequence[str], run: str = "seed") -> pd.DataFrame:
+    """Pooled precision, recall and F1 per run (ΣTP/Σ|M|, ΣTP/Σ|G| over its frame pairs, the
+    DESIGN §3 conventions for empty sums), then mean and std over runs (ddof=1; 0 for one run).
+
+    per_pair: one row per (run, frame pair) with columns `by`, `run`, ``tp``, ``n_pred``,
+    ``n_gt``. Returns one row per `by` group with ``<name>_mean``/``<name>_std`` for each name of
+    :data:`POOLED`.
+    """
+    missing = [c for c in (*by, run, "tp", "n_pred", "n_gt") if c not in per_pair.columns]
+    if missing:
+        raise ValueError(f"per_pair: missing columns {missing}")
+    sums = per_pair.groupby([*by, run], sort=False)[["tp", "n_pred", "n_gt"]].sum()
+    precision = _precision(sums["tp"], sums["n_pred"], sums["n_gt"])
+    recall = _recall(sums["tp"], sums["n_gt"])
+    per_run = pd.DataFrame(
+        {"precision_pooled": precision, "recall_pooled": recall},
+        index=sums.index,
+    )
+    per_run["f1_pooled"] = _f1(precision, recall)
+    grouped = per_run.groupby(level=list(range(len(by))), sort=False)
+    mean = grouped.mean().add_suffix("_mean")
+    std = grouped.std(ddof=1).fillna(0.0).add_suffix("_std")
+    out = pd.concat([mean, std], axis=1).reset_index()
+    return out[[*by, *(f"{m}_{s}" for m in POOLED for s in ("mean", "std"))]]

@@ -4,7 +4,8 @@ directory). The section sits between ``<!-- results:begin -->`` and ``<!-- resul
 
 It holds the regime cards beside Table I (tuned, calibrated), the paired differences with their
 intervals, the dataset spread, the paper-protocol table, the regime sweep, Fig. 4, the qualitative
-figure and "Where we agree with the paper, and where not" — statements computed from those tables
+figure, the ranking agreement with external data, the external benchmark (DMGM CAD pairs), the
+localisation sweep and "Where we agree with the paper, and where not" — statements computed from those tables
 (ranks, differences and whether their intervals exclude 0, crossovers), never typed in by hand.
 Every part is optional: a results directory without a file leaves its part out.
 """
@@ -18,6 +19,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from eval.agreement import readme_part as agreement_readme
+from eval.external import readme_part as external_readme
 from eval.tables import PAPER_COLUMN, PAPER_NAMES, dataset_order, method_name, params_text
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
@@ -322,6 +325,7 @@ def results_section(results: Path, readme_dir: Path) -> str:
         "precision–recall curve swept over τ." + untuned,
         "",
     ]
+    out += agreement_readme(results, rel)
     paired = _csv(results / "paired_differences.csv")
     if paired is not None and len(paired):
         out += [
@@ -366,6 +370,21 @@ def results_section(results: Path, readme_dir: Path) -> str:
             f"the thinned validation set ({_n(len(sweep.get('val_seeds', [])), 'run')}), "
             f"{_n(len(sweep.get('seeds', [])), 'run')} on the first {sweep.get('pairs') or 'all'} "
             f"test pairs. Crossovers: [{rel}/crossovers.csv]({rel}/crossovers.csv).",
+            "",
+        ]
+    out += external_readme(results, rel)
+    if (results / "fig_localisation.png").is_file():
+        loc = record.get("localisation_sweep", {})
+        out += [
+            "### F1 against localisation error (CAD)",
+            "",
+            f"![F1 against the observers' position error]({rel}/fig_localisation.png)",
+            "",
+            "Each observer's pose perturbed by a seeded GPS-like error (position σ per axis on "
+            "the x axis, heading σ = 0.2° per 1.2 m), drawn at read time (no re-rendering); τ "
+            f"per σ on the validation set at that σ; {_n(len(loc.get('seeds', [])), 'run')}, "
+            f"first {loc.get('pairs') or 'all'} test pairs "
+            f"([{rel}/localisation_sweep.csv]({rel}/localisation_sweep.csv)).",
             "",
         ]
     noise = record.get("noise_sweep", {})

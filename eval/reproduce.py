@@ -7,8 +7,10 @@ Stages (each cached, so a second run only re-renders): generate every scenario's
 ``--data``, and for the default CAD two more test datasets (seed + SPREAD_SEED_OFFSETS); evaluate
 all matchers × runs (parameters tuned and τ calibrated on validation only; the untuned table
 beside); the paper's protocol; the CAD noise sweep (re-detection on stored clean depth); the regime
-sweep on every dataset; the dataset spread; tables and figures; run record. Ends by printing
-Table I beside the paper's.
+sweep on every dataset; the dataset spread; the localisation sweep on CAD (prior re-drawn per
+position error); the external benchmark on the shipped DMGM CAD pairs (``eval/data/dmgm-cad``,
+:mod:`eval.external`) and the ranking agreement with it (:mod:`eval.agreement`); tables and
+figures; run record. Ends by printing Table I beside the paper's.
 
 Tiny run (the test suite's): ``python -m eval.reproduce --pairs 2 --matchers sm,maximin
 --rates 0,0.01 --out DIR --data DIR --cache DIR``.
@@ -26,6 +28,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from eval.agreement import write_agreement
 from eval.cache import ResultCache, code_version
 from eval.commands.evaluate import (
     DEFAULT_CACHE,
@@ -35,9 +38,20 @@ from eval.commands.evaluate import (
     open_entry,
     parse_matchers,
 )
+from eval.commands.sweep_localisation import (
+    DEFAULT_MATCHERS as LOCALISATION_MATCHERS,
+)
+from eval.commands.sweep_localisation import (
+    DEFAULT_SIGMAS,
+    parse_sigmas,
+    sweep_localisation,
+    sweep_specs,
+)
+from eval.commands.sweep_localisation import write_sweep as write_localisation_sweep
 from eval.commands.sweep_noise import DEFAULT_RATES, parse_rates, sweep
 from eval.commands.sweep_regime import DEFAULT_KEEP, parse_keep, sweep_regime, write_sweep
 from eval.executor import add_scheduler_argument, make_executor
+from eval.external import CALIBRATION_DIR, TEST_DIR, evaluate_external, external_matchers
 from eval.figures import render_all
 from eval.protocol import PAPER_OPTIONS
 from eval.readme_results import update_readme
@@ -71,6 +85,15 @@ SPREAD_DATASET = "CAD"
 SPREAD_SEED_OFFSETS = (2000, 3000)
 SPREAD_PAIRS = 25
 SPREAD_RUNS = 4
+# Localisation sweep (CAD): the first LOCALISATION_PAIRS test pairs × LOCALISATION_RUNS seeds per
+# position error, τ per error on the validation set re-drawn at that error.
+LOCALISATION_DATASET = "CAD"
+LOCALISATION_PAIRS = 25
+LOCALISATION_RUNS = 4
+# External benchmark (DMGM CAD): EXTERNAL_RUNS seeds; parameters tuned on the first
+# EXTERNAL_TUNE_PAIRS pairs of sequence 070, τ calibrated on all of it (docs/external-data.md).
+EXTERNAL_RUNS = 1
+EXTERNAL_TUNE_PAIRS = 50
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -146,6 +169,35 @@ def build_parser() -> argparse.ArgumentParser:
         type=int,
         default=SPREAD_RUNS,
         help=f"runs on each extra dataset (default {SPREAD_RUNS})",
+    )
+    p.add_argument(
+        "--localisation-sigmas",
+        default=",".join(f"{s:g}" for s in DEFAULT_SIGMAS),
+        help="position errors (m) of the localisation sweep (empty: no sweep)",
+    )
+    p.add_argument(
+        "--localisation-pairs",
+        type=int,
+        default=LOCALISATION_PAIRS,
+        help=f"localisation sweep on the first N test pairs (default {LOCALISATION_PAIRS}; 0: all)",
+    )
+    p.add_argument(
+        "--localisation-runs",
+        type=int,
+        default=LOCALISATION_RUNS,
+        help=f"runs per position error (default {LOCALISATION_RUNS})",
+    )
+    p.add_argument(
+        "--external-runs",
+        type=int,
+        default=EXTERNAL_RUNS,
+        help=f"runs on the DMGM CAD pairs (default {EXTERNAL_RUNS}; 0: skip the external stage)",
+    )
+    p.add_argument(
+        "--external-tune-pairs",
+        type=int,
+        default=EXTERNAL_TUNE_PAIRS,
+        help=f"tune on the first N pairs of sequence 070 (default {EXTERNAL_TUNE_PAIRS}; 0: all)",
     )
     p.add_argument("--out", default="results", help="output directory (default: results)")
     p.add_argument("--data", default="data", help="dataset directory (default: data)")
@@ -348,6 +400,55 @@ def main(argv: list[str] | None = None) -> int:
                 )
                 table.round(6).to_csv(out / "dataset_spread.csv", index=False)
         count("dataset_spread", before)
+        loc_entry = next((e for e in entries if e.label == LOCALISATION_DATASET), None)
+        loc_sigmas = (
+            parse_sigmas(args.localisation_sigmas) if args.localisation_sigmas.strip() else []
+        )
+        loc_seeds = list(range(args.localisation_runs))
+        with timer.stage("localisation_sweep"):
+            before = asdict(runner.totals)
+            (out / "localisation_sweep.csv").unlink(missing_ok=True)
+            if loc_entry is not None and loc_sigmas:
+                loc_named = sweep_specs(
+                    out, loc_entry, parse_matchers(LOCALISATION_MATCHERS), runner, args.tune
+                )
+                log.info(
+                    "[localisation sweep] %s: position σ %s m × %d runs, first %s test pairs",
+                    loc_entry.label,
+                    loc_sigmas,
+                    len(loc_seeds),
+                    args.localisation_pairs or "all",
+                )
+                rows = sweep_localisation(
+                    loc_entry,
+                    loc_named,
+                    loc_seeds,
+                    loc_sigmas,
+                    runner,
+                    args.localisation_pairs or None,
+                )
+                write_localisation_sweep(out, rows)
+        count("localisation_sweep", before)
+        external_seeds = list(range(args.external_runs))
+        with timer.stage("external"):
+            before = asdict(runner.totals)
+            if external_seeds:
+                external = external_matchers(args.matchers)
+                log.info(
+                    "[external] DMGM CAD: %d matchers × %d runs; τ and tuning on sequence 070",
+                    len(external),
+                    len(external_seeds),
+                )
+                evaluate_external(
+                    runner,
+                    out,
+                    external,
+                    external_seeds,
+                    tune=args.tune,
+                    tune_pairs=args.external_tune_pairs or None,
+                )
+                write_agreement(out)
+        count("external", before)
 
     with timer.stage("tables_figures"):
         markdown = write_tables(out, PAPER_CSV)
@@ -370,6 +471,19 @@ def main(argv: list[str] | None = None) -> int:
         | {"seeds": sweep_seeds, "pairs": sweep_pairs},
         regime_sweep={"datasets": [e.label for e in entries] if keeps else [], "keep": keeps}
         | {"seeds": regime_seeds, "val_seeds": regime_val_seeds, "pairs": regime_pairs},
+        localisation_sweep={
+            "dataset": LOCALISATION_DATASET if loc_entry and loc_sigmas else None,
+            "position_sigmas_m": loc_sigmas,
+            "yaw_sigma_deg_per_m": 0.2 / 1.2,
+            "seeds": loc_seeds,
+            "pairs": args.localisation_pairs or None,
+        },
+        external={
+            "test_dir": _shown(TEST_DIR),
+            "calibration_dir": _shown(CALIBRATION_DIR),
+            "seeds": external_seeds,
+            "tune_pairs": args.external_tune_pairs or None,
+        },
         dataset_spread={
             "dataset": SPREAD_DATASET if spread_sets else None,
             "generated": [{"dir": d, "scenario_seed": s} for d, _, s in spread_sets],

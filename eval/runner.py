@@ -39,6 +39,7 @@ class RunRequest:
     noise_rate: float | None = None
     limit: int | None = None
     keep: float | None = None
+    localisation: tuple[float, float] | None = None
 
     def spec(self, version: str) -> RunSpec:
         return RunSpec(
@@ -49,6 +50,7 @@ class RunRequest:
             version,
             self.limit,
             self.keep,
+            self.localisation,
         )
 
 
@@ -79,14 +81,18 @@ def requests_for(
     noise_rates: Iterable[float | None] = (None,),
     limit: int | None = None,
     keep: float | None = None,
+    localisation: tuple[float, float] | None = None,
 ) -> list[RunRequest]:
     """Every combination of (dataset dir, checksum) × matcher × seed × noise rate (first `limit`
     frame pairs of each dataset; None: all; non-covisible detections thinned to level `keep`,
-    where 1 and None both mean no thinning and share the untouched runs)."""
+    where 1 and None both mean no thinning and share the untouched runs; the localisation prior
+    re-drawn at (position sigma m, yaw sigma deg), None: each record's own)."""
     matchers, seeds, noise_rates = list(matchers), list(seeds), list(noise_rates)
     keep = None if keep is None or float(keep) == 1.0 else float(keep)
+    if localisation is not None:
+        localisation = (float(localisation[0]), float(localisation[1]))
     return [
-        RunRequest(d, c, m, s, r, limit, keep)
+        RunRequest(d, c, m, s, r, limit, keep, localisation)
         for d, c in datasets
         for r in noise_rates
         for s in seeds
@@ -105,11 +111,12 @@ def _group(missing: Sequence[RunRequest], version: str) -> list[RunTask]:
             req.noise_rate,
             req.limit,
             req.keep,
+            req.localisation,
         )
         key = key if shared else (*key, req.matcher)
         groups.setdefault(key, []).append(req.matcher)
     return [
-        RunTask(k[0], k[1], k[2], k[3], tuple(dict.fromkeys(ms)), version, k[4], k[5])
+        RunTask(k[0], k[1], k[2], k[3], tuple(dict.fromkeys(ms)), version, k[4], k[5], k[6])
         for k, ms in groups.items()
     ]
 

@@ -1,6 +1,7 @@
 """Table I: our accuracy, balanced accuracy, precision, recall (mean ± std over runs), F1, AP, τ,
 tuned parameters and median time per pair for every dataset and matcher, beside the paper's
-numbers; Markdown, CSV and LaTeX.
+numbers, and precision, recall and F1 pooled over each run's frame pairs (``*_pooled``, DMGM's
+aggregation); Markdown, CSV and LaTeX.
 
 Inputs are the CSV files ``cadsim evaluate`` writes into its output directory
 (``metrics_per_pair.csv``, ``average_precision.csv``, ``thresholds.csv``, each also per variant:
@@ -16,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from eval.metrics import METRICS, summarise_runs
+from eval.metrics import METRICS, POOLED, summarise_pooled, summarise_runs
 from eval.protocol import MAIN, VARIANTS, variant_path
 
 PAPER_CSV = Path(__file__).parent / "data" / "paper-table1.csv"
@@ -32,7 +33,15 @@ PAPER_NAMES = {
     "mos": "MOS",
     "maximin": "Maximin",
 }
-EXTRA_NAMES = {"appearance": "Appearance only", "none": "None (declares nothing)"}
+EXTRA_NAMES = {
+    "appearance": "Appearance only",
+    "none": "None (declares nothing)",
+    "consistency": "Consistency (no prior)",
+    "pose": "Pose prior only",
+    "pose_refine": "Pose prior, refined",
+    "pose_appearance": "Pose prior × appearance",
+    "maximin_pose": "Maximin + pose prior",
+}
 PAPER_DATASETS = ("MRC", "CAD")
 # Our dataset -> the paper's column shown beside it (a variant of a paper dataset).
 PAPER_COLUMN = {"CAD-dense": "CAD"}
@@ -81,8 +90,11 @@ def build_table(
         na_values=[""],
     )
     summary = summarise_runs(per_pair, by=["dataset", "matcher"])
+    if {"tp", "n_pred", "n_gt"} <= set(per_pair.columns):
+        pooled = summarise_pooled(per_pair, by=["dataset", "matcher"])
+        summary = summary.merge(pooled, on=["dataset", "matcher"], how="left")
     for col in summary.columns:
-        if col.rsplit("_", 1)[0] in METRICS and col.endswith(("_mean", "_std")):
+        if col.rsplit("_", 1)[0] in (*METRICS, *POOLED) and col.endswith(("_mean", "_std")):
             summary[col] = 100 * summary[col]
     sizes = per_pair.groupby(["dataset", "matcher"]).agg(
         frames=("pair", "nunique"), time_median_ms=("time_s", lambda t: 1000 * float(np.median(t)))
@@ -154,11 +166,20 @@ def _cells(row: pd.Series, show_params: bool) -> dict[str, str]:
                 row.get("balanced_accuracy_mean", np.nan), row.get("balanced_accuracy_std", np.nan)
             )
     cells["F1"] = _pm(row["f1_mean"], row["f1_std"])
+    cells["Pooled P / R / F1"] = pooled_text(row)
     cells["AP"] = _pm(row.get("ap_mean", np.nan), row.get("ap_std", np.nan))
     tau = row.get("tau", np.nan)
     cells["τ"] = "–" if pd.isna(tau) else f"{tau:.3f}"
     cells["ms / pair"] = f"{row['time_median_ms']:.1f}"
     return cells
+
+
+def pooled_text(row: pd.Series) -> str:
+    """``P / R / F1`` pooled over frame pairs (percent, mean over runs), or – without them."""
+    values = [row.get(f"{m}_mean", np.nan) for m in POOLED]
+    if any(pd.isna(v) for v in values):
+        return "–"
+    return " / ".join(f"{v:.1f}" for v in values)
 
 
 def _show_params(table: pd.DataFrame) -> bool:
@@ -202,9 +223,10 @@ def to_latex(table: pd.DataFrame) -> str:
             r"\centering",
             rf"\caption{{Correspondence identification on {_latex_escape(dataset)} (\%, mean $\pm$ "
             r"std over runs; the paper's numbers in parentheses).}",
-            r"\begin{tabular}{lccccccrr}",
+            r"\begin{tabular}{lcccccccrr}",
             r"\toprule",
-            r"Method & Accuracy & Bal.\ acc. & Precision & Recall & F1 & AP & $\tau$ & ms/pair \\",
+            r"Method & Accuracy & Bal.\ acc. & Precision & Recall & F1 & F1 pooled & AP & $\tau$ & "
+            r"ms/pair \\",
             r"\midrule",
         ]
         for _, r in rows.iterrows():
@@ -217,6 +239,8 @@ def to_latex(table: pd.DataFrame) -> str:
                 paper = r.get(f"paper_{metric}_mean", np.nan)
                 cells.append(ours if pd.isna(paper) else f"{ours} ({paper:.1f})")
             cells.append(f"{r['f1_mean']:.1f} $\\pm$ {r['f1_std']:.1f}")
+            pooled = r.get("f1_pooled_mean", np.nan)
+            cells.append("--" if pd.isna(pooled) else f"{pooled:.1f}")
             ap = r.get("ap_mean", np.nan)
             cells.append("--" if pd.isna(ap) else f"{ap:.1f}")
             tau = r.get("tau", np.nan)

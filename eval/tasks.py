@@ -2,10 +2,12 @@
 
 A *run* is (dataset, matcher with options, run seed, noise rate or None = the stored detections;
 optionally only the dataset's first N frame pairs, optionally with its non-covisible detections
-thinned to a keep level, :mod:`eval.thinning`).
+thinned to a keep level, :mod:`eval.thinning`, optionally with the localisation prior re-drawn at
+(position sigma m, yaw sigma deg) — ``FramePair.localise(..., seed)``; None: the record's own prior).
 Its identity, :class:`RunSpec`, holds everything that determines the result — dataset checksum,
 matcher name and options (tuned parameters and protocol options such as ``pairwise="image"``
-are options), seed, noise rate, keep level, code version — and hashes to the cache key. A
+are options), seed, noise rate, keep level, localisation sigmas, code version — and hashes to
+the cache key (the localisation draw is fixed by the sigmas, the seed and the record identity). A
 :class:`RunTask` is the unit of work handed to an executor: one dataset, seed and noise rate and
 one or more matchers, which then share the (costly) re-detection of every frame pair. Tasks carry
 only plain data (paths, names, numbers), so any executor, local or remote, gives the same result.
@@ -58,6 +60,8 @@ class RunSpec:
     code_version: str
     limit: int | None = None  # only the first `limit` frame pairs (None: all)
     keep: float | None = None  # thinning level of non-covisible detections (None: no thinning)
+    # (position sigma m, yaw sigma deg) of a re-drawn localisation prior (None: the record's own)
+    localisation: tuple[float, float] | None = None
 
     def key(self) -> str:
         """Hex SHA-256 of the canonical JSON of the fields."""
@@ -77,6 +81,7 @@ class RunTask:
     code_version: str
     limit: int | None = None
     keep: float | None = None
+    localisation: tuple[float, float] | None = None
 
     def specs(self) -> list[RunSpec]:
         return [
@@ -88,6 +93,7 @@ class RunTask:
                 self.code_version,
                 self.limit,
                 self.keep,
+                self.localisation,
             )
             for m in self.matchers
         ]
@@ -167,6 +173,8 @@ def execute(task: RunTask) -> list[RunResult]:
             pair = pair.redetect(task.noise_rate, seed=task.seed)
         if task.keep is not None:
             pair = thin_pair(pair, task.keep)
+        if task.localisation is not None:
+            pair = pair.localise(*task.localisation, seed=task.seed)
         problem = pair.problem()
         gt = np.asarray(pair.gt_pairs, dtype=np.int64).reshape(-1, 2)
         for spec, fn, result in zip(task.matchers, functions, results, strict=True):

@@ -74,15 +74,18 @@ def candidates_of(base: MatcherSpec) -> list[tuple[MatcherSpec, dict]]:
     return list(out.items())
 
 
-def tune_entry(entry, matchers: Sequence[MatcherSpec], runner: Runner) -> dict[str, TuningChoice]:
-    """Pick each matcher's configuration on `entry`'s validation dataset (seed 0 runs only).
-    `entry` is an ``eval.commands.evaluate.DatasetEntry``; returns {matcher label: choice}."""
+def tune_entry(
+    entry, matchers: Sequence[MatcherSpec], runner: Runner, limit: int | None = None
+) -> dict[str, TuningChoice]:
+    """Pick each matcher's configuration on `entry`'s validation dataset (seed 0 runs only; its
+    first `limit` frame pairs, None: all). `entry` is an ``eval.commands.evaluate.DatasetEntry``;
+    returns {matcher label: choice}."""
     if entry.val_dir is None:
         raise ValueError(f"{entry.test_dir}: tuning needs a validation dataset")
     grids = {m.label: candidates_of(m) for m in matchers}
     specs = [spec for options in grids.values() for spec, _ in options]
     runs = runner.run(
-        requests_for([(entry.val_dir, entry.val_checksum)], specs, [TUNING_SEED]),
+        requests_for([(entry.val_dir, entry.val_checksum)], specs, [TUNING_SEED], limit=limit),
         desc=f"{entry.label} tuning",
     )
     by_spec = {run.spec.matcher: run for run in runs}

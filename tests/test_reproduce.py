@@ -40,6 +40,12 @@ OUTPUTS = (
     "fig_regime.png",
     "fig_regime.pdf",
     "dataset_spread.csv",
+    "localisation_sweep.csv",
+    "fig_localisation.png",
+    "fig_localisation.pdf",
+    "table_external.md",
+    "table_external.csv",
+    "agreement.csv",
 )
 MATCHERS = ["maximin", "none", "sm"]
 
@@ -52,6 +58,8 @@ def test_tiny_reproduce_writes_every_output_and_reruns_from_cache(tmp_path, caps
     argv += ["--rates", "0,0.01", "--keep", "1,0", "--regime-runs", "1", "--spread-runs", "1"]
     argv += ["--runs", "2", "--out", str(out), "--data", str(data), "--cache", str(cache)]
     argv += ["--sweep-runs", "2", "--workers", "2", "--quiet"]
+    argv += ["--localisation-sigmas", "0,2", "--localisation-runs", "1"]
+    argv += ["--external-runs", "1", "--external-tune-pairs", "3"]
     assert reproduce.main(argv) == 0
     printed = capsys.readouterr().out
     assert "Table I" in printed and "Maximin" in printed
@@ -84,6 +92,25 @@ def test_tiny_reproduce_writes_every_output_and_reruns_from_cache(tmp_path, caps
     assert set(regime["dataset"]) == set(labels) and sorted(regime["keep"].unique()) == [0.0, 1.0]
     assert (regime.loc[regime["keep"] == 0, "share"] == 0).all()
     assert len(pd.read_csv(out / "table1_paper_protocol.csv")) == len(labels) * 3
+    external = pd.read_csv(out / "table_external.csv")
+    assert sorted(external.loc[external["source"] == "ours", "matcher"]) == MATCHERS
+    assert (external.loc[external["source"] == "ours", "frames"] == 109).all()
+    assert external["f1_pooled"].between(0, 1).all() and "dmgm_published" in set(
+        external["matcher"]
+    )
+    agreement = pd.read_csv(out / "agreement.csv")
+    assert list(agreement.columns) == [
+        "dataset",
+        "reference",
+        "matchers",
+        "rho",
+        "ci_low",
+        "ci_high",
+    ]
+    if "CAD" in labels:
+        loc = pd.read_csv(out / "localisation_sweep.csv")
+        assert sorted(loc["position_sigma_m"].unique()) == [0.0, 2.0]
+        assert {"pose", "pose_refine", "maximin"} <= set(loc["matcher"])
     tuning = pd.read_csv(out / "tuning.csv")
     assert set(tuning["dataset"]) == set(labels)
     assert (tuning.groupby(["dataset", "matcher"])["chosen"].sum() == 1).all()

@@ -61,6 +61,7 @@ def summarise(ds) -> dict:
         "dataset": str(ds.path),
         "scenario": manifest["scenario"]["name"],
         "seed": manifest["seeds"]["root"],
+        "source": manifest.get("source"),
         "checksum": ds.checksum,
         "noise": ds.noise_config,
         "n_pairs": len(pairs),
@@ -111,6 +112,11 @@ def _text(s: dict) -> str:
     lines = [
         f"{s['dataset']}: scenario {s['scenario']}, {s['n_pairs']} pairs, seed {s['seed']}, "
         f"checksum {s['checksum'][:16]}",
+        *(
+            [f"  imported from           {src['repository']} @ {src['commit']} ({src['licence']})"]
+            if (src := s.get("source"))
+            else []
+        ),
         f"  objects per view        {_fmt(s['objects_per_view'])}",
         f"  covisible per pair      {_fmt(s['covisible'])}",
         f"  non-covisible per view  {_fmt(s['non_covisible_per_view'])}",

@@ -3,6 +3,9 @@
 Positions are in that view's camera frame (OpenCV: x right, y down, z forward, metres), computed
 from the noisy depth; boxes are pixel rectangles (u0, v0, u1, v1); features are the detection
 adapter's appearance vectors; ``object_ids`` are ground truth and never part of a matcher's input.
+``world`` (imported data only) is each detection's position in a shared world frame as the
+observer's own noisy localisation put it — the localisation prior stored with the data; simulated
+records leave it None and the reader derives the prior from the camera pose.
 """
 
 from __future__ import annotations
@@ -19,7 +22,8 @@ class ViewDetections:
     """k detections of one view.
 
     positions: (k, 3) float64 metres, camera frame. boxes: (k, 4) float64 pixels (u0, v0, u1, v1).
-    features: (k, d) float32. object_ids, classes: k strings. pixels: (k,) int64 visible pixels.
+    features: (k, d) float32. object_ids, classes: k strings. pixels: (k,) int64 visible pixels
+    (0 = unknown). world: (k, 3) float64 metres (x, y horizontal, z up) or None — a stored prior.
     """
 
     positions: np.ndarray
@@ -28,6 +32,7 @@ class ViewDetections:
     object_ids: list[str]
     classes: list[str]
     pixels: np.ndarray
+    world: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         k = len(self.object_ids)
@@ -40,6 +45,13 @@ class ViewDetections:
                           ("pixels", pixels), ("classes", self.classes)):  # fmt: skip
             if len(arr) != k:
                 raise ValueError(f"detections.{name}: {len(arr)} rows for {k} object ids")
+        if self.world is not None:
+            world = np.asarray(self.world, dtype=np.float64).reshape(-1, 3)
+            if len(world) != k:
+                raise ValueError(f"detections.world: {len(world)} rows for {k} object ids")
+            if not np.isfinite(world).all():
+                raise ValueError("detections.world: non-finite values")
+            object.__setattr__(self, "world", world)
         if len(set(self.object_ids)) != k:
             raise ValueError("detections.object_ids: an object is detected twice in one view")
         object.__setattr__(self, "positions", positions)
@@ -58,8 +70,10 @@ class ViewDetections:
         return cls(**{f: getattr(det, f) for f in _FIELDS})
 
     def to_arrays(self, prefix: str) -> dict[str, np.ndarray]:
-        """Arrays for an npz, keys ``PREFIX_FIELD``; strings as fixed-width unicode arrays."""
-        return {
+        """Arrays for an npz, keys ``PREFIX_FIELD``; strings as fixed-width unicode arrays;
+        ``PREFIX_world`` only when a prior is stored."""
+        world = {} if self.world is None else {f"{prefix}_world": self.world}
+        return world | {
             f"{prefix}_positions": self.positions,
             f"{prefix}_boxes": self.boxes,
             f"{prefix}_features": self.features,
@@ -70,17 +84,26 @@ class ViewDetections:
 
     @classmethod
     def from_arrays(cls, arrays: dict[str, np.ndarray], prefix: str, what: str) -> ViewDetections:
-        """Inverse of ``to_arrays``; ``what`` names the file in errors."""
+        """Inverse of ``to_arrays``; ``what`` names the file in errors. Features stored as
+        uint8 with a scalar ``PREFIX_features_scale`` (compact imported data) are returned as
+        float32 ``q · scale``."""
         missing = [f"{prefix}_{f}" for f in _FIELDS if f"{prefix}_{f}" not in arrays]
         if missing:
             raise ValueError(f"{what}: missing arrays {missing}")
+        features = arrays[f"{prefix}_features"]
+        scale = arrays.get(f"{prefix}_features_scale")
+        if scale is not None:
+            if features.dtype != np.uint8 or np.size(scale) != 1:
+                raise ValueError(f"{what}: {prefix}_features_scale needs uint8 features, one scale")
+            features = features.astype(np.float32) * np.float32(np.ravel(scale)[0])
         return cls(
             positions=arrays[f"{prefix}_positions"],
             boxes=arrays[f"{prefix}_boxes"],
-            features=arrays[f"{prefix}_features"],
+            features=features,
             object_ids=arrays[f"{prefix}_object_ids"].tolist(),
             classes=arrays[f"{prefix}_classes"].tolist(),
             pixels=arrays[f"{prefix}_pixels"],
+            world=arrays.get(f"{prefix}_world"),
         )
 
     def take(self, rows) -> ViewDetections:
@@ -95,13 +118,17 @@ class ViewDetections:
             object_ids=[self.object_ids[r] for r in rows],
             classes=[self.classes[r] for r in rows],
             pixels=self.pixels[rows],
+            world=None if self.world is None else self.world[rows],
         )
 
     def equals(self, other: ViewDetections) -> bool:
         """Exact equality of every field."""
+        if (self.world is None) != (other.world is None):
+            return False
         return (
             self.object_ids == other.object_ids
             and self.classes == other.classes
+            and (self.world is None or np.array_equal(self.world, other.world))
             and all(
                 np.array_equal(getattr(self, f), getattr(other, f))
                 for f in ("positions", "boxes", "features", "pixels")

@@ -76,6 +76,7 @@ def generation_config(scenario, seed: int, pairs_per_episode: int, criteria: dic
         "noise": _plain(scenario.noise),
         "detection": _plain(scenario.detection),
         "sampling": _plain(scenario.sampling),
+        "localisation": _plain(getattr(scenario, "localisation", {})),
     }
 
 

@@ -1,5 +1,11 @@
 """Reading a frame-pair dataset. Imports neither SUMO nor pyrender (``redetect`` imports the
-depth-noise and detection modules, which need only numpy/scipy/OpenCV)."""
+depth-noise and detection modules, which need only numpy/scipy/OpenCV).
+
+The localisation prior (``FramePair.prior``, filled into ``Problem.world1/world2/world_sigma``) is
+drawn here, at read time: simulated records store the pose-error parameters and seeds, the reader
+places each view's detections in the world through its camera pose with that error
+(``cadsim.sensing.localisation``); imported records store the prior's world positions as given.
+"""
 
 from __future__ import annotations
 
@@ -18,8 +24,9 @@ from cadsim.dataset.checksum import dataset_checksum, record_dir_checksum
 from cadsim.dataset.detections import ViewDetections, ground_truth_pairs
 from cadsim.dataset.encoding import decode_png, load_npz
 from cadsim.dataset.manifest import DatasetError, read_manifest
-from cadsim.dataset.seeds import noise_seed
+from cadsim.dataset.seeds import localisation_seed, noise_seed
 from cadsim.observer_pose import ObserverPose, camera_to_world
+from cadsim.sensing.localisation import LocalisationConfig, PoseError, perturbed_world
 from cadsim.world import WorldObject
 
 
@@ -29,12 +36,12 @@ class FramePair:
     index: position in the dataset. episode, slot: the record's identity; sim_seed: its
     simulation's seed. view1, view2: ``ViewDetections`` (positions in each observer's camera
     frame, metres). gt_pairs: (k, 2) int64 (i, j) indices of the same object in view1/view2.
-    cameras: the two ``Camera``s (world frame poses). observer_poses: the two observers' true
-    world poses (``ObserverPose``: body origin, metres, and heading, radians).
-    camera_extrinsics: per view, the 4×4 camera (OpenCV) → observer body transform.
-    camera_to_world: per view, the 4×4 camera (OpenCV) → world transform. noise_rate: the
-    depth-noise rate the current detections were made at. Images (color1/2, clean depth1/2,
-    instance1/2) load on first use.
+    cameras: the two ``Camera``s (world frame poses; None for imported records without images).
+    observer_poses: the two observers' true world poses (``ObserverPose``: body origin, metres,
+    and heading, radians). camera_extrinsics: per view, the 4×4 camera (OpenCV) → observer body
+    transform. camera_to_world: per view, the 4×4 camera (OpenCV) → world transform. noise_rate:
+    the depth-noise rate the current detections were made at. Images (color1/2, clean depth1/2,
+    instance1/2) load on first use. ``prior()``: the localisation prior, see :meth:`localise`.
     """
 
     def __init__(
@@ -46,6 +53,9 @@ class FramePair:
         detection: dict,
         views: tuple[ViewDetections, ViewDetections] | None = None,
         noise_rate: float | None = None,
+        *,
+        record_files: tuple[str, ...] = layout.RECORD_FILES,
+        localisation: tuple[LocalisationConfig, tuple[int, int]] | None | str = "record",
     ) -> None:
         self.path = Path(path)
         self.index = int(index)
@@ -57,6 +67,8 @@ class FramePair:
         self._entry = entry
         self._noise = dict(noise)
         self._detection = dict(detection)
+        self._record_files = tuple(record_files)
+        self._localisation = localisation  # "record": the record's own pose-error draw
         if views is None:
             what = self.path / layout.DETECTIONS_NPZ
             arrays = load_npz(str(self._file(layout.DETECTIONS_NPZ)), str(what))
@@ -92,25 +104,40 @@ class FramePair:
 
     @property
     def time(self) -> float:
-        """Simulation time of the snapshot, seconds."""
-        return float(self.record["time"])
+        """Simulation time of the snapshot, seconds (NaN when the source does not give it)."""
+        value = self.record.get("time")
+        return float("nan") if value is None else float(value)
+
+    @property
+    def has_images(self) -> bool:
+        """Whether the record has colour, depth and instance images (imported records do not)."""
+        return layout.VIEW1_PNG in self._record_files
 
     @cached_property
-    def cameras(self) -> tuple[Camera, Camera]:
+    def cameras(self) -> tuple[Camera, Camera] | None:
+        """The two observers' cameras (world poses, intrinsics), or None when the record has none."""
         obs = self.record["observers"]
+        if any(o.get("camera") is None for o in obs):
+            return None
         return Camera.from_dict(obs[0]["camera"]), Camera.from_dict(obs[1]["camera"])
 
     @cached_property
-    def observer_poses(self) -> tuple[ObserverPose, ObserverPose]:
+    def observer_poses(self) -> tuple[ObserverPose, ObserverPose] | None:
         """The two observers' true world poses: the carrying object's bounding-box centre (world
-        metres) and heading (radians CCW from +x); a camera on no object: its own."""
+        metres) and heading (radians CCW from +x); a camera on no object: its own. None for
+        imported records, which carry no true poses."""
         obs = self.record["observers"]
+        if any(o.get("pose") is None for o in obs):
+            return None
         return ObserverPose.from_dict(obs[0]["pose"]), ObserverPose.from_dict(obs[1]["pose"])
 
     @cached_property
-    def camera_extrinsics(self) -> tuple[np.ndarray, np.ndarray]:
+    def camera_extrinsics(self) -> tuple[np.ndarray, np.ndarray] | None:
         """Per view, the 4×4 transform from the camera's OpenCV frame to its observer's body
-        frame (x forward, y left, z up, origin at the body's centre): the camera mount."""
+        frame (x forward, y left, z up, origin at the body's centre): the camera mount. None
+        without cameras and poses (imported records)."""
+        if self.cameras is None or self.observer_poses is None:
+            return None
         return tuple(
             pose.camera_extrinsics(cam)
             for pose, cam in zip(self.observer_poses, self.cameras, strict=True)
@@ -119,7 +146,10 @@ class FramePair:
     @cached_property
     def camera_to_world(self) -> tuple[np.ndarray, np.ndarray]:
         """Per view, the 4×4 transform from the camera's OpenCV frame to the world frame (true
-        pose): ``camera_to_world[0] @ [p, 1]`` puts a view-1 position into the world."""
+        pose): ``camera_to_world[0] @ [p, 1]`` puts a view-1 position into the world. None
+        without cameras (imported records)."""
+        if self.cameras is None:
+            return None
         return camera_to_world(self.cameras[0]), camera_to_world(self.cameras[1])
 
     @property
@@ -179,31 +209,115 @@ class FramePair:
 
     def problem(self):
         """The matching problem as ``matchers.Problem``: positions (metres, each camera's frame)
-        and features of both views, and the box centres in pixels (``pixels1``/``pixels2``, for
-        matchers that compare objects in the image)."""
+        and features of both views, the box centres in pixels (``pixels1``/``pixels2``, for
+        matchers that compare objects in the image), and the localisation prior (world positions
+        + stated sigma, :meth:`prior`) when the record has one."""
         from matchers.problem import Problem
 
+        prior = self.prior()
+        world1, world2, sigma = (None, None, None) if prior is None else prior
+        loc = self.localisation
         return Problem(
             self.view1.positions,
             self.view2.positions,
             self.view1.features,
             self.view2.features,
-            meta={"pair": self.index, "name": self.name, "noise_rate": self.noise_rate},
+            meta={
+                "pair": self.index,
+                "name": self.name,
+                "noise_rate": self.noise_rate,
+                "localisation": None if loc is None else dataclasses.asdict(loc[0]),
+            },
             pixels1=_box_centres(self.view1.boxes),
             pixels2=_box_centres(self.view2.boxes),
+            world1=world1,
+            world2=world2,
+            world_sigma=sigma,
         )
+
+    @property
+    def localisation(self) -> tuple[LocalisationConfig, tuple[int, int]] | None:
+        """The pose-error parameters and the two views' seeds the prior is drawn with: the
+        record's own (its scenario's ``[localisation]`` table, seeds from the dataset's root
+        seed), or those given to :meth:`localise`. None when the prior is stored (imported data)
+        or the record has none (a pair built in memory)."""
+        if self._localisation != "record":
+            return self._localisation
+        if self.view1.world is not None or not (self.path / layout.RECORD_JSON).is_file():
+            return None  # stored prior, or a pair built in memory without a record
+        prior = self.record.get("prior") or {}
+        if prior.get("kind") != "pose_error" or self.cameras is None:
+            return None
+        config = LocalisationConfig(
+            **{k: prior[k] for k in ("position_sigma_m", "yaw_sigma_deg") if k in prior}
+        )
+        obs = self.record["observers"]
+        return config, (int(obs[0]["localisation_seed"]), int(obs[1]["localisation_seed"]))
+
+    def prior(self) -> tuple[np.ndarray, np.ndarray, float] | None:
+        """The localisation prior: (world1 (n, 3), world2 (m, 3), stated sigma in metres) — each
+        view's detections in the world frame (x, y horizontal, z up) through that observer's own
+        noisy pose — or None when the record has none. Simulated records: the current detections
+        (after any ``redetect``/``select``) through each camera, with its observer's pose error
+        applied about the observer's body origin (``cadsim.sensing.localisation``); sigma =
+        position sigma, at least 0.5 m. Imported
+        records: the stored positions and the source's stated sigma."""
+        if self.view1.world is not None and self.view2.world is not None:
+            return self.view1.world, self.view2.world, float(self.record["prior"]["world_sigma_m"])
+        loc = self.localisation
+        if loc is None:
+            return None
+        config, seeds = loc
+        worlds = []
+        views = (self.view1, self.view2)
+        for view, camera, pose, seed in zip(views, self.cameras, self.observer_poses, seeds, strict=True):  # fmt: skip
+            error = PoseError.draw(config, np.random.default_rng(seed))
+            world = camera.camera_to_world(view.positions)
+            worlds.append(perturbed_world(world, np.asarray(pose.position), error))
+        return worlds[0], worlds[1], config.stated_sigma_m
+
+    def localise(self, position_sigma_m: float, yaw_sigma_deg: float, seed: int) -> FramePair:
+        """This pair with its localisation prior re-drawn: each observer's pose error has
+        standard deviations ``position_sigma_m`` (metres per ground axis) and ``yaw_sigma_deg``,
+        seeded by (seed, episode, slot, view). Nothing is re-rendered or re-detected. Same
+        arguments ⇒ the same prior; for one seed the error scales with the sigmas; the dataset's
+        root seed and its scenario's sigmas ⇒ the record's own prior. ``ValueError`` for a record
+        whose prior is stored (imported) or that has no cameras.
+
+        >>> pair.localise(2.5, 2.5 * 0.2 / 1.2, seed=0).prior()[2]   # doctest: +SKIP
+        2.5
+        """
+        config = LocalisationConfig(position_sigma_m=position_sigma_m, yaw_sigma_deg=yaw_sigma_deg)
+        if self.view1.world is not None:
+            raise ValueError(
+                f"{self.path}: the localisation prior is stored with this (imported) record and "
+                "cannot be re-drawn"
+            )
+        if self.cameras is None:
+            raise ValueError(f"{self.path}: record has no camera poses to localise from")
+        seeds = tuple(localisation_seed(seed, self.episode, self.slot, v) for v in (1, 2))
+        return self._derived((self.view1, self.view2), self.noise_rate, (config, seeds))
 
     def select(self, rows1, rows2) -> FramePair:
         """This pair with only the detections at `rows1` of view 1 and `rows2` of view 2 (integer
         indices, in that order); ground truth follows the kept objects. Images are shared."""
         views = (self.view1.take(rows1), self.view2.take(rows2))
-        return self._with_views(views, self.noise_rate)
+        return self._derived(views, self.noise_rate, self._localisation)
 
-    def _with_views(
-        self, views: tuple[ViewDetections, ViewDetections], noise_rate: float
+    def _derived(
+        self, views: tuple[ViewDetections, ViewDetections], noise_rate: float, localisation
     ) -> FramePair:
+        """A copy with other detections / prior parameters, sharing what was loaded."""
         pair = FramePair(
-            self.path, self.index, self._entry, self._noise, self._detection, views, noise_rate
+            self.path,
+            self.index,
+            self._entry,
+            self._noise,
+            self._detection,
+            views,
+            noise_rate,
+            record_files=self._record_files,
+            localisation=localisation,
         )
         shared = ("record", "color1", "color2", "_depth", "_instance", "objects", "cameras")
         shared += ("observer_poses", "camera_extrinsics", "camera_to_world")
@@ -225,6 +339,8 @@ class FramePair:
 
         if not np.isfinite(noise_rate) or noise_rate < 0:
             raise ValueError(f"noise_rate: expected a finite value >= 0, got {noise_rate!r}")
+        if not self.has_images:
+            raise ValueError(f"{self.path}: record has no depth images to re-detect from")
         try:
             noise_cfg = NoiseConfig(**self._noise)
             det_cfg = DetectionConfig(**self._detection)
@@ -256,7 +372,7 @@ class FramePair:
                 known_features=known,
             )
             views.append(ViewDetections.from_detections(det))
-        return self._with_views(tuple(views), noise_rate)
+        return self._derived(tuple(views), noise_rate, self._localisation)
 
 
 def _box_centres(boxes: np.ndarray) -> np.ndarray:
@@ -270,7 +386,7 @@ _VERIFIED: dict[str, tuple[str, str]] = {}
 
 
 class Dataset(Sequence[FramePair]):
-    """A frame-pair dataset written by ``cadsim generate``.
+    """A frame-pair dataset written by ``cadsim generate`` or ``cadsim import``.
 
     ``len(ds)``, ``ds[k]`` (a ``FramePair``), iteration in dataset order, ``ds.manifest`` (the
     parsed manifest.json), ``ds.checksum`` (hash over the records' checksums). ``verify()``
@@ -292,6 +408,15 @@ class Dataset(Sequence[FramePair]):
         gen = self.manifest["generation"]
         self.noise_config: dict = dict(gen.get("noise") or {})
         self.detection_config: dict = dict(gen.get("detection") or {})
+        self.record_files: tuple[str, ...] = tuple(
+            self.manifest.get("record_files") or layout.RECORD_FILES
+        )
+        unknown = sorted(set(self.record_files) - set(layout.RECORD_FILES))
+        if unknown or layout.DETECTIONS_NPZ not in self.record_files:
+            raise DatasetError(
+                f"{self.path / layout.MANIFEST}: record_files {list(self.record_files)} must "
+                f"include {layout.DETECTIONS_NPZ} and name only files of {list(layout.RECORD_FILES)}"
+            )
         if verify:
             self.verify_once()
 
@@ -318,7 +443,14 @@ class Dataset(Sequence[FramePair]):
         record_dir = self.path / layout.PAIRS_DIR / entry["name"]
         if not record_dir.is_dir():
             raise DatasetError(f"{record_dir}: record listed in the manifest is missing")
-        return FramePair(record_dir, k, entry, self.noise_config, self.detection_config)
+        return FramePair(
+            record_dir,
+            k,
+            entry,
+            self.noise_config,
+            self.detection_config,
+            record_files=self.record_files,
+        )
 
     def __iter__(self) -> Iterator[FramePair]:
         for k in range(len(self)):
@@ -358,10 +490,10 @@ class Dataset(Sequence[FramePair]):
         """Re-hash every record and the dataset; ``DatasetError`` naming the first mismatch."""
         for entry in self._records:
             record_dir = self.path / layout.PAIRS_DIR / entry["name"]
-            missing = [n for n in layout.RECORD_FILES if not (record_dir / n).is_file()]
+            missing = [n for n in self.record_files if not (record_dir / n).is_file()]
             if missing:
                 raise DatasetError(f"{record_dir}: missing record files {missing}")
-            actual = record_dir_checksum(record_dir, layout.RECORD_FILES)
+            actual = record_dir_checksum(record_dir, self.record_files)
             if actual != entry["checksum"]:
                 raise DatasetError(f"{record_dir}: checksum mismatch (record modified or corrupt)")
         if dataset_checksum(r["checksum"] for r in self._records) != self.checksum:

@@ -6,17 +6,22 @@ Files of ``pairs/eEEEEE_sSS/`` (see docs/dataset.md for every field):
 ``instance2`` (H, W) int32 index into ``record.json``'s ``objects``, -1 = none; ``detections.npz``
 ``view{1,2}_{positions,boxes,features,object_ids,classes,pixels}`` at the scenario's noise
 config; ``record.json`` cameras, observers (with their true world poses), seeds, snapshot time and
-objects, ground truth.
+objects, ground truth, and the localisation prior's parameters (``prior``; the pose error itself is
+drawn at read time from ``observers[].localisation_seed``).
 
-Format versions: 1, the first; 2 adds ``observers[].pose`` and ``observers[].attribute_seed``
-(features carry detector-like attributes from then on). A change of the record layout bumps
-``FORMAT_VERSION``; the reader refuses other versions with a message naming both.
+Records of imported data (``cadsim import``) have no images: ``detections.npz`` and ``record.json``
+only (the manifest's ``record_files``), the prior's world positions stored as ``view{1,2}_world``.
+
+Format versions: 1, the first; 2 adds ``observers[].pose``, ``observers[].attribute_seed``
+(features carry detector-like attributes from then on), the localisation prior (``prior``,
+``observers[].localisation_seed``) and image-less imported records. A change of the record layout
+bumps ``FORMAT_VERSION``; the reader refuses other versions with a message naming both.
 """
 
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
@@ -25,6 +30,7 @@ from cadsim.dataset import layout
 from cadsim.dataset.detections import ViewDetections, ground_truth_pairs
 from cadsim.dataset.encoding import json_bytes, npz_bytes, png_bytes
 from cadsim.observer_pose import ObserverPose
+from cadsim.sensing.localisation import LocalisationConfig
 from cadsim.world import WorldObject
 
 FORMAT_VERSION = 2
@@ -35,7 +41,8 @@ class ViewCapture:
     """One observer's view: camera, the id of the object carrying it ("" for none), the rendered
     colour (H, W, 3) uint8 RGB, clean depth (H, W) float32 metres, instance ids (H, W) int32, the
     detections at the scenario's noise config, the seed of that noise, the seed of the detector's
-    attribute errors and the observer's true world pose."""
+    attribute errors, the observer's true world pose, and the seed of its localisation error
+    (drawn at read time, ``cadsim.sensing.localisation``)."""
 
     camera: Camera
     observer_id: str
@@ -46,11 +53,14 @@ class ViewCapture:
     noise_seed: int
     attribute_seed: int
     pose: ObserverPose
+    localisation_seed: int = 0
 
 
 @dataclass(frozen=True, eq=False)
 class PairRecord:
-    """One accepted frame pair. Identity: (episode, slot). time: simulation seconds."""
+    """One accepted frame pair. Identity: (episode, slot). time: simulation seconds.
+    localisation: the scenario's ``[localisation]`` table (``position_sigma_m``,
+    ``yaw_sigma_deg``; missing keys take ``LocalisationConfig``'s defaults)."""
 
     episode: int
     slot: int
@@ -60,6 +70,7 @@ class PairRecord:
     view1: ViewCapture
     view2: ViewCapture
     meta: dict = field(default_factory=dict)
+    localisation: dict = field(default_factory=dict)
 
 
 def jsonable(value):
@@ -107,9 +118,11 @@ def encode_record(rec: PairRecord) -> dict[str, bytes]:
                 "pose": v.pose.as_dict(),
                 "noise_seed": int(v.noise_seed),
                 "attribute_seed": int(v.attribute_seed),
+                "localisation_seed": int(v.localisation_seed),
             }
             for v in views
         ],
+        "prior": {"kind": "pose_error", **asdict(LocalisationConfig(**rec.localisation))},
         "objects": [o.as_dict() for o in rec.objects],
         "ground_truth": [{"object_id": ids1[i], "i": int(i), "j": int(j)} for i, j in gt],
         "counts": {

@@ -57,7 +57,7 @@ from cadsim.dataset.manifest import (
     write_manifest,
 )
 from cadsim.dataset.record_format import PairRecord, ViewCapture, encode_record
-from cadsim.dataset.seeds import attribute_seed, noise_seed, simulation_seed
+from cadsim.dataset.seeds import attribute_seed, localisation_seed, noise_seed, simulation_seed
 from cadsim.dataset.writer_lock import exclusive_writer
 from cadsim.generation.executor import Executor, report_progress
 from cadsim.generation.executors import make_executor
@@ -344,7 +344,7 @@ def _try_pair(
         pose = ObserverPose.of_carrier(carrier) if carrier else ObserverPose.of_camera(camera)
         capture = ViewCapture(
             camera, observer, rendered.color, rendered.depth, rendered.instance, det, seed,
-            attr_seed, pose,
+            attr_seed, pose, localisation_seed(task.root_seed, task.episode, slot, v),
         )  # fmt: skip
         views.append(capture)
     if not is_acceptable_pair(
@@ -355,6 +355,7 @@ def _try_pair(
     return PairRecord(
         task.episode, slot, simulation_seed(task.root_seed, task.episode), float(snapshot.time),
         list(snapshot.objects), views[0], views[1], meta,
+        dict(getattr(task.scenario, "localisation", {})),
     )  # fmt: skip
 
 

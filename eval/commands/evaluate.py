@@ -391,11 +391,14 @@ def evaluate(
     calibrate: bool = True,
     tune: bool = False,
     protocol: str = "calibrated",
+    tune_limit: int | None = None,
+    untuned: bool = True,
 ) -> dict:
     """The whole evaluation of one protocol; writes into `out_dir` the variant files of
     :mod:`eval.protocol` (thresholds, metrics_per_pair, average_precision, evaluation.json; the
     main variant also pr_curves.csv and qualitative.json; with `tune` also ``tuning.csv`` and the
-    untuned variant). Returns the τ table of the main (or paper) variant as
+    untuned variant, unless `untuned` is False; `tune_limit`: tune on the first N validation
+    pairs only). Returns the τ table of the main (or paper) variant as
     {dataset label: {matcher label: τ or None}}."""
     protocol = check_protocol(protocol)
     if protocol == "paper" and tune:
@@ -422,12 +425,13 @@ def evaluate(
             )
             continue
         if tune:
-            chosen = tuning.tune_entry(entry, list(base.values()), runner)
+            chosen = tuning.tune_entry(entry, list(base.values()), runner, tune_limit)
             choices += chosen.values()
             named = {label: chosen[label].spec for label in base}
-            results.setdefault(UNTUNED, []).append(
-                evaluate_entry(entry, base, seeds, runner, calibrate)
-            )
+            if untuned:
+                results.setdefault(UNTUNED, []).append(
+                    evaluate_entry(entry, base, seeds, runner, calibrate)
+                )
             results.setdefault(MAIN, []).append(
                 evaluate_entry(entry, named, seeds, runner, calibrate)
             )

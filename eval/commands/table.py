@@ -1,5 +1,6 @@
 """``cadsim table DIR``: re-render Table I (every variant present: tuned, untuned, paper protocol),
-the paired differences, the crossovers and every figure from the CSV/JSON files an evaluation wrote
+the paired differences, the crossovers, the external table and the ranking agreement (when
+``DIR/external/`` holds an evaluation) and every figure from the CSV/JSON files an evaluation wrote
 into DIR (no matcher is run, no cache is needed; the qualitative figure needs the dataset)."""
 
 from __future__ import annotations
@@ -7,7 +8,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from eval.agreement import write_agreement
 from eval.crossovers import write_crossovers
+from eval.external import SUBDIR, write_table_external
 from eval.figures import render_all
 from eval.protocol import VARIANTS, variant_path
 from eval.tables import PAPER_CSV, write_tables
@@ -23,8 +26,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     out = Path(args.dir)
     evaluated = any(variant_path(out, "metrics_per_pair", v, ".csv").is_file() for v in VARIANTS)
-    swept = any((out / n).is_file() for n in ("noise_runs.csv", "regime_sweep.csv"))
-    if not evaluated and not swept:
+    swept = any(
+        (out / n).is_file()
+        for n in ("noise_runs.csv", "regime_sweep.csv", "localisation_sweep.csv")
+    )
+    external = (out / SUBDIR / "metrics_per_pair.csv").is_file()
+    if not evaluated and not swept and not external:
         raise SystemExit(
             f"{out}: no metrics_per_pair*.csv, noise_runs.csv or regime_sweep.csv "
             "(run `cadsim evaluate`)"
@@ -32,6 +39,10 @@ def run(args: argparse.Namespace) -> int:
     markdown = write_tables(out, args.paper_table) if evaluated else ""
     if (out / "regime_sweep.csv").is_file():
         print(write_crossovers(out))
+    if external:
+        write_table_external(out)
+        write_agreement(out)
+        print(out / "table_external.md")
     for path in render_all(out):
         print(path)
     print(markdown)

@@ -1,0 +1,189 @@
+"""Reading the DMGM CAD test pairs (``proc_s/<id>/data.pt`` = view 1, ``proc_t/<id>/data.pt`` =
+view 2) into numpy arrays, through ``restricted_pickle`` (no torch, nothing executed).
+
+Each file is ``torch.save((Data, None))`` of a torch_geometric ``Data`` whose mapping holds one
+view's n objects; ``read_view`` checks every field's shape, dtype and finiteness and returns a
+``DmgmView``. Format and measured regime: docs/external-data.md. Must not import torch, matchers
+or eval; writing our dataset format is the converter's job, not this module's.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+
+from cadsim.importers import ImportFormatError
+from cadsim.importers.restricted_pickle import PickledObject, load_torch_archive
+
+FEATURE_DIM = 900
+"""Length of the appearance descriptor ``x``."""
+
+_NAME = re.compile(r"^data/proc_[st]/(?P<pair>\d+)/(?P<sequence>\d+)_(?P<frame>\d+)$")
+_FLOAT_FIELDS = {"x": FEATURE_DIM, "pos": 3, "pos_world": 3, "norm": 2}
+
+
+@dataclass(frozen=True)
+class DmgmView:
+    """One vehicle's view of a DMGM CAD pair; arrays are read-only, row k = object k.
+
+    x: (n, 900) float32 appearance descriptors. y: (n,) int64 CARLA instance ids (same id in both
+    views = same object). pos: (n, 3) float32 metres in the vehicle's camera frame (x right, y
+    down, z forward). pos_world: (n, 3) float32 metres in the world frame (x, y horizontal, z up)
+    through the vehicle's noisy GPS pose. norm: (n, 2) float32 image position, pixels. label:
+    (n,) int64 object class. name: ``data/proc_s/<pair>/<sequence>_<frame>``.
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    pos: np.ndarray
+    pos_world: np.ndarray
+    norm: np.ndarray
+    label: np.ndarray
+    name: str
+
+    @property
+    def sequence(self) -> str:
+        """The driving sequence, e.g. ``"069"``."""
+        return _NAME.match(self.name)["sequence"]
+
+    @property
+    def frame(self) -> str:
+        """The frame within the sequence, e.g. ``"0914"``."""
+        return _NAME.match(self.name)["frame"]
+
+    def __len__(self) -> int:
+        return len(self.y)
+
+
+class DmgmPair(NamedTuple):
+    """One pair: id (folder name), view 1 (``proc_s``), view 2 (``proc_t``), sequence id."""
+
+    pair_id: str
+    view_s: DmgmView
+    view_t: DmgmView
+    sequence: str
+
+
+def _mapping(obj: object, path: Path) -> dict:
+    """The ``Data`` object's field mapping, from ``(Data, slices)``."""
+    if not (isinstance(obj, tuple) and len(obj) == 2):
+        raise ImportFormatError(
+            path, f"top-level object is {type(obj).__name__}, not (Data, slices)"
+        )
+    data, slices = obj
+    if slices is not None:
+        raise ImportFormatError(path, "collated dataset (slices not None) is not one view")
+    if not (
+        isinstance(data, PickledObject) and data.global_name == "torch_geometric.data.data.Data"
+    ):
+        raise ImportFormatError(path, f"first element is {type(data).__name__}, not Data")
+    store = data.state.get("_store")
+    if not (
+        isinstance(store, PickledObject)
+        and store.global_name == "torch_geometric.data.storage.GlobalStorage"
+    ):
+        raise ImportFormatError(path, "Data has no GlobalStorage '_store'")
+    mapping = store.state.get("_mapping")
+    if not isinstance(mapping, dict):
+        raise ImportFormatError(path, "GlobalStorage has no '_mapping' dict")
+    return mapping
+
+
+def _field(mapping: dict, key: str, path: Path, dtype: type, ndim: int) -> np.ndarray:
+    value = mapping.get(key)
+    if not isinstance(value, np.ndarray):
+        raise ImportFormatError(path, f"field '{key}': missing or not a tensor")
+    if value.dtype != dtype or value.ndim != ndim:
+        raise ImportFormatError(
+            path,
+            f"field '{key}': {value.ndim}-d {value.dtype}, expected {ndim}-d {np.dtype(dtype)}",
+        )
+    return value
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
+
+
+def read_view(path: str | Path) -> DmgmView:
+    """Read one DMGM CAD ``data.pt``; ``ImportFormatError`` (one line: file, field) if malformed.
+
+    >>> view = read_view("proc_s/60260/data.pt")   # doctest: +SKIP
+    >>> view.sequence, len(view), view.pos_world.shape
+    ('069', 6, (6, 3))
+    """
+    path = Path(path)
+    mapping = _mapping(load_torch_archive(path), path)
+    name = mapping.get("name")
+    if not isinstance(name, str) or _NAME.match(name) is None:
+        raise ImportFormatError(
+            path, f"field 'name': {name!r:.80} is not data/proc_?/<id>/<seq>_<frame>"
+        )
+    label = _field(mapping, "label", path, np.int32, 1)
+    ids = _field(mapping, "y", path, np.float32, 1)
+    n = len(ids)
+    arrays = {}
+    for key, width in _FLOAT_FIELDS.items():
+        a = _field(mapping, key, path, np.float32, 2)
+        if a.shape != (n, width):
+            raise ImportFormatError(
+                path, f"field '{key}': shape {a.shape}, expected ({n}, {width})"
+            )
+        arrays[key] = a
+    if label.shape != (n,):
+        raise ImportFormatError(path, f"field 'label': shape {label.shape}, expected ({n},)")
+    for key, a in {"y": ids, **arrays}.items():
+        if not np.isfinite(a).all():
+            raise ImportFormatError(path, f"field '{key}': non-finite values")
+    if not (np.all(ids == np.round(ids)) and np.all(np.abs(ids) < 2**24)):
+        raise ImportFormatError(path, "field 'y': instance ids are not exact integers")
+    y = ids.astype(np.int64)
+    if len(np.unique(y)) != n:
+        raise ImportFormatError(path, "field 'y': an instance id appears twice in one view")
+    return DmgmView(
+        x=_frozen(arrays["x"]),
+        y=_frozen(y),
+        pos=_frozen(arrays["pos"]),
+        pos_world=_frozen(arrays["pos_world"]),
+        norm=_frozen(arrays["norm"]),
+        label=_frozen(label.astype(np.int64)),
+        name=name,
+    )
+
+
+def iter_pairs(src_dir: str | Path) -> Iterator[DmgmPair]:
+    """Yield every pair of a folder laid out as ``proc_s/<id>/data.pt`` + ``proc_t/<id>/data.pt``,
+    sorted by numeric id. Both folders must hold the same ids, and both views of a pair the same
+    sequence and frame; otherwise ``ImportFormatError`` naming the folder or file.
+
+    >>> for pair_id, view_s, view_t, sequence in iter_pairs("dmgm-cad"):   # doctest: +SKIP
+    ...     print(pair_id, sequence, len(view_s), len(view_t))
+    """
+    src_dir = Path(src_dir)
+    ids = {}
+    for side in ("proc_s", "proc_t"):
+        folder = src_dir / side
+        if not folder.is_dir():
+            raise ImportFormatError(folder, "missing folder (expected proc_s/<id>/data.pt layout)")
+        ids[side] = {p.name for p in folder.iterdir() if p.is_dir()}
+        bad = sorted(i for i in ids[side] if not i.isdigit())[:3]
+        if bad:
+            raise ImportFormatError(folder, f"pair folders {bad} are not numeric ids")
+    only = sorted(ids["proc_s"] ^ ids["proc_t"], key=int)[:5]
+    if only:
+        raise ImportFormatError(src_dir, f"pairs {only} are in only one of proc_s/ and proc_t/")
+    for pair_id in sorted(ids["proc_s"], key=int):
+        view_s = read_view(src_dir / "proc_s" / pair_id / "data.pt")
+        path_t = src_dir / "proc_t" / pair_id / "data.pt"
+        view_t = read_view(path_t)
+        if (view_s.sequence, view_s.frame) != (view_t.sequence, view_t.frame):
+            raise ImportFormatError(
+                path_t, f"frame {view_t.name!r} differs from view 1's {view_s.name!r}"
+            )
+        yield DmgmPair(pair_id, view_s, view_t, view_s.sequence)

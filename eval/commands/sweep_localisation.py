@@ -1,0 +1,200 @@
+"""``cadsim sweep-localisation DATASET_DIR --val VAL --sigmas 0,0.5,1.2,2.5,5 --out DIR``: F1
+against the observers' localisation error — the connected-driving counterpart of Fig. 4.
+
+At each position sigma s (metres per ground axis; heading sigma s × 0.2°/1.2 m, DMGM's ratio) and
+run seed, every frame pair's localisation prior is re-drawn (``FramePair.localise(s, yaw, seed)``:
+nothing is re-rendered or re-detected; for one seed the error scales with s) and every matcher of
+that run sees the same prior. τ is calibrated per sigma on the validation dataset re-drawn at
+the same sigma (a deployed system knows its stated uncertainty); the matchers' parameters are
+those ``DIR/thresholds.csv`` records (tuned when ``cadsim evaluate --tune`` ran); a matcher it
+lacks is tuned here on the validation dataset with the records' own prior (:mod:`eval.tuning`,
+seed 0; ``--no-tune``: its defaults). Writes ``localisation_sweep.csv`` (dataset, position_sigma_m, yaw_sigma_deg, matcher,
+f1_mean, f1_std: mean and sample std over runs of the per-run mean per-pair F1) and
+``fig_localisation.png/.pdf``.
+
+Matchers that do not read the prior are run at every sigma too (their curves are flat by
+construction; they are the reference a prior has to beat).
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+from pathlib import Path
+
+import pandas as pd
+
+from eval import tuning
+from eval.cache import ResultCache
+from eval.commands.evaluate import (
+    DatasetEntry,
+    add_runner_arguments,
+    as_named,
+    calibrate_named,
+    chosen_specs,
+    open_entry,
+    parse_matchers,
+    score_runs,
+    val_dirs,
+)
+from eval.executor import make_executor
+from eval.runner import Runner, requests_for
+from eval.tasks import MatcherSpec, RunResult
+
+DEFAULT_SIGMAS = (0.0, 0.5, 1.2, 2.5, 5.0)
+YAW_PER_METRE = 0.2 / 1.2
+"""Heading sigma (degrees) per metre of position sigma: DMGM's GPS noise (1.2 m, 0.2°)."""
+DEFAULT_MATCHERS = "pose,pose_refine,pose_appearance,maximin_pose,maximin,consistency"
+COLUMNS = ["dataset", "position_sigma_m", "yaw_sigma_deg", "matcher", "f1_mean", "f1_std"]
+
+
+def parse_sigmas(text: str) -> list[float]:
+    """Comma-separated position sigmas (metres, ≥ 0), sorted, duplicates removed."""
+    try:
+        sigmas = [float(s) for s in text.split(",") if s.strip()]
+    except ValueError as exc:
+        raise ValueError(f"--sigmas: expected comma-separated numbers, got {text!r}") from exc
+    if not sigmas or any(not (s >= 0) or s == float("inf") for s in sigmas):
+        raise ValueError(f"--sigmas: expected finite sigmas >= 0 (metres), got {text!r}")
+    return sorted(set(sigmas))
+
+
+def localisation_of(sigma: float) -> tuple[float, float]:
+    """(position sigma m, yaw sigma deg) of sweep point `sigma`."""
+    return float(sigma), float(sigma) * YAW_PER_METRE
+
+
+def sweep_specs(
+    out_dir: str | Path,
+    entry: DatasetEntry,
+    matchers: Sequence[MatcherSpec],
+    runner: Runner,
+    tune: bool = True,
+) -> dict[str, MatcherSpec]:
+    """{label: spec}: the parameters ``out_dir/thresholds.csv`` records for `entry`; matchers it
+    lacks tuned on `entry`'s validation dataset (record's own prior, seed 0) when `tune`."""
+    named, taus = chosen_specs(out_dir, entry.label, matchers)
+    missing = [named[label] for label, tau in taus.items() if tau is None]
+    if tune and missing and entry.val_dir is not None:
+        chosen = tuning.tune_entry(entry, missing, runner)
+        named |= {label: choice.spec for label, choice in chosen.items()}
+    return named
+
+
+def _runs(
+    runner: Runner,
+    dataset: tuple[str, str],
+    named: dict[str, MatcherSpec],
+    seeds: Sequence[int],
+    sigma: float,
+    limit: int | None,
+    desc: str,
+) -> dict[str, list[RunResult]]:
+    specs = list(dict.fromkeys(named.values()))
+    requests = requests_for(
+        [dataset], specs, seeds, limit=limit, localisation=localisation_of(sigma)
+    )
+    by_spec: dict[MatcherSpec, list[RunResult]] = {}
+    for run in runner.run(requests, desc=desc):
+        by_spec.setdefault(run.spec.matcher, []).append(run)
+    return {label: by_spec[spec] for label, spec in named.items()}
+
+
+def sweep_localisation(
+    entry: DatasetEntry,
+    matchers: Sequence[MatcherSpec] | dict[str, MatcherSpec],
+    seeds: Sequence[int],
+    sigmas: Sequence[float],
+    runner: Runner,
+    limit: int | None = None,
+    val_limit: int | None = None,
+) -> pd.DataFrame:
+    """One row per (sigma, matcher) with the columns of :data:`COLUMNS`, on the first `limit`
+    test pairs (None: all); τ per sigma from the first `val_limit` validation pairs."""
+    if entry.val_dir is None:
+        raise ValueError(f"{entry.test_dir}: the localisation sweep needs a validation dataset")
+    named = as_named(matchers)
+    rows = []
+    for sigma in sigmas:
+        position, yaw = localisation_of(sigma)
+        val_runs = _runs(
+            runner,
+            (entry.val_dir, entry.val_checksum),
+            named,
+            seeds,
+            sigma,
+            val_limit,
+            f"{entry.label} localisation σ={sigma:g} m validation",
+        )
+        taus = {label: fit.tau for label, fit in calibrate_named(val_runs).items()}
+        test_runs = _runs(
+            runner,
+            (entry.test_dir, entry.test_checksum),
+            named,
+            seeds,
+            sigma,
+            limit,
+            f"{entry.label} localisation σ={sigma:g} m",
+        )
+        per_pair = score_runs(test_runs, taus, dataset=entry.label)
+        per_run = per_pair.groupby(["matcher", "seed"], sort=False)["f1"].mean()
+        stats = per_run.groupby(level=0, sort=False).agg(["mean", "std"])
+        for label, row in stats.iterrows():
+            rows.append(
+                {
+                    "dataset": entry.label,
+                    "position_sigma_m": position,
+                    "yaw_sigma_deg": yaw,
+                    "matcher": label,
+                    "f1_mean": float(row["mean"]),
+                    "f1_std": 0.0 if pd.isna(row["std"]) else float(row["std"]),
+                }
+            )
+    return pd.DataFrame(rows, columns=COLUMNS)
+
+
+def write_sweep(out_dir: str | Path, rows: pd.DataFrame) -> Path:
+    """Write (or, for other datasets already in it, extend) ``localisation_sweep.csv``."""
+    path = Path(out_dir) / "localisation_sweep.csv"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if path.is_file():
+        old = pd.read_csv(path)
+        rows = pd.concat([old[~old["dataset"].isin(rows["dataset"])], rows], ignore_index=True)
+    rows.round(6).to_csv(path, index=False)
+    return path
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("dataset", metavar="DATASET_DIR", help="test dataset (simulated, CAD)")
+    parser.add_argument("--val", default=None, help="validation dataset (default: DATASET_DIR-val)")
+    parser.add_argument(
+        "--sigmas",
+        default=",".join(f"{s:g}" for s in DEFAULT_SIGMAS),
+        help="comma-separated position sigmas, metres (yaw sigma = 0.2° per 1.2 m)",
+    )
+    parser.add_argument("--pairs", type=int, default=None, help="only the first N test pairs")
+    parser.add_argument(
+        "--no-tune",
+        dest="tune",
+        action="store_false",
+        help="matchers without a recorded choice run with their defaults (no parameter search)",
+    )
+    add_runner_arguments(parser)
+    parser.set_defaults(matchers=DEFAULT_MATCHERS)
+
+
+def run(args: argparse.Namespace) -> int:
+    (val,) = val_dirs([args.dataset], [args.val] if args.val else None)
+    entry = open_entry(args.dataset, val)
+    matchers = parse_matchers(args.matchers)
+    sigmas = parse_sigmas(args.sigmas)
+    with make_executor(args.workers, args.scheduler) as executor:
+        runner = Runner(ResultCache(args.cache), executor)
+        named = sweep_specs(args.out, entry, matchers, runner, args.tune)
+        rows = sweep_localisation(entry, named, range(args.runs), sigmas, runner, args.pairs)
+    write_sweep(args.out, rows)
+    from eval.figures import write_fig_localisation
+
+    for path in write_fig_localisation(args.out):
+        print(path)
+    return 0
