@@ -27,6 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
+from matchers.tensor_build import MAX_ENTRIES
+
 SIZES = (10, 20, 40, 60, 80, 100)
 MATCHERS = ("appearance", "sm", "rrwm", "mos", "tm", "hgm", "bcagm", "rrwhm", "maximin")
 PYGM = "pygmtools rrwm"
@@ -176,10 +178,16 @@ def _score(kind: str, pairs: np.ndarray, truth: np.ndarray, n1: int, n2: int) ->
 
 
 def cap_accuracy(
-    inliers: int, outliers: list[int], both: bool, trials: int, frames: int, seed: int
+    inliers: int,
+    outliers: list[int],
+    both: bool,
+    trials: int,
+    frames: int,
+    seed: int,
+    caps: list[int | None],
 ) -> None:
     """Accuracy (F1 for CoID, full Hungarian assignment, no threshold) of every hypergraph
-    matcher on the same problems with the capped and the uncapped tensor."""
+    matcher on the same problems with each tensor cap in ``caps`` (None: uncapped)."""
     from matchers import build_tensor, get
 
     suites = [
@@ -197,29 +205,25 @@ def cap_accuracy(
             * (frames > 0)
         ),
     ]
-    print("| problems | " + " | ".join(HYPERGRAPH) + " | entries capped / uncapped |")
+    names = " / ".join("uncapped" if c is None else f"{c:,}" for c in caps)
+    print("| problems | " + " | ".join(HYPERGRAPH) + f" | entries ({names}) |")
     print("|---|" + "---|" * (len(HYPERGRAPH) + 1))
     for kind, label, recipe, problems in suites:
-        scores = {(name, cap): [] for name in HYPERGRAPH for cap in (True, False)}
-        sizes = {True: [], False: []}
+        scores = {(name, cap): [] for name in HYPERGRAPH for cap in caps}
+        sizes = {cap: [] for cap in caps}
         for problem, truth, mseed in problems:
-            for capped in (True, False):
-                rng = np.random.default_rng(mseed)
-                opts = {} if capped else {"max_entries": None}
-                tensor = build_tensor(problem, recipe, rng, **opts)
-                sizes[capped].append(tensor.nnz)
+            for cap in caps:
+                tensor = build_tensor(
+                    problem, recipe, np.random.default_rng(mseed), max_entries=cap
+                )
+                sizes[cap].append(tensor.nnz)
                 for name in HYPERGRAPH:
                     m = get(name)(problem, seed=mseed, tensor=tensor)
-                    scores[name, capped].append(
-                        _score(kind, m.pairs, truth, problem.n1, problem.n2)
-                    )
-        cells = []
-        for name in HYPERGRAPH:
-            capped, full = np.mean(scores[name, True]), np.mean(scores[name, False])
-            cells.append(f"{capped:.3f} / {full:.3f}")
-        size = f"{np.mean(sizes[True]):,.0f} / {np.mean(sizes[False]):,.0f}"
+                    scores[name, cap].append(_score(kind, m.pairs, truth, problem.n1, problem.n2))
+        cells = [" / ".join(f"{np.mean(scores[name, c]):.3f}" for c in caps) for name in HYPERGRAPH]
+        size = " / ".join(f"{np.mean(sizes[c]):,.0f}" for c in caps)
         print(f"| {label} ({len(problems)}) | " + " | ".join(cells) + f" | {size} |", flush=True)
-    print("\ncells: capped / uncapped (mean over the problems in brackets)")
+    print(f"\ncells: {names} (mean over the problems in brackets)")
 
 
 # --------------------------------------------------------------------------- CLI
@@ -236,7 +240,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--point", nargs=2, metavar=("MATCHER", "N"), help=argparse.SUPPRESS)
     parser.add_argument("--cap-accuracy", action="store_true", help="the cap's accuracy table")
     parser.add_argument("--inliers", type=int, default=20, help="outlier protocol inliers")
-    parser.add_argument("--outliers", type=int, nargs="+", default=[50, 100], help="outliers")
+    parser.add_argument("--outliers", type=int, nargs="*", default=[50, 100], help="outliers")
+    parser.add_argument(
+        "--caps", nargs="+", default=[str(MAX_ENTRIES), "none"], help="tensor caps to compare"
+    )
     parser.add_argument("--both-views", action="store_true", help="outliers in each view")
     parser.add_argument("--trials", type=int, default=3, help="outlier trials per setting")
     parser.add_argument("--frames", type=int, default=3, help="CoID frame pairs")
@@ -245,8 +252,9 @@ def main(argv: list[str] | None = None) -> int:
     if args.point:
         print(json.dumps(measure_point(args.point[0], int(args.point[1]))))
     elif args.cap_accuracy:
+        caps = [None if c == "none" else int(c) for c in args.caps]
         cap_accuracy(
-            args.inliers, args.outliers, args.both_views, args.trials, args.frames, args.seed
+            args.inliers, args.outliers, args.both_views, args.trials, args.frames, args.seed, caps
         )
     else:
         scaling(tuple(args.sizes), args.matchers, args.out, args.timeout)

@@ -93,7 +93,7 @@ LOCALISATION_RUNS = 4
 # External benchmark (DMGM CAD): EXTERNAL_RUNS seeds; parameters tuned on the first
 # EXTERNAL_TUNE_PAIRS pairs of sequence 070, τ calibrated on all of it (docs/external-data.md).
 EXTERNAL_RUNS = 1
-EXTERNAL_TUNE_PAIRS = 50
+EXTERNAL_TUNE_PAIRS = 25
 
 
 def build_parser() -> argparse.ArgumentParser:

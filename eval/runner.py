@@ -2,8 +2,9 @@
 it completes, so a re-run computes only what changed and an interrupted sweep resumes. A run of
 the first N frame pairs is read from the cached run of the whole dataset when there is one.
 
-Missing runs are grouped into :class:`eval.tasks.RunTask` s: with a noise rate, all matchers of
-one (dataset, seed, rate) share a task (they share its re-detection); without, each run is its
+Missing runs are grouped into :class:`eval.tasks.RunTask` s: with a noise rate or a localisation
+re-draw, all matchers of one (dataset, seed, rate, draw) share a task (they share its
+re-detection and its reading of the records); without, each run is its
 own task (finer load balancing). Tasks go to an :class:`eval.executor.Executor`; results come
 back to this process, which writes the cache — workers need no access to it (only to the
 datasets), whichever executor runs them (local processes or a Dask cluster, docs/scale-out.md).
@@ -103,7 +104,7 @@ def requests_for(
 def _group(missing: Sequence[RunRequest], version: str) -> list[RunTask]:
     groups: dict[tuple, list[MatcherSpec]] = {}
     for req in missing:
-        shared = req.noise_rate is not None
+        shared = req.noise_rate is not None or req.localisation is not None
         key = (
             req.dataset_dir,
             req.dataset_checksum,

@@ -126,6 +126,7 @@ class SparseTensor:
             if plan["calls"] < FUSE_AFTER:
                 return None
             plan["layout"] = SlotLayout(self._slots, self.nnz, self.size)
+            plan.pop("intp", None)  # the bincount passes are done with
         self._matrix.append(plan["layout"].matrix(self.values))
         return self._matrix[0]
 
@@ -139,6 +140,16 @@ class SparseTensor:
     def _slots(self) -> np.ndarray:
         """Match index of slot 0, 1, 2 of every triple, concatenated: (3N,) (a view)."""
         return self.indices.T.reshape(-1)
+
+    def _gather_slots(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(slot 0, slot 1, slot 2, concatenated) as platform integers for the bincount passes:
+        np.take and np.bincount convert narrower indices on every call, so the converted copy
+        (24 bytes per triple) is kept with the index pattern while products use these passes."""
+        if "intp" not in self._plan:
+            self._plan["intp"] = self._slots.astype(np.intp)
+        slots = self._plan["intp"]
+        count = self.nnz
+        return slots[:count], slots[count : 2 * count], slots[2 * count :], slots
 
     def restricted(self, mask: np.ndarray) -> SparseTensor:
         """The triples with at least two of their three matches in ``mask`` (bool, length nm).
@@ -166,7 +177,7 @@ class SparseTensor:
             pair = np.outer(y, z)
             pair += pair.T  # [b, c] = y_b z_c + y_c z_b, the same sum in the same order
             return fused @ pair.reshape(-1)
-        ia, ib, ic = self._columns
+        ia, ib, ic, slots = self._gather_slots()
         ya, yb, yc = np.take(y, ia), np.take(y, ib), np.take(y, ic)
         za, zb, zc = np.take(z, ia), np.take(z, ib), np.take(z, ic)
         count = self.nnz
@@ -175,7 +186,7 @@ class SparseTensor:
         weights[count : 2 * count] = ya * zc + yc * za
         weights[2 * count :] = ya * zb + yb * za
         weights.reshape(3, count)[:] *= self.values
-        return np.bincount(self._slots, weights, minlength=self.size)
+        return np.bincount(slots, weights, minlength=self.size)
 
     def product(self, x: np.ndarray) -> np.ndarray:
         """(T x_2 x x_3 x)[a] = sum_{b,c} T[a, b, c] x[b] x[c], length n*m (2x the 3-slot sum)."""
@@ -191,7 +202,7 @@ class SparseTensor:
         fused = self._fused()
         if fused is not None:
             return fused @ np.outer(x, x).reshape(-1)
-        ia, ib, ic = self._columns
+        ia, ib, ic, slots = self._gather_slots()
         xa, xb, xc = np.take(x, ia), np.take(x, ib), np.take(x, ic)
         count = self.nnz
         weights = np.empty(3 * count)
@@ -199,7 +210,7 @@ class SparseTensor:
         np.multiply(xa, xc, out=weights[count : 2 * count])
         np.multiply(xa, xb, out=weights[2 * count :])
         weights.reshape(3, count)[:] *= self.values
-        return np.bincount(self._slots, weights, minlength=self.size)
+        return np.bincount(slots, weights, minlength=self.size)
 
     def degrees(self) -> np.ndarray:
         """Stored-entry degree d[a] = sum of h over stored triples containing a (3-slot count);

@@ -180,7 +180,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="matchers without a recorded choice run with their defaults (no parameter search)",
     )
     add_runner_arguments(parser)
-    parser.set_defaults(matchers=DEFAULT_MATCHERS)
+    for action in parser._actions:
+        if action.dest == "matchers":
+            action.default = DEFAULT_MATCHERS
+            action.help = f"comma list or 'all' (default: {DEFAULT_MATCHERS})"
 
 
 def run(args: argparse.Namespace) -> int:
