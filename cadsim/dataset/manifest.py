@@ -175,7 +175,11 @@ def _check_fields(manifest: dict, path: Path) -> None:
     name = manifest["scenario"].get("name")
     need(isinstance(name, str), "scenario.name", name, "a string")
     root = manifest["seeds"].get("root")
-    need(_is_int(root) and root >= 0, "seeds.root", root, "an integer >= 0")
+    imported = manifest["seeds"].get("root_from") == "imported"  # external data: no seed
+    need(
+        (_is_int(root) and root >= 0) or (imported and root is None),
+        "seeds.root", root, "an integer >= 0 (null only for imported data)",
+    )  # fmt: skip
     gen = manifest["generation"]
     for key in ("noise", "detection"):
         value = gen.get(key, {})
