@@ -71,6 +71,9 @@ class MemoryDataset(list):
         self.scenario_name = scenario
         self.manifest = {"scenario": {"name": scenario}}
 
+    def verify_once(self) -> None:
+        """In memory: nothing to re-hash."""
+
 
 def make_dataset(
     first_seed: int, pairs: int, scenario: str = "cad-fake", per_episode: int = 2, **kwargs

@@ -39,7 +39,20 @@ from eval.metrics import (
 
 log = logging.getLogger(__name__)
 
-ALL_MATCHERS = ("appearance", "sm", "rrwm", "tm", "hgm", "bcagm", "rrwhm", "mos", "maximin")
+# Every matcher that needs no localisation prior (the synthetic scenes have none).
+ALL_MATCHERS = (
+    "none",
+    "appearance",
+    "sm",
+    "rrwm",
+    "tm",
+    "hgm",
+    "bcagm",
+    "rrwhm",
+    "mos",
+    "maximin",
+    "consistency",
+)
 
 
 @dataclass(frozen=True)
