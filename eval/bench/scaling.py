@@ -1,12 +1,12 @@
 """How the matchers scale with the number of objects, and what the tensor cap costs in accuracy.
 
-``python -m eval.bench_scaling`` times every matcher (tensor or affinity build included) and
+``python -m eval.bench.scaling`` times every matcher (tensor or affinity build included) and
 pygmtools' RRWM on n vs n objects (n = 10 ... 100, the CoID-like problems of
 :func:`eval.bench.bench_problem`), each point in a fresh process so that its peak resident memory
 (``ru_maxrss``) is its own, and draws ``docs/figures/scaling.png`` (log-log: seconds and MB
 against n). It is a benchmark output, not a ``make reproduce`` result.
 
-``python -m eval.bench_scaling --cap-accuracy`` runs every hypergraph matcher with and without
+``python -m eval.bench.scaling --cap-accuracy`` runs every hypergraph matcher with and without
 the default tensor cap (``max_tensor_entries``) where the cap binds: the outlier protocol of
 :mod:`eval.validation.synthetic` with 20 inliers (the published 10 give view 1 only 120
 triangles, too few for the cap to bind) and 50 and 100 outliers (``--both-views``: in each view)
@@ -83,7 +83,7 @@ def measure_point(name: str, n: int) -> dict:
 
 def run_point(name: str, n: int, timeout_s: float) -> dict:
     """:func:`measure_point` in a fresh interpreter; time/memory None if it failed or timed out."""
-    cmd = [sys.executable, "-m", "eval.bench_scaling", "--point", name, str(n)]
+    cmd = [sys.executable, "-m", "eval.bench.scaling", "--point", name, str(n)]
     try:
         done = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s, check=True)
         return json.loads(done.stdout.strip().splitlines()[-1])
@@ -231,7 +231,7 @@ def cap_accuracy(
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m eval.bench_scaling", description=__doc__.split("\n")[0]
+        prog="python -m eval.bench.scaling", description=__doc__.split("\n")[0]
     )
     parser.add_argument("--sizes", type=int, nargs="+", default=list(SIZES), help="n values")
     parser.add_argument("--matchers", nargs="+", default=[*MATCHERS, PYGM], help="what to time")
