@@ -138,6 +138,13 @@ register(
 )
 register(
     lazy_section(
+        "scaling",
+        "time and peak memory of every matcher against n (docs/figures/scaling.png)",
+        "eval.bench.scaling:scaling_section",
+    )
+)
+register(
+    lazy_section(
         "pipeline",
         "render views/s and 50-pair CAD generation",
         "eval.bench.pipeline:pipeline_section",

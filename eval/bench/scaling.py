@@ -138,6 +138,13 @@ def scaling(sizes: tuple[int, ...], matchers: list[str], out: Path, timeout_s: f
     return rows
 
 
+def scaling_section(args) -> list:
+    """``make bench`` section "scaling": every matcher's time and peak memory against n, and the
+    figure; it checks no target (the targets are in the "targets" section)."""
+    scaling(tuple(SIZES), [*MATCHERS, PYGM], FIGURE, 600.0)
+    return []
+
+
 # --------------------------------------------------------------------------- cap accuracy
 
 
