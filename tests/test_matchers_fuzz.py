@@ -18,6 +18,8 @@ from hypothesis import strategies as st
 from matchers import Problem, ProblemTooLarge, available, get, requires
 
 MATCHERS = available()
+# 30 examples per matcher normally; the "long" profile's count (tests/conftest.py) when selected.
+EXAMPLES = 30 if settings().max_examples < 1000 else settings().max_examples
 # The arguments a refusal may name: the problem's fields and any option passed.
 ARGUMENTS = (
     "points1|points2|features1|features2|pixels1|pixels2|world1|world2|world_sigma|problem|seed|"
@@ -97,7 +99,7 @@ def _check(name: str, problem: Problem, threshold) -> None:
 
 
 @pytest.mark.parametrize("name", MATCHERS)
-@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(problem=views(), threshold=st.sampled_from([None, 0.0, 0.5, 1.0]))
 def test_matcher_survives_fuzzed_views(name, problem, threshold):
     _check(name, problem, threshold)
