@@ -1,8 +1,9 @@
 """Sparse super-symmetric third-order affinity tensor over the n*m candidate matches.
 
-Storage: one row per unordered triple of distinct candidate matches, ``indices`` (N, 3) int32
-(int64 only if n*m does not fit; match index a = i*m + j, see :mod:`matchers.indexing`; rows
-are in increasing order a < b < c
+Storage: one row per unordered triple of distinct candidate matches, ``indices`` (N, 3) int64
+(numpy's own index type: narrower indices would be converted on every gather and ``bincount``;
+the fused product's CSR layout, read by compiled code, uses int32; match index a = i*m + j, see
+:mod:`matchers.indexing`; rows are in increasing order a < b < c
 unless the tensor was built with ``assume_unique``, where they are in the builder's order — no
 operation depends on the order inside a row) and ``values`` (N,) > 0.
 The tensor it stands for is super-symmetric: T[a, b, c] = value for all 6 permutations of a stored
@@ -19,14 +20,14 @@ from itertools import permutations
 
 import numpy as np
 
-from .tensor_product import FUSE_AFTER, PAIR_LIMIT, SlotLayout, index_dtype
+from .tensor_product import FUSE_AFTER, PAIR_LIMIT, SlotLayout
 
 
 @dataclass(frozen=True, eq=False)
 class SparseTensor:
     """Super-symmetric sparse tensor; build it with :meth:`from_entries` (or :meth:`empty`)."""
 
-    indices: np.ndarray  # (N, 3) int32 (int64 if nm >= 2^31), distinct per row, no triple twice
+    indices: np.ndarray  # (N, 3) platform int, three distinct indices per row, no triple twice
     values: np.ndarray  # (N,) float
     n: int
     m: int
@@ -48,7 +49,7 @@ class SparseTensor:
 
     @classmethod
     def empty(cls, n: int, m: int, info: dict | None = None) -> SparseTensor:
-        return cls(np.zeros((0, 3), dtype=index_dtype(n * m)), np.zeros(0), n, m, info)
+        return cls(np.zeros((0, 3), dtype=np.intp), np.zeros(0), n, m, info)
 
     @classmethod
     def from_entries(
@@ -109,24 +110,28 @@ class SparseTensor:
     def __post_init__(self) -> None:
         # column-major layout: indices is the transpose of a C-contiguous (3, N) array, so the
         # three slots are contiguous (fast gathers) and their concatenation is a free reshape
-        dtype = index_dtype(self.n * self.m)
-        object.__setattr__(self, "indices", np.ascontiguousarray(self.indices.T, dtype=dtype).T)
+        object.__setattr__(self, "indices", np.ascontiguousarray(self.indices.T, dtype=np.intp).T)
 
-    def _fused(self) -> object | None:
+    def prepare_products(self) -> None:
+        """Sort the fused-product layout now (a caller about to run many products, like TM's
+        100 fixed iterations); otherwise it is sorted on the :data:`FUSE_AFTER`-th product."""
+        self._fused(now=True)
+
+    def _fused(self, now: bool = False) -> object | None:
         """The CSR product matrix (:mod:`matchers.tensor_product`), or None while the bincount
         passes are cheaper: the layout is sorted on the FUSE_AFTER-th product of an index
-        pattern, and only when the (nm)^2 outer product fits :data:`PAIR_LIMIT`."""
+        pattern (or on :meth:`prepare_products`), and only when the (nm)^2 outer product fits
+        :data:`PAIR_LIMIT`."""
         if self._matrix:
             return self._matrix[0]
         if self.size * self.size > PAIR_LIMIT or not self.nnz:
             return None
         plan = self._plan
         if "layout" not in plan:
-            plan["calls"] = plan.get("calls", 0) + 1
-            if plan["calls"] < FUSE_AFTER:
+            plan["calls"] = plan.get("calls", 0) + (0 if now else 1)
+            if plan["calls"] < FUSE_AFTER and not now:
                 return None
             plan["layout"] = SlotLayout(self._slots, self.nnz, self.size)
-            plan.pop("intp", None)  # the bincount passes are done with
         self._matrix.append(plan["layout"].matrix(self.values))
         return self._matrix[0]
 
@@ -142,12 +147,8 @@ class SparseTensor:
         return self.indices.T.reshape(-1)
 
     def _gather_slots(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(slot 0, slot 1, slot 2, concatenated) as platform integers for the bincount passes:
-        np.take and np.bincount convert narrower indices on every call, so the converted copy
-        (24 bytes per triple) is kept with the index pattern while products use these passes."""
-        if "intp" not in self._plan:
-            self._plan["intp"] = self._slots.astype(np.intp)
-        slots = self._plan["intp"]
+        """(slot 0, slot 1, slot 2, all three concatenated) match indices, views."""
+        slots = self._slots
         count = self.nnz
         return slots[:count], slots[count : 2 * count], slots[2 * count :], slots
 

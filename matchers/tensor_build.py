@@ -51,7 +51,6 @@ from scipy.spatial import cKDTree
 from .memory_budget import check_memory
 from .problem import Problem
 from .sparse_tensor import SparseTensor
-from .tensor_product import index_dtype
 from .triangles import (
     PERMUTATIONS,
     all_triangles,
@@ -181,7 +180,7 @@ def build_tensor(
     values = np.exp(-dist / bandwidth).reshape(-1)
 
     # slot-major (3, ...) so that the tensor's column-major indices need no copy downstream
-    matches = np.empty((3, *dist.shape), dtype=index_dtype(n * m))
+    matches = np.empty((3, *dist.shape), dtype=np.intp)
     for f in range(3):
         mine_f = mine[:, f]  # (T, 1) or (E,)
         if swap:

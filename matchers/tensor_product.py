@@ -13,9 +13,12 @@ row's terms in storage order, in the same order and with the same roundings as `
 the two are bit-identical (a test checks it), so switching between them never changes a result.
 
 The outer product needs (nm)^2 doubles, so the CSR path is used only while that is at most
-:data:`PAIR_LIMIT` (nm <= 2048); larger problems use the ``bincount`` passes. The sort costs a
-few ``bincount`` products, so a tensor builds its layout on its :data:`FUSE_AFTER`-th product
-(short uses, such as BCAGM's restricted tensors, never pay for it).
+:data:`PAIR_LIMIT` (nm <= 2048); larger problems use the ``bincount`` passes. The sort costs about
+five ``bincount`` products and each fused product saves about 0.8 of one, so it pays only for
+long runs: a tensor sorts its layout on its :data:`FUSE_AFTER`-th product (maximin's ~10 steps,
+MOS's and RRWHM's typical runs and BCAGM's restricted tensors never pay for it; RRWHM runs that
+do not converge early do), or at once on
+:meth:`~matchers.sparse_tensor.SparseTensor.prepare_products` (TM: 100 fixed iterations).
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ import numpy as np
 import scipy.sparse as sp
 
 PAIR_LIMIT = 2048 * 2048  # largest (nm)^2 for which the outer product w is formed (32 MB)
-FUSE_AFTER = 3  # products of an index pattern run as bincount passes before the layout is built
+FUSE_AFTER = 16  # products of an index pattern run as bincount passes before the layout is built
 
 
 def index_dtype(size: int) -> type:

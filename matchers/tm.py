@@ -12,6 +12,7 @@ from .problem import Problem
 from .result import finish, max_normalised
 from .sparse_tensor import SparseTensor
 from .tensor_build import MAX_ENTRIES, resolve_tensor
+from .tensor_product import FUSE_AFTER
 
 NORMALISATIONS = ("doubly", "rows", "global")
 
@@ -77,6 +78,8 @@ def tensor_power(
     (the BCAGM benchmark's ``stoc='doubly'``). Returns the relaxed assignment x o x (length nm).
     """
     n, m = tensor.n, tensor.m
+    if max_iter >= FUSE_AFTER:
+        tensor.prepare_products()  # a fixed number of products: sort the fused layout now
     x0 = np.full(n * m, 1.0 / max(m, 1))
     x = x0.copy()
     for _ in range(max_iter):
