@@ -5,7 +5,9 @@ the first N frame pairs is read from the cached run of the whole dataset when th
 Missing runs are grouped into :class:`eval.tasks.RunTask` s: with a noise rate or a localisation
 re-draw, all matchers of one (dataset, seed, rate, draw) share a task (they share its
 re-detection and its reading of the records); without, each run is its
-own task (finer load balancing). Tasks go to an :class:`eval.executor.Executor`; results come
+own task (finer load balancing). A matcher that ignores its seed (``matchers.deterministic``) is
+run with seed 0 only where nothing else uses the seed (no noise re-draw, no localisation re-draw):
+its runs for other seeds are that run, relabelled — same bits, a quarter of Table I's cost. Tasks go to an :class:`eval.executor.Executor`; results come
 back to this process, which writes the cache — workers need no access to it (only to the
 datasets), whichever executor runs them (local processes or a Dask cluster, docs/scale-out.md).
 """
@@ -101,6 +103,20 @@ def requests_for(
     ]
 
 
+def _seed_free(req: RunRequest) -> RunRequest:
+    """`req` with seed 0 when its matcher ignores the seed and nothing else in the run uses it
+    (no noise re-detection, no localisation re-draw; thinning is seeded per pair, not per run)."""
+    if req.seed == 0 or req.noise_rate is not None or req.localisation is not None:
+        return req
+    from matchers.registry import deterministic
+
+    try:
+        free = deterministic(req.matcher.name)
+    except ValueError:  # unknown matcher: let the task report it
+        return req
+    return dataclasses.replace(req, seed=0) if free else req
+
+
 def _group(missing: Sequence[RunRequest], version: str) -> list[RunTask]:
     groups: dict[tuple, list[MatcherSpec]] = {}
     for req in missing:
@@ -163,16 +179,20 @@ class Runner:
                 return full
         return None
 
-    def _load(self, spec: RunSpec) -> RunResult:
+    def _load(self, spec: RunSpec, wanted: RunSpec | None = None) -> RunResult:
+        """The run `spec` (from the cache), labelled `wanted` (default: `spec`)."""
         source = self._source(spec)
         result = self.cache.load(spec if source is None else source)
-        if source is not None and source != spec:
+        wanted = spec if wanted is None else wanted
+        if result.spec != wanted:
             outcomes = result.outcomes[: spec.limit]
             share = len(outcomes) / max(len(result.outcomes), 1)
-            result = RunResult(spec, result.dataset_dir, outcomes, result.wall_s * share)
+            result = RunResult(wanted, result.dataset_dir, outcomes, result.wall_s * share)
         return result
 
     def _run(self, requests: Sequence[RunRequest], desc: str) -> list[RunResult]:
+        wanted = [req.spec(self.version) for req in requests]
+        requests = [_seed_free(req) for req in requests]
         specs = [req.spec(self.version) for req in requests]
         missing = list(
             {s: r for s, r in zip(specs, requests, strict=True) if self._source(s) is None}.values()
@@ -213,4 +233,4 @@ class Runner:
                     f"to retry only the failed ones); the first: {one_line(errors[0])}",
                     errors,
                 )
-        return [self._load(spec) for spec in specs]
+        return [self._load(spec, want) for spec, want in zip(specs, wanted, strict=True)]

@@ -17,7 +17,15 @@ docs/matchers.md.
 from .matching import Matching
 from .memory_budget import ProblemTooLarge
 from .problem import Problem
-from .registry import ENTRY_POINT_GROUP, available, get, register, requires, search_space
+from .registry import (
+    ENTRY_POINT_GROUP,
+    available,
+    deterministic,
+    get,
+    register,
+    requires,
+    search_space,
+)
 from .sparse_tensor import SparseTensor
 from .tensor_build import build_tensor
 
@@ -29,6 +37,7 @@ __all__ = [
     "SparseTensor",
     "available",
     "build_tensor",
+    "deterministic",
     "get",
     "register",
     "requires",

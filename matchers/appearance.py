@@ -24,3 +24,6 @@ def appearance(problem: Problem, seed: int | None = 0, threshold: float | None =
     return finish(
         "appearance", scores, threshold, started, 0, {"features": problem.features1 is not None}
     )
+
+
+appearance.deterministic = True  # the result does not depend on `seed`

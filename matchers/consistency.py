@@ -131,3 +131,6 @@ def consistency(
         scores = np.zeros((n, m))
     info = {"tolerance": float(eps), "clique": size}
     return finish("consistency", scores, threshold, started, 0, info)
+
+
+consistency.deterministic = True  # the result does not depend on `seed`

@@ -46,3 +46,5 @@ def pose(
 
 
 pose.requires = PRIOR_FIELDS
+
+pose.deterministic = True  # the result does not depend on `seed`

@@ -45,3 +45,5 @@ def pose_appearance(
 
 
 pose_appearance.requires = PRIOR_FIELDS
+
+pose_appearance.deterministic = True  # the result does not depend on `seed`

@@ -151,3 +151,5 @@ def pose_refine(
 
 
 pose_refine.requires = PRIOR_FIELDS
+
+pose_refine.deterministic = True  # the result does not depend on `seed`

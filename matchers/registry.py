@@ -3,7 +3,8 @@ entry-point group (third-party packages), loaded lazily on the first :func:`get`
 
 A matcher is any callable ``matcher(problem, seed=0, threshold=None, **options) -> Matching``.
 A matcher that needs optional Problem fields (the localisation prior) names them in a
-``requires`` attribute, :func:`requires`. Each name also has a tuning grid, :func:`search_space`: given to :func:`register`, carried by
+``requires`` attribute, :func:`requires`; one whose result does not depend on its seed says so
+with ``deterministic = True``, :func:`deterministic`. Each name also has a tuning grid, :func:`search_space`: given to :func:`register`, carried by
 the callable as a ``search_space`` attribute (entry points), or, for the built-ins, from
 :mod:`matchers.search_spaces`.
 """
@@ -124,6 +125,17 @@ def requires(name: str) -> frozenset[str]:
     ['world1', 'world2', 'world_sigma']
     """
     return frozenset(getattr(get(name), "requires", ()))
+
+
+def deterministic(name: str) -> bool:
+    """Whether matcher ``name`` ignores its ``seed`` (same problem, same result for every seed):
+    the callable's ``deterministic`` attribute, False when it has none. A harness may then run
+    it once instead of once per seed.
+
+    >>> deterministic("sm"), deterministic("maximin")
+    (True, False)
+    """
+    return bool(getattr(get(name), "deterministic", False))
 
 
 def available() -> list[str]:

@@ -127,3 +127,6 @@ def rrwm(
     )
     scores = max_normalised(x, n, m)
     return finish("rrwm", scores, threshold, started, iterations, {"converged": converged})
+
+
+rrwm.deterministic = True  # the result does not depend on `seed`

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .jit import njit
+
 
 def sinkhorn(
     matrix: np.ndarray, max_iter: int = 100, tol: float = 1e-3, slack: bool = True
@@ -42,7 +44,7 @@ def sinkhorn(
         row_target = 1.0 if n <= m else short
         col_target = 1.0 if m <= n else short
     if work.min() > 0:
-        fast = _positive_sweeps(work.copy(), max_iter, tol, row_target, col_target)
+        fast = positive_sweeps(work.copy(), max_iter, tol, row_target, col_target)
         if fast is not None:
             return fast[0][:n, :m], fast[1]
     sweeps = 0
@@ -88,3 +90,102 @@ def _positive_sweeps(
     if not (np.isfinite(rows).all() and np.isfinite(cols).all()):
         return None
     return work, sweeps
+
+
+# numpy sums a contiguous row pairwise (8 partial sums per block of at most this many entries,
+# recursion above it); the compiled kernel reproduces the block case only.
+_PAIRWISE_BLOCK = 128
+
+
+def _row_sum(a: np.ndarray, n: int) -> float:
+    """numpy's ``add.reduce`` of a contiguous float64 row of length n <= 128, operation for
+    operation (its pairwise summation: a plain loop below 8 entries, else 8 interleaved partial
+    sums combined as a tree, then the remainder)."""
+    if n < 8:
+        res = 0.0
+        for i in range(n):
+            res += a[i]
+        return res
+    r0, r1, r2, r3 = a[0], a[1], a[2], a[3]
+    r4, r5, r6, r7 = a[4], a[5], a[6], a[7]
+    i = 8
+    stop = n - n % 8
+    while i < stop:
+        r0 += a[i]
+        r1 += a[i + 1]
+        r2 += a[i + 2]
+        r3 += a[i + 3]
+        r4 += a[i + 4]
+        r5 += a[i + 5]
+        r6 += a[i + 6]
+        r7 += a[i + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[i]
+        i += 1
+    return res
+
+
+def _positive_kernel(
+    work: np.ndarray, max_iter: int, tol: float, row_target: float, col_target: float
+) -> tuple[int, bool]:
+    """:func:`_positive_sweeps` as one compiled loop, in place: the same sums (rows pairwise as
+    numpy, columns row after row as numpy), reciprocals and products in the same order.
+    Returns (sweeps, whether every sum stayed finite)."""
+    size_r, size_c = work.shape
+    rows = np.empty(size_r)
+    cols = np.empty(size_c)
+    sweeps = 0
+    for sweep in range(1, max_iter + 1):
+        sweeps = sweep
+        for r in range(size_r):
+            rows[r] = _row_sum_jit(work[r], size_c)
+        if sweep > 1:
+            hi, lo, nan = rows[0], rows[0], False
+            for r in range(size_r):
+                v = rows[r]
+                if v != v:
+                    nan = True
+                hi = max(hi, v)
+                lo = min(lo, v)
+            if not nan and hi - row_target <= tol and row_target - lo <= tol:
+                sweeps = sweep - 1
+                break
+        for r in range(size_r):
+            rows[r] = row_target / rows[r]
+            for c in range(size_c):
+                work[r, c] = work[r, c] * rows[r]
+        for c in range(size_c):
+            cols[c] = work[0, c]
+        for r in range(1, size_r):
+            for c in range(size_c):
+                cols[c] += work[r, c]
+        for c in range(size_c):
+            cols[c] = col_target / cols[c]
+        for r in range(size_r):
+            for c in range(size_c):
+                work[r, c] = work[r, c] * cols[c]
+    finite = bool(np.isfinite(rows).all() and np.isfinite(cols).all())
+    return sweeps, finite
+
+
+_row_sum_jit = njit(_row_sum)
+_positive_kernel_jit = njit(_positive_kernel) if _row_sum_jit is not None else None
+
+
+def positive_sweeps(
+    work: np.ndarray, max_iter: int, tol: float, row_target: float, col_target: float
+) -> tuple[np.ndarray, int] | None:
+    """:func:`_positive_sweeps`, compiled when numba is available (:mod:`matchers.jit`) and the
+    matrix is C-contiguous float64 with 2 to 128 columns (numpy sums a single column, and rows
+    longer than 128, differently); bit-identical either way."""
+    if (
+        _positive_kernel_jit is None
+        or not 2 <= work.shape[1] <= _PAIRWISE_BLOCK
+        or work.dtype != np.float64
+        or not work.flags.c_contiguous
+    ):
+        return _positive_sweeps(work, max_iter, tol, row_target, col_target)
+    sweeps, finite = _positive_kernel_jit(work, max_iter, float(tol), row_target, col_target)
+    return (work, sweeps) if finite else None

@@ -75,3 +75,6 @@ def sm(
     x, iterations, converged = spectral_vector(affinity, max_iter, tol)
     scores = max_normalised(x, n, m)
     return finish("sm", scores, threshold, started, iterations, {"converged": converged})
+
+
+sm.deterministic = True  # the result does not depend on `seed`

@@ -20,7 +20,14 @@ from itertools import permutations
 
 import numpy as np
 
-from .tensor_product import FUSE_AFTER, PAIR_LIMIT, SlotLayout
+from .tensor_product import (
+    COMPILED,
+    FUSE_AFTER,
+    PAIR_LIMIT,
+    SlotLayout,
+    compiled_bilinear,
+    compiled_slot_sums,
+)
 
 
 @dataclass(frozen=True, eq=False)
@@ -111,6 +118,7 @@ class SparseTensor:
         # column-major layout: indices is the transpose of a C-contiguous (3, N) array, so the
         # three slots are contiguous (fast gathers) and their concatenation is a free reshape
         object.__setattr__(self, "indices", np.ascontiguousarray(self.indices.T, dtype=np.intp).T)
+        object.__setattr__(self, "values", np.ascontiguousarray(self.values, dtype=np.float64))
 
     def prepare_products(self) -> None:
         """Sort the fused-product layout now (a caller about to run many products, like TM's
@@ -127,6 +135,8 @@ class SparseTensor:
         if self.size * self.size > PAIR_LIMIT or not self.nnz:
             return None
         plan = self._plan
+        if "layout" not in plan and COMPILED and not now:
+            return None  # compiled products: the layout pays only when asked for (TM)
         if "layout" not in plan:
             plan["calls"] = plan.get("calls", 0) + (0 if now else 1)
             if plan["calls"] < FUSE_AFTER and not now:
@@ -178,6 +188,8 @@ class SparseTensor:
             pair = np.outer(y, z)
             pair += pair.T  # [b, c] = y_b z_c + y_c z_b, the same sum in the same order
             return fused @ pair.reshape(-1)
+        if COMPILED:
+            return compiled_bilinear(self._slots, self.values, y, z, self.size)
         ia, ib, ic, slots = self._gather_slots()
         ya, yb, yc = np.take(y, ia), np.take(y, ib), np.take(y, ic)
         za, zb, zc = np.take(z, ia), np.take(z, ib), np.take(z, ic)
@@ -203,6 +215,8 @@ class SparseTensor:
         fused = self._fused()
         if fused is not None:
             return fused @ np.outer(x, x).reshape(-1)
+        if COMPILED:
+            return compiled_slot_sums(self._slots, self.values, x, self.size)
         ia, ib, ic, slots = self._gather_slots()
         xa, xb, xc = np.take(x, ia), np.take(x, ib), np.take(x, ic)
         count = self.nnz

@@ -19,12 +19,19 @@ long runs: a tensor sorts its layout on its :data:`FUSE_AFTER`-th product (maxim
 MOS's and RRWHM's typical runs and BCAGM's restricted tensors never pay for it; RRWHM runs that
 do not converge early do), or at once on
 :meth:`~matchers.sparse_tensor.SparseTensor.prepare_products` (TM: 100 fixed iterations).
+
+With numba (:mod:`matchers.jit`) neither is used: :func:`compiled_slot_sums` and
+:func:`compiled_bilinear` are the ``bincount`` formulation as one compiled loop per slot — the
+same products, added to each slot in the same order, so again bit-identical — with no sort, no
+outer product and no temporaries (the nm-long output stays in cache).
 """
 
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
+
+from .jit import njit
 
 PAIR_LIMIT = 2048 * 2048  # largest (nm)^2 for which the outer product w is formed (32 MB)
 FUSE_AFTER = 16  # products of an index pattern run as bincount passes before the layout is built
@@ -59,3 +66,53 @@ class SlotLayout:
         """The (nm, nm*nm) CSR matrix of these incidences with the triples' ``values``."""
         data = np.concatenate([values, values, values])[self.order]
         return sp.csr_matrix((data, self.columns, self.indptr), shape=(self.size, self.size**2))
+
+
+def _slot_sums_kernel(slots: np.ndarray, values: np.ndarray, x: np.ndarray, size: int):
+    # bincount order: all slot-0 incidences, then slot 1, then slot 2; weight (x x) * h
+    count = values.shape[0]
+    out = np.zeros(size)
+    for i in range(count):
+        out[slots[i]] += (x[slots[count + i]] * x[slots[2 * count + i]]) * values[i]
+    for i in range(count):
+        out[slots[count + i]] += (x[slots[i]] * x[slots[2 * count + i]]) * values[i]
+    for i in range(count):
+        out[slots[2 * count + i]] += (x[slots[i]] * x[slots[count + i]]) * values[i]
+    return out
+
+
+def _bilinear_kernel(
+    slots: np.ndarray, values: np.ndarray, y: np.ndarray, z: np.ndarray, size: int
+):
+    count = values.shape[0]
+    out = np.zeros(size)
+    for i in range(count):
+        b, c = slots[count + i], slots[2 * count + i]
+        out[slots[i]] += (y[b] * z[c] + y[c] * z[b]) * values[i]
+    for i in range(count):
+        a, c = slots[i], slots[2 * count + i]
+        out[slots[count + i]] += (y[a] * z[c] + y[c] * z[a]) * values[i]
+    for i in range(count):
+        a, b = slots[i], slots[count + i]
+        out[slots[2 * count + i]] += (y[a] * z[b] + y[b] * z[a]) * values[i]
+    return out
+
+
+_slot_sums_jit = njit(_slot_sums_kernel)
+_bilinear_jit = njit(_bilinear_kernel)
+COMPILED = _slot_sums_jit is not None and _bilinear_jit is not None
+
+
+def compiled_slot_sums(slots: np.ndarray, values: np.ndarray, x: np.ndarray, size: int):
+    """``SparseTensor.slot_sums`` from the concatenated (3N,) slot indices; needs numba
+    (:data:`COMPILED`)."""
+    return _slot_sums_jit(slots, values, np.ascontiguousarray(x, dtype=np.float64), size)
+
+
+def compiled_bilinear(
+    slots: np.ndarray, values: np.ndarray, y: np.ndarray, z: np.ndarray, size: int
+):
+    """``SparseTensor.bilinear`` from the concatenated (3N,) slot indices; needs numba."""
+    y = np.ascontiguousarray(y, dtype=np.float64)
+    z = np.ascontiguousarray(z, dtype=np.float64)
+    return _bilinear_jit(slots, values, y, z, size)

@@ -155,7 +155,8 @@ def test_pairwise_matchers_go_sparse_above_500_partners():
         get("sm")(problem, affinity_neighbours=0)
 
 
-def test_fused_product_is_bit_identical_to_bincount():
+def test_fused_product_is_bit_identical_to_bincount(monkeypatch):
+    monkeypatch.setattr("matchers.sparse_tensor.COMPILED", False)  # the numpy paths
     problem, _ = _problem(12, 13, seed=11)
     tensor = build_tensor(problem, "paper", 0)
     again = build_tensor(problem, "paper", 0)

@@ -94,3 +94,24 @@ def test_entry_point_group_is_discovered_lazily(tmp_path, monkeypatch):
     finally:
         registry._entry_points.cache_clear()
         sys.modules.pop("third_party_matcher", None)
+
+
+def test_matchers_that_declare_themselves_seed_free_are():
+    # the runner runs a deterministic matcher once for all seeds: a wrong declaration would
+    # silently drop run-to-run variation from every table
+    from matchers import available, deterministic
+
+    rng = np.random.default_rng(3)
+    world = rng.uniform(0, 30, (20, 3))
+    p1, p2 = world[:14], world[6:] + rng.normal(0, 0.3, (14, 3))
+    features = rng.random((20, 6))
+    problem = Problem(
+        p1, p2, features[:14], features[6:], world1=p1, world2=p2 + 0.5, world_sigma=1.0
+    )
+    declared = [name for name in available() if deterministic(name)]
+    assert {"none", "appearance", "sm", "rrwm", "consistency", "pose"} <= set(declared)
+    assert not deterministic("maximin") and not deterministic("rrwhm")
+    for name in declared:
+        a, b = get(name)(problem, seed=0), get(name)(problem, seed=7)
+        assert np.array_equal(a.pairs, b.pairs), name
+        assert np.array_equal(a.scores, b.scores), name

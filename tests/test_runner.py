@@ -216,3 +216,22 @@ def test_a_dead_worker_fails_its_tasks_and_the_pool_recovers():
         assert done[0].error is not None
         again = sorted(c.value for c in ex.map_unordered(_die_on_three, [1, 2]))
     assert again == [1, 2]
+
+
+def test_a_seed_free_matcher_runs_once_for_every_seed(fake_world, tmp_path, monkeypatch):
+    import matchers.registry
+
+    monkeypatch.setattr(matchers.registry, "deterministic", lambda name: name == "fixed")
+    runner = _runner(tmp_path)
+    data = [("data/cad", "sum-data/cad-100")]
+    seeds = [0, 1, 2, 3]
+    results = runner.run(requests_for(data, [MatcherSpec("fixed"), MatcherSpec("b")], seeds))
+    assert runner.stats.computed == 1 + 4  # "fixed" once, "b" once per seed
+    fixed = [r for r in results if r.spec.matcher.name == "fixed"]
+    assert [r.spec.seed for r in fixed] == seeds  # labelled as asked
+    for run in fixed[1:]:
+        for a, b in zip(fixed[0].outcomes, run.outcomes, strict=True):
+            np.testing.assert_array_equal(a.scores, b.scores)
+    # the seed also draws the noise of a re-detection: then every seed is its own run
+    runner.run(requests_for(data, [MatcherSpec("fixed")], seeds, [0.1]))
+    assert runner.stats.computed == 4

@@ -1,0 +1,91 @@
+"""The compiled kernels (matchers.jit) are bit-identical to the numpy code they replace, and the
+matchers give the same bits with and without them."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from matchers import Problem, get, sinkhorn, sparse_tensor, tensor_product
+from matchers.tensor_build import build_tensor
+
+
+def test_numba_is_installed_and_the_kernels_compile():
+    # numba is a declared dependency: without it every kernel test below would test nothing new
+    assert tensor_product.COMPILED
+    assert sinkhorn._positive_kernel_jit is not None
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_compiled_sinkhorn_sweeps_are_bit_identical(seed):
+    rng = np.random.default_rng(seed)
+    for _ in range(60):
+        n = int(rng.integers(2, 70))
+        m = n if rng.random() < 0.5 else int(rng.integers(2, 70))
+        x = rng.random((n, m))
+        work = np.exp(rng.uniform(1, 40) * x / x.max())  # RRWM's peaked jump
+        target = (1.0, 1.0) if n == m else (1.0, min(n, m) / max(n, m))
+        expected = sinkhorn._positive_sweeps(work.copy(), 100, 1e-3, *target)
+        got = sinkhorn.positive_sweeps(work.copy(), 100, 1e-3, *target)
+        assert (expected is None) == (got is None)
+        if expected is not None:
+            assert got[1] == expected[1]
+            assert np.array_equal(got[0], expected[0])
+
+
+def test_compiled_sinkhorn_falls_back_outside_its_shapes():
+    work = np.exp(np.random.default_rng(0).random((5, 1)))
+    expected = sinkhorn._positive_sweeps(work.copy(), 100, 1e-3, 0.2, 1.0)
+    got = sinkhorn.positive_sweeps(work.copy(), 100, 1e-3, 0.2, 1.0)
+    assert np.array_equal(got[0], expected[0]) and got[1] == expected[1]
+
+
+def _reference_products(tensor, x, y, z):
+    """slot_sums and bilinear as the np.bincount passes (the pre-compiled formulation)."""
+    ia, ib, ic = (tensor.indices[:, k] for k in range(3))
+    slots = np.concatenate([ia, ib, ic])
+    v = np.tile(tensor.values, 3)
+    sums = np.bincount(
+        slots, np.concatenate([x[ib] * x[ic], x[ia] * x[ic], x[ia] * x[ib]]) * v, tensor.size
+    )
+    w = np.concatenate(
+        [
+            y[ib] * z[ic] + y[ic] * z[ib],
+            y[ia] * z[ic] + y[ic] * z[ia],
+            y[ia] * z[ib] + y[ib] * z[ia],
+        ]
+    )
+    return sums, np.bincount(slots, w * v, tensor.size)
+
+
+@pytest.mark.parametrize("shape", [(6, 7), (12, 13), (17, 15)])
+def test_compiled_products_are_bit_identical_to_bincount(shape):
+    rng = np.random.default_rng(shape[0])
+    problem = Problem(rng.uniform(0, 20, (shape[0], 3)), rng.uniform(0, 20, (shape[1], 3)))
+    tensor = build_tensor(problem, "paper", 0)
+    assert tensor.nnz > 0
+    x, y, z = rng.random((3, tensor.size))
+    sums, bilinear = _reference_products(tensor, x, y, z)
+    assert np.array_equal(tensor.slot_sums(x), sums)
+    assert np.array_equal(tensor.bilinear(y, z), bilinear)
+    assert not tensor._matrix  # compiled products need no sorted layout
+
+
+def _problem(seed: int) -> Problem:
+    rng = np.random.default_rng(seed)
+    world = rng.uniform(0, 30, (22, 3))
+    p1, p2 = world[:16], world[6:] + rng.normal(0, 0.2, (16, 3))
+    f = rng.random((22, 8))
+    return Problem(p1, p2, f[:16], f[6:] + rng.normal(0, 0.05, (16, 8)))
+
+
+@pytest.mark.parametrize("name", ["rrwm", "rrwhm", "tm", "mos", "maximin", "bcagm", "hgm"])
+def test_matchers_give_the_same_bits_without_numba(name, monkeypatch):
+    problems = [_problem(seed) for seed in range(3)]
+    compiled = [get(name)(p, seed=1) for p in problems]
+    monkeypatch.setattr(sparse_tensor, "COMPILED", False)
+    monkeypatch.setattr(sinkhorn, "_positive_kernel_jit", None)
+    for problem, fast in zip(problems, compiled, strict=True):
+        slow = get(name)(problem, seed=1)
+        assert np.array_equal(fast.pairs, slow.pairs)
+        assert np.array_equal(fast.scores, slow.scores)
