@@ -42,6 +42,7 @@ def _numba():
 def njit(fn: Callable) -> Callable | None:
     """`fn` compiled with numba (nopython, cached on disk), or None without numba."""
     numba = _numba()
-    if numba is None:
+    try:
+        return None if numba is None else numba.njit(cache=True, nogil=True)(fn)
+    except AttributeError:  # numba half-imported (an import cycle through a shadowing module)
         return None
-    return numba.njit(cache=True, nogil=True)(fn)
