@@ -38,7 +38,7 @@ def test_uncapped_tensor_over_budget_is_refused_before_allocating(monkeypatch):
     assert "third-order tensor (30 x 30 objects" in message and "60 MB budget" in message
     assert "max_tensor_entries" in message and BUDGET_ENV in message
     assert isinstance(err.value, ValueError)
-    get("maximin")(problem)  # the default cap keeps the same problem within budget
+    get("maximin")(problem, max_tensor_entries=250_000)  # a lower cap fits the budget
 
 
 def test_dense_pairwise_over_budget_names_the_option(monkeypatch):
