@@ -158,3 +158,30 @@ def test_registered_mesh_builder_is_used_and_unknown_shapes_are_named(renderer):
 def test_camera_size_must_match(renderer):
     with pytest.raises(ValueError, match="differs from the renderer"):
         renderer.render(Snapshot(0.0, []), Camera(position=(0, 0, 1), yaw=0.0, width=64, height=48))
+
+
+def test_frustum_culling_leaves_out_only_what_no_pixel_shows(renderer):
+    # objects in front, straddling the image border, behind the camera, beyond the far plane and
+    # far to the side: the culled render must equal the full one bit for bit
+    rng = np.random.default_rng(4)
+    objects = [
+        box(f"o{k}", (x, y, 1.0), (2.0, 4.0, 2.0), yaw=float(rng.uniform(0, 3)))
+        for k, (x, y) in enumerate(rng.uniform(-60, 60, (40, 2)))
+    ]
+    objects.append(box("far", (700.0, 0.0, 1.0), (4, 4, 4)))
+    snapshot, c = Snapshot(0.0, objects), cam()
+    culled_ids = renderer._culled(snapshot, renderer._scene.sync(snapshot), c)
+    assert "far" in culled_ids and 5 < len(culled_ids) < len(objects)
+    renderer.cull = True
+    culled = renderer.render(snapshot, c)
+    renderer.cull = False
+    try:
+        full = renderer.render(snapshot, c)
+    finally:
+        renderer.cull = True
+    assert np.array_equal(culled.color, full.color)
+    assert np.array_equal(culled.depth, full.depth)
+    assert np.array_equal(culled.instance, full.instance)
+    # every culled object is really absent from the full render
+    index = {o.id: k for k, o in enumerate(objects)}
+    assert not set(np.unique(full.instance)) & {index[i] for i in culled_ids}

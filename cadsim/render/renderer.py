@@ -16,6 +16,7 @@ import numpy as np
 
 from cadsim.camera import Camera
 from cadsim.render.backend import BACKENDS, install_hint, load_pyrender
+from cadsim.render.frustum_culling import box_corners_world, outside_frustum
 from cadsim.render.scene import ObjectScene
 from cadsim.render.shading import use_lambert_shading
 from cadsim.render.view import RenderedView
@@ -62,6 +63,8 @@ class Renderer:
             raise ValueError(f"Renderer: width and height must be positive, got {width}x{height}")
         if not 0 < znear < zfar:
             raise ValueError(f"Renderer: need 0 < znear < zfar, got znear={znear}, zfar={zfar}")
+        self._znear, self._zfar = float(znear), float(zfar)
+        self.cull = True  # leave out objects outside the frustum (no pixel changes)
         pyrender, self.backend = load_pyrender()
         self.width, self.height = int(width), int(height)
         self._flags = pyrender.RenderFlags
@@ -109,7 +112,7 @@ class Renderer:
         if self._scene.ground is not None:
             seg_map[self._scene.ground] = (0, 0, 0)
         scene = self._scene.scene
-        self._scene.hide(exclude_ids)
+        self._scene.hide([*exclude_ids, *self._culled(snapshot, nodes, camera)])
         try:
             color, _ = self._gl.render(scene, flags=self._flags.NONE)
             seg, depth = self._gl.render(scene, flags=self._flags.SEG, seg_node_map=seg_map)
@@ -120,6 +123,19 @@ class Renderer:
             depth=np.ascontiguousarray(depth, dtype=np.float32),
             instance=decode_instances(seg),
         )
+
+    def _culled(self, snapshot: Snapshot, nodes: list, camera: Camera) -> list[str]:
+        """Ids of the objects wholly outside ``camera``'s frustum (:mod:`frustum_culling`)."""
+        if not self.cull or not nodes:
+            return []
+        bounds = np.stack([node.mesh.bounds for node in nodes])
+        matrices = np.stack([node.matrix for node in nodes])
+        corners = box_corners_world(bounds, matrices)
+        cam = camera.world_to_camera(corners.reshape(-1, 3)).reshape(corners.shape)
+        outside = outside_frustum(
+            cam, camera.width, camera.height, camera.fx, self._znear, self._zfar
+        )
+        return [obj.id for obj, out in zip(snapshot.objects, outside, strict=True) if out]
 
     def close(self) -> None:
         """Free the GL context (idempotent)."""
