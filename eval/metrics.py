@@ -51,9 +51,24 @@ def _pairs_array(name: str, pairs, n1: int, n2: int) -> np.ndarray:
     arr = arr.astype(np.int64)
     if arr.min(initial=0) < 0 or arr[:, 0].max() >= n1 or arr[:, 1].max() >= n2:
         raise ValueError(f"{name}: index out of range for views of {n1} and {n2} objects")
-    if len(np.unique(arr[:, 0])) != len(arr) or len(np.unique(arr[:, 1])) != len(arr):
+    if np.bincount(arr[:, 0]).max() > 1 or np.bincount(arr[:, 1]).max() > 1:
         raise ValueError(f"{name}: not one-to-one (an object index repeats)")
     return arr
+
+
+def _partner(gt: np.ndarray, n1: int) -> np.ndarray:
+    """(n1,) view-2 partner of each view-1 object under the one-to-one pairs `gt`, -1 for none."""
+    partner = np.full(n1, -1, dtype=np.int64)
+    partner[gt[:, 0]] = gt[:, 1]
+    return partner
+
+
+def _covered(n: int, *indices: np.ndarray) -> np.ndarray:
+    """(n,) bool: the objects named in any of `indices`."""
+    mask = np.zeros(n, dtype=bool)
+    for idx in indices:
+        mask[idx] = True
+    return mask
 
 
 def _precision(tp, n_pred, n_gt):
@@ -120,11 +135,10 @@ def pair_metrics(predicted, ground_truth, n1: int, n2: int) -> PairMetrics:
     """
     pred = _pairs_array("predicted", predicted, n1, n2)
     gt = _pairs_array("ground_truth", ground_truth, n1, n2)
-    stride = max(n2, 1)
-    tp = len(np.intersect1d(pred[:, 0] * stride + pred[:, 1], gt[:, 0] * stride + gt[:, 1]))
+    tp = int(np.count_nonzero(_partner(gt, n1)[pred[:, 0]] == pred[:, 1]))
     # Objects decided right: 2 per true positive, plus non-covisible objects left unmatched.
-    unmatched_negative1 = n1 - len(np.union1d(pred[:, 0], gt[:, 0]))
-    unmatched_negative2 = n2 - len(np.union1d(pred[:, 1], gt[:, 1]))
+    unmatched_negative1 = n1 - int(np.count_nonzero(_covered(n1, pred[:, 0], gt[:, 0])))
+    unmatched_negative2 = n2 - int(np.count_nonzero(_covered(n2, pred[:, 1], gt[:, 1])))
     correct = 2 * tp + unmatched_negative1 + unmatched_negative2
     negatives = n1 + n2 - 2 * len(gt)
     precision = float(_precision(tp, len(pred), len(gt)))
@@ -179,12 +193,12 @@ class RankedAssignments:
             s = np.asarray(scores, dtype=float).reshape(-1)
             if len(s) != len(a):
                 raise ValueError(f"assigned_scores[{f}]: {len(s)} scores for {len(a)} pairs")
-            stride = max(n2, 1)
+            partner = _partner(g, n1)[a[:, 0]]
             parts["frame"].append(np.full(len(a), f, dtype=np.int64))
             parts["score"].append(s)
-            parts["correct"].append(np.isin(a[:, 0] * stride + a[:, 1], g[:, 0] * stride + g[:, 1]))
-            parts["cov1"].append(np.isin(a[:, 0], g[:, 0]))
-            parts["cov2"].append(np.isin(a[:, 1], g[:, 1]))
+            parts["correct"].append(partner == a[:, 1])
+            parts["cov1"].append(partner >= 0)
+            parts["cov2"].append(_covered(n2, g[:, 1])[a[:, 1]])
             n1s.append(n1)
             n2s.append(n2)
             n_gts.append(len(g))
