@@ -7,8 +7,8 @@ re-draw, all matchers of one (dataset, seed, rate, draw) share a task (they shar
 re-detection and its reading of the records); without, each run is its
 own task (finer load balancing). A matcher that ignores its seed (``matchers.deterministic``) is
 run with seed 0 only where nothing else uses the seed (no noise re-draw, no localisation re-draw):
-its runs for other seeds are that run, relabelled — same bits, a quarter of Table I's cost. Tasks go to an :class:`eval.executor.Executor`; results come
-back to this process, which writes the cache — workers need no access to it (only to the
+its runs for other seeds are that run, read once and relabelled — same bits, a quarter of Table
+I's cost. Tasks go to an :class:`eval.executor.Executor`; results come back to this process, which writes the cache — workers need no access to it (only to the
 datasets), whichever executor runs them (local processes or a Dask cluster, docs/scale-out.md).
 """
 
@@ -179,15 +179,13 @@ class Runner:
                 return full
         return None
 
-    def _load(self, spec: RunSpec, wanted: RunSpec | None = None) -> RunResult:
-        """The run `spec` (from the cache), labelled `wanted` (default: `spec`)."""
+    def _load(self, spec: RunSpec) -> RunResult:
         source = self._source(spec)
         result = self.cache.load(spec if source is None else source)
-        wanted = spec if wanted is None else wanted
-        if result.spec != wanted:
+        if source is not None and source != spec:
             outcomes = result.outcomes[: spec.limit]
             share = len(outcomes) / max(len(result.outcomes), 1)
-            result = RunResult(wanted, result.dataset_dir, outcomes, result.wall_s * share)
+            result = RunResult(spec, result.dataset_dir, outcomes, result.wall_s * share)
         return result
 
     def _run(self, requests: Sequence[RunRequest], desc: str) -> list[RunResult]:
@@ -233,4 +231,8 @@ class Runner:
                     f"to retry only the failed ones); the first: {one_line(errors[0])}",
                     errors,
                 )
-        return [self._load(spec, want) for spec, want in zip(specs, wanted, strict=True)]
+        loaded = {spec: self._load(spec) for spec in dict.fromkeys(specs)}  # each file once
+        return [
+            loaded[spec] if spec == want else dataclasses.replace(loaded[spec], spec=want)
+            for spec, want in zip(specs, wanted, strict=True)
+        ]

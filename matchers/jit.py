@@ -1,4 +1,5 @@
-"""Optional numba compilation for the few hot loops numpy cannot vectorise (Sinkhorn sweeps).
+"""Optional numba compilation for the few hot loops numpy cannot vectorise (the Sinkhorn sweeps
+of :mod:`matchers.sinkhorn`, the tensor products of :mod:`matchers.tensor_product`).
 
 ``njit(fn)`` returns the compiled function when numba imports, else None — callers keep their
 numpy implementation and use it whenever the compiled one is missing, so numba is an accelerator,

@@ -122,7 +122,8 @@ class SparseTensor:
 
     def prepare_products(self) -> None:
         """Sort the fused-product layout now (a caller about to run many products, like TM's
-        100 fixed iterations); otherwise it is sorted on the :data:`FUSE_AFTER`-th product."""
+        100 fixed iterations); otherwise it is sorted on the :data:`FUSE_AFTER`-th product, or
+        never when the products are compiled (:data:`~matchers.tensor_product.COMPILED`)."""
         self._fused(now=True)
 
     def _fused(self, now: bool = False) -> object | None:

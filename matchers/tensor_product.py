@@ -20,10 +20,11 @@ MOS's and RRWHM's typical runs and BCAGM's restricted tensors never pay for it; 
 do not converge early do), or at once on
 :meth:`~matchers.sparse_tensor.SparseTensor.prepare_products` (TM: 100 fixed iterations).
 
-With numba (:mod:`matchers.jit`) neither is used: :func:`compiled_slot_sums` and
-:func:`compiled_bilinear` are the ``bincount`` formulation as one compiled loop per slot — the
-same products, added to each slot in the same order, so again bit-identical — with no sort, no
-outer product and no temporaries (the nm-long output stays in cache).
+With numba (:mod:`matchers.jit`) the ``bincount`` passes are replaced by :func:`compiled_slot_sums`
+and :func:`compiled_bilinear`: the same formulation as one compiled loop per slot — the same
+products, added to each slot in the same order, so again bit-identical — with no sort, no outer
+product and no temporaries. They are as fast as the CSR product, so the layout is then sorted
+only when a caller asks for it (``prepare_products``, TM), never on the FUSE_AFTER-th product.
 """
 
 from __future__ import annotations

@@ -45,6 +45,8 @@ class Renderer:
     ``render`` must have this size. background: sky colour (sRGB, [0, 1]). ground_color: colour of
     an endless ground plane just below z = 0, or None for none. znear, zfar: clip distances in
     metres (depth beyond zfar reads 0 = no hit). ambient, sun_intensity: lighting strengths.
+    ``cull`` (default True): leave out objects wholly outside the camera's frustum
+    (:mod:`cadsim.render.frustum_culling`; no pixel changes).
     """
 
     def __init__(
@@ -64,7 +66,7 @@ class Renderer:
         if not 0 < znear < zfar:
             raise ValueError(f"Renderer: need 0 < znear < zfar, got znear={znear}, zfar={zfar}")
         self._znear, self._zfar = float(znear), float(zfar)
-        self.cull = True  # leave out objects outside the frustum (no pixel changes)
+        self.cull = True
         pyrender, self.backend = load_pyrender()
         self.width, self.height = int(width), int(height)
         self._flags = pyrender.RenderFlags
