@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .jit import njit
+from .numpy_sum import PAIRWISE_BLOCK, row_sum_jit
 
 
 def sinkhorn(
@@ -94,39 +95,6 @@ def _positive_sweeps(
 
 # numpy sums a contiguous row pairwise (8 partial sums per block of at most this many entries,
 # recursion above it); the compiled kernel reproduces the block case only.
-_PAIRWISE_BLOCK = 128
-
-
-def _row_sum(a: np.ndarray, n: int) -> float:
-    """numpy's ``add.reduce`` of a contiguous float64 row of length n <= 128, operation for
-    operation (its pairwise summation: a plain loop below 8 entries, else 8 interleaved partial
-    sums combined as a tree, then the remainder)."""
-    if n < 8:
-        res = 0.0
-        for i in range(n):
-            res += a[i]
-        return res
-    r0, r1, r2, r3 = a[0], a[1], a[2], a[3]
-    r4, r5, r6, r7 = a[4], a[5], a[6], a[7]
-    i = 8
-    stop = n - n % 8
-    while i < stop:
-        r0 += a[i]
-        r1 += a[i + 1]
-        r2 += a[i + 2]
-        r3 += a[i + 3]
-        r4 += a[i + 4]
-        r5 += a[i + 5]
-        r6 += a[i + 6]
-        r7 += a[i + 7]
-        i += 8
-    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < n:
-        res += a[i]
-        i += 1
-    return res
-
-
 def _positive_kernel(
     work: np.ndarray, max_iter: int, tol: float, row_target: float, col_target: float
 ) -> tuple[int, bool]:
@@ -140,7 +108,7 @@ def _positive_kernel(
     for sweep in range(1, max_iter + 1):
         sweeps = sweep
         for r in range(size_r):
-            rows[r] = _row_sum_jit(work[r], size_c)
+            rows[r] = row_sum_jit(work[r], size_c)
         if sweep > 1:
             hi, lo, nan = rows[0], rows[0], False
             for r in range(size_r):
@@ -170,8 +138,7 @@ def _positive_kernel(
     return sweeps, finite
 
 
-_row_sum_jit = njit(_row_sum)
-_positive_kernel_jit = njit(_positive_kernel) if _row_sum_jit is not None else None
+_positive_kernel_jit = njit(_positive_kernel) if row_sum_jit is not None else None
 
 
 def positive_sweeps(
@@ -182,7 +149,7 @@ def positive_sweeps(
     longer than 128, differently); bit-identical either way."""
     if (
         _positive_kernel_jit is None
-        or not 2 <= work.shape[1] <= _PAIRWISE_BLOCK
+        or not 2 <= work.shape[1] <= PAIRWISE_BLOCK
         or work.dtype != np.float64
         or not work.flags.c_contiguous
     ):

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from matchers import Problem, get, sinkhorn, sparse_tensor, tensor_product
+from matchers import Problem, get, sinkhorn, sparse_tensor, tensor_product, tm
 from matchers.tensor_build import build_tensor
 
 
@@ -14,6 +14,7 @@ def test_numba_is_installed_and_the_kernels_compile():
     # numba is a declared dependency: without it every kernel test below would test nothing new
     assert tensor_product.COMPILED
     assert sinkhorn._positive_kernel_jit is not None
+    assert tm._doubly_kernel_jit is not None
 
 
 @pytest.mark.parametrize("seed", range(6))
@@ -58,6 +59,16 @@ def _reference_products(tensor, x, y, z):
     return sums, np.bincount(slots, w * v, tensor.size)
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_compiled_doubly_normalisation_is_bit_identical(seed):
+    rng = np.random.default_rng(seed)
+    for _ in range(200):
+        n, m = (int(v) for v in rng.integers(1, 45, size=2))  # m = 1 and m > 8 included
+        mat = rng.random((n, m)) ** rng.uniform(1, 12) + 1e-300  # TM's iterate: positive
+        expected = tm._doubly_positive(mat.copy(), 10)
+        assert np.array_equal(tm.doubly_positive(mat.copy(), 10), expected)
+
+
 @pytest.mark.parametrize("shape", [(6, 7), (12, 13), (17, 15)])
 def test_compiled_products_are_bit_identical_to_bincount(shape):
     rng = np.random.default_rng(shape[0])
@@ -69,6 +80,9 @@ def test_compiled_products_are_bit_identical_to_bincount(shape):
     assert np.array_equal(tensor.slot_sums(x), sums)
     assert np.array_equal(tensor.bilinear(y, z), bilinear)
     assert not tensor._matrix  # compiled products need no sorted layout
+    assert tensor._compact_slots.dtype == np.uint16  # they stream 2-byte indices
+    tensor.prepare_products()
+    assert not tensor._matrix  # ... even when asked for it (TM): the compiled loop is faster
 
 
 def _problem(seed: int) -> Problem:
@@ -85,6 +99,7 @@ def test_matchers_give_the_same_bits_without_numba(name, monkeypatch):
     compiled = [get(name)(p, seed=1) for p in problems]
     monkeypatch.setattr(sparse_tensor, "COMPILED", False)
     monkeypatch.setattr(sinkhorn, "_positive_kernel_jit", None)
+    monkeypatch.setattr(tm, "_doubly_kernel_jit", None)
     for problem, fast in zip(problems, compiled, strict=True):
         slow = get(name)(problem, seed=1)
         assert np.array_equal(fast.pairs, slow.pairs)
