@@ -25,7 +25,7 @@ def worst_case_tensor(tensor: SparseTensor, b: np.ndarray) -> SparseTensor:
     b = np.asarray(b, dtype=float).reshape(-1)
     if not tensor.nnz:
         return tensor
-    worst = tensor.values * b[tensor.indices].min(axis=1)
+    worst = tensor.min_weighted(b)
     t_prime = tensor.with_values(worst)
     row_max = (2.0 * t_prime.degrees()).max()
     if not row_max > 0:

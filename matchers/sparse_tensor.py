@@ -26,6 +26,8 @@ from .tensor_product import (
     PAIR_LIMIT,
     SlotLayout,
     compiled_bilinear,
+    compiled_degrees,
+    compiled_min_weighted,
     compiled_slot_sums,
 )
 
@@ -247,7 +249,16 @@ class SparseTensor:
         the full mode-1 row sum sum_{b,c} T[a, b, c] is 2 * d[a]."""
         if not self.nnz:
             return np.zeros(self.size)
+        if COMPILED:
+            return compiled_degrees(self._compact_slots, self.values, self.size)
         return np.bincount(self._slots, np.tile(self.values, 3), minlength=self.size)
+
+    def min_weighted(self, b: np.ndarray) -> np.ndarray:
+        """Each stored value times the smallest of ``b`` (length nm) over its triple's three
+        matches: h * min(b_a, b_b, b_c) per stored triple (maximin's worst case, Eq. 5)."""
+        if COMPILED and self.nnz:
+            return compiled_min_weighted(self._compact_slots, self.values, b)
+        return self.values * np.asarray(b, dtype=float)[self.indices].min(axis=1)
 
     def value(self, x: np.ndarray) -> float:
         """Objective sum_{a,b,c} T[a, b, c] x[a] x[b] x[c] (= 6 * sum h x_a x_b x_c)."""

@@ -99,9 +99,34 @@ def _bilinear_kernel(
     return out
 
 
+def _degrees_kernel(slots: np.ndarray, values: np.ndarray, size: int):
+    # np.bincount(slots, np.tile(values, 3)): slot 0 incidences, then slot 1, then slot 2
+    count = values.shape[0]
+    out = np.zeros(size)
+    for f in range(3):
+        for i in range(count):
+            out[slots[f * count + i]] += values[i]
+    return out
+
+
+def _min_weighted_kernel(slots: np.ndarray, values: np.ndarray, b: np.ndarray):
+    # values * b[indices].min(axis=1)
+    count = values.shape[0]
+    out = np.empty(count)
+    for i in range(count):
+        low = min(b[slots[i]], b[slots[count + i]], b[slots[2 * count + i]])
+        out[i] = values[i] * low
+    return out
+
+
 _slot_sums_jit = njit(_slot_sums_kernel)
 _bilinear_jit = njit(_bilinear_kernel)
-COMPILED = _slot_sums_jit is not None and _bilinear_jit is not None
+_degrees_jit = njit(_degrees_kernel)
+_min_weighted_jit = njit(_min_weighted_kernel)
+COMPILED = all(
+    kernel is not None
+    for kernel in (_slot_sums_jit, _bilinear_jit, _degrees_jit, _min_weighted_jit)
+)
 
 
 def compiled_slot_sums(slots: np.ndarray, values: np.ndarray, x: np.ndarray, size: int):
@@ -117,3 +142,14 @@ def compiled_bilinear(
     y = np.ascontiguousarray(y, dtype=np.float64)
     z = np.ascontiguousarray(z, dtype=np.float64)
     return _bilinear_jit(slots, values, y, z, size)
+
+
+def compiled_degrees(slots: np.ndarray, values: np.ndarray, size: int):
+    """``SparseTensor.degrees`` from the concatenated (3N,) slot indices; needs numba."""
+    return _degrees_jit(slots, values, size)
+
+
+def compiled_min_weighted(slots: np.ndarray, values: np.ndarray, b: np.ndarray):
+    """``SparseTensor.min_weighted``: each value times the smallest of b over its triple's
+    three matches; needs numba."""
+    return _min_weighted_jit(slots, values, np.ascontiguousarray(b, dtype=np.float64))

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from matchers import Problem, get, sinkhorn, sparse_tensor, tensor_product, tm
+from matchers import Problem, get, sinkhorn, sparse_tensor, tensor_build, tensor_product, tm
 from matchers.tensor_build import build_tensor
 
 
@@ -100,7 +100,34 @@ def test_matchers_give_the_same_bits_without_numba(name, monkeypatch):
     monkeypatch.setattr(sparse_tensor, "COMPILED", False)
     monkeypatch.setattr(sinkhorn, "_positive_kernel_jit", None)
     monkeypatch.setattr(tm, "_doubly_kernel_jit", None)
+    monkeypatch.setattr(tensor_build, "_match_indices_jit", None)
+    monkeypatch.setattr(tensor_build, "_decay_jit", None)
     for problem, fast in zip(problems, compiled, strict=True):
         slow = get(name)(problem, seed=1)
         assert np.array_equal(fast.pairs, slow.pairs)
         assert np.array_equal(fast.scores, slow.scores)
+
+
+@pytest.mark.parametrize("recipe", ["paper", "duchenne"])
+@pytest.mark.parametrize("size", [(9, 11), (20, 20), (40, 38)])  # the last one capped
+def test_compiled_tensor_assembly_is_bit_identical(recipe, size, monkeypatch):
+    rng = np.random.default_rng(size[0])
+    problem = Problem(rng.uniform(0, 20, (size[0], 3)), rng.uniform(0, 20, (size[1], 3)))
+    compiled = build_tensor(problem, recipe, 3)
+    monkeypatch.setattr(tensor_build, "_match_indices_jit", None)
+    monkeypatch.setattr(tensor_build, "_decay_jit", None)
+    plain = build_tensor(problem, recipe, 3)
+    assert compiled.nnz > 0
+    assert np.array_equal(compiled.indices, plain.indices)
+    assert np.array_equal(compiled.values, plain.values)
+
+
+def test_compiled_degrees_and_worst_case_weights_are_bit_identical():
+    rng = np.random.default_rng(4)
+    problem = Problem(rng.uniform(0, 20, (15, 3)), rng.uniform(0, 20, (17, 3)))
+    tensor = build_tensor(problem, "paper", 0)
+    b = rng.random(tensor.size)
+    slots = np.concatenate([tensor.indices[:, k] for k in range(3)])
+    expected = np.bincount(slots, np.tile(tensor.values, 3), minlength=tensor.size)
+    assert np.array_equal(tensor.degrees(), expected)
+    assert np.array_equal(tensor.min_weighted(b), tensor.values * b[tensor.indices].min(axis=1))
