@@ -31,9 +31,13 @@ a tensor has (n*m)^2 entries, 10^8 at 100 vs 100. When triangles x neighbours ex
 the builder keeps the ``max_entries`` highest-valued entries of the tensor it would otherwise
 build — the same sampled triangles and the same per-triangle k-NN lists, ranked globally by
 descriptor distance (the value is a decreasing function of it) — without forming that tensor:
-each triangle is first asked for about twice its share of neighbours, and only triangles whose
-last neighbour is still inside the running global cut are asked again for more (4x, up to k).
-Ties at the cut are kept in triangle order. With the defaults the cap binds exactly when
+a sample of the queries (every triangle in each of its 6 vertex orders) picks a radius that
+should hold about 1.25x the cap, and one dual-tree search returns every pair within it
+(:func:`_radius_pool`); where the sample cannot vouch for the radius (heavy ties, or dense
+neighbourhoods it cannot see the end of), each query is instead asked for about twice its share
+of neighbours and only those whose last neighbour is still inside the running global cut are
+asked again for more (4x, up to k). Ties at the cut are kept in the order the search returned
+them (deterministic for given descriptors). With the defaults the cap binds exactly when
 n*m > 1000, so every problem up to 1000 candidate matches gets the paper's tensor unchanged.
 The "duchenne" bandwidth is then the mean over the kept entries.
 """
@@ -298,7 +302,8 @@ def _capped_candidates(
         tree, np.round(queries, _DECIMALS), groups, k, min(k, len(base)), cap, p
     )
     order, rows = np.divmod(query, count)
-    theirs = [base[idx, PERMUTATIONS[order, f]] for f in range(3)]
+    flat, at = base.reshape(-1), idx * 3  # base[idx, PERMUTATIONS[order, f]], one 1-D gather
+    theirs = [np.take(flat, at + np.take(PERMUTATIONS[:, f], order)) for f in range(3)]
     return rows, dist, theirs
 
 
@@ -319,11 +324,74 @@ def capped_neighbours(
     neighbours; one whose farthest neighbour is still within both the running cut (the cap-th
     smallest distance of the pool) and its group's k-th smallest is asked again for 4x as many.
     A query not asked again holds every neighbour that could still be kept, so the result is
-    the uncapped lists' ``cap`` smallest distances (ties: earliest in the pool first).
+    the uncapped lists' ``cap`` smallest distances (ties: earliest in the pool first). The pool
+    comes from one radius search instead when a sample vouches for the radius
+    (:func:`_radius_pool`); it then holds every pair within the radius, which is beyond the cut.
     Returns (query, distance, neighbour index) of the kept pairs, grouped by group.
     """
     count = len(queries)
     first = min(per_query, max(1, -(-2 * cap // count)))
+    pool = _radius_pool(tree, queries, groups, k, per_query, cap, p, first)
+    if pool is not None:
+        pool_query, pool_dist, pool_idx = pool
+        cut = np.partition(pool_dist, cap - 1)[cap - 1] if pool_dist.size > cap else np.inf
+    else:
+        pool_query, pool_dist, pool_idx, cut = _grown_pool(
+            tree, queries, groups, k, per_query, cap, p, first
+        )
+    if pool_dist.size > cap:
+        inside = pool_dist < cut
+        inside[np.flatnonzero(pool_dist == cut)[: cap - int(inside.sum())]] = True
+        pool_query, pool_dist, pool_idx = pool_query[inside], pool_dist[inside], pool_idx[inside]
+    order = np.argsort(groups[pool_query], kind="stable")
+    return pool_query[order], pool_dist[order], pool_idx[order]
+
+
+_SAMPLED_QUERIES = 2000  # queries asked first to choose the radius
+
+
+def _radius_pool(tree, queries, groups, k, per_query, cap, p, first):
+    """Every pair within a radius r chosen to hold about 1.25 * cap of them (from 4 * ``first``
+    neighbours of every (count / 2000)-th query), limited to ``per_query`` per query and k per
+    group, by one dual-tree search (``sparse_distance_matrix``: 2-4x cheaper than asking every
+    query for its neighbours); None when the sample cannot vouch for r (ties at r, or over 10 %
+    of the sampled queries with all their neighbours within r — the density is then unknown and
+    the search could return far more pairs than the memory budget allows) or the pool falls
+    short of cap."""
+    count = len(queries)
+    step = max(1, count // _SAMPLED_QUERIES)
+    deep = min(per_query, 4 * first)  # the sample looks 4x deeper than a query's share
+    sampled, _ = tree.query(queries[::step], k=deep, p=p, workers=-1)
+    sampled = sampled.reshape(-1, deep)
+    want = -(-5 * cap * len(sampled) // (4 * count))  # sampled pairs within r
+    ranked = np.sort(sampled.reshape(-1))
+    if want >= ranked.size:
+        return None
+    radius = ranked[want - 1]
+    if (
+        np.mean(sampled[:, -1] <= radius) > 0.1
+        or np.searchsorted(ranked, radius, "right") > 2 * want
+    ):
+        return None
+    found = cKDTree(queries, balanced_tree=False, compact_nodes=False).sparse_distance_matrix(
+        tree, radius, p=p, output_type="ndarray"
+    )
+    pool_query, pool_idx, pool_dist = found["i"], found["j"], found["v"]
+    for label, limit in ((pool_query, per_query), (groups[pool_query], k)):
+        keep, _ = _group_best(label, pool_dist, limit, int(label.max(initial=0)) + 1)
+        if keep is not None:
+            pool_query, pool_dist, pool_idx = pool_query[keep], pool_dist[keep], pool_idx[keep]
+    if pool_dist.size < cap:
+        return None
+    return pool_query, pool_dist, pool_idx
+
+
+def _grown_pool(tree, queries, groups, k, per_query, cap, p, first):
+    """The pool of :func:`capped_neighbours` grown query by query (the fallback of
+    :func:`_radius_pool`): every query asks for ``first`` neighbours, and one whose farthest is
+    still within both the running cut and its group's k-th smallest asks again for 4x as many.
+    Returns (query, distance, index, cut)."""
+    count = len(queries)
     dist, idx = tree.query(queries, k=first, p=p, workers=-1)
     pool_query = np.repeat(np.arange(count), first)
     pool_dist, pool_idx = dist.reshape(-1), idx.reshape(-1)
@@ -331,7 +399,8 @@ def capped_neighbours(
     farthest = dist.reshape(count, first)[:, -1].copy()
     while True:
         keep, group_kth = _group_best(groups[pool_query], pool_dist, k, int(groups.max()) + 1)
-        pool_query, pool_dist, pool_idx = pool_query[keep], pool_dist[keep], pool_idx[keep]
+        if keep is not None:
+            pool_query, pool_dist, pool_idx = pool_query[keep], pool_dist[keep], pool_idx[keep]
         cut = np.partition(pool_dist, cap - 1)[cap - 1] if pool_dist.size > cap else np.inf
         again = np.flatnonzero(
             (asked < per_query) & (farthest <= np.minimum(cut, group_kth[groups]))
@@ -347,21 +416,17 @@ def capped_neighbours(
         pool_dist = np.concatenate([pool_dist[fresh], dist.reshape(-1)])
         pool_idx = np.concatenate([pool_idx[fresh], idx.reshape(-1)])
         asked[again], farthest[again] = more, dist.reshape(len(again), more)[:, -1]
-    if pool_dist.size > cap:
-        inside = pool_dist < cut
-        inside[np.flatnonzero(pool_dist == cut)[: cap - int(inside.sum())]] = True
-        pool_query, pool_dist, pool_idx = pool_query[inside], pool_dist[inside], pool_idx[inside]
-    order = np.argsort(groups[pool_query], kind="stable")
-    return pool_query[order], pool_dist[order], pool_idx[order]
+    return pool_query, pool_dist, pool_idx, cut
 
 
 def _group_best(group: np.ndarray, dist: np.ndarray, k: int, groups: int):
     """(mask of the pool entries among their group's k smallest distances — ties: earlier
-    first —, each group's k-th smallest distance or inf if it has fewer than k)."""
+    first — or None when that is all of them, each group's k-th smallest distance or inf if it
+    has fewer than k)."""
     size = np.bincount(group, minlength=groups)
     kth = np.full(groups, np.inf)
     if size.max() <= k:
-        return np.ones(len(dist), dtype=bool), kth
+        return None, kth
     ranked = np.lexsort((dist, group))
     rank = np.empty(len(dist), dtype=np.int64)
     rank[ranked] = np.arange(len(dist)) - np.repeat(np.cumsum(size) - size, size)

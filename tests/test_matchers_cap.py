@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from matchers import Problem, SparseTensor, build_tensor, get
+from matchers import Problem, SparseTensor, build_tensor, get, tensor_build
 from matchers.pairwise import pairwise_affinity, resolve_affinity, sparse_pairwise_affinity
 from matchers.tensor_build import MAX_ENTRIES
 from matchers.tensor_product import FUSE_AFTER
@@ -39,6 +39,16 @@ def _rows(tensor: SparseTensor) -> dict:
     }
 
 
+def _recording(search, calls: list, refuse: bool = False):
+    """``search`` (the radius search) recording what it returned, or refusing every radius."""
+
+    def recorded(*args):
+        calls.append(None if refuse else search(*args))
+        return calls[-1]
+
+    return recorded
+
+
 @functools.cache
 def _uncapped(recipe: str, dim: int) -> tuple[Problem, SparseTensor]:
     """16 vs 36 objects, n*m = 576: C(16, 3) = 560 triangles x 576 neighbours uncapped."""
@@ -48,9 +58,19 @@ def _uncapped(recipe: str, dim: int) -> tuple[Problem, SparseTensor]:
 
 @pytest.mark.parametrize("recipe,dim", [("paper", 3), ("duchenne", 2), ("paper", 2)])
 @pytest.mark.parametrize("cap", [250_000, 30_000])
-def test_capped_tensor_keeps_every_entry_ranked_above_the_cap(recipe, dim, cap):
+@pytest.mark.parametrize("search", ["radius", "grown"])
+def test_capped_tensor_keeps_every_entry_ranked_above_the_cap(
+    recipe, dim, cap, search, monkeypatch
+):
     problem, full = _uncapped(recipe, dim)
+    pools = []
+    original = tensor_build._radius_pool
+    fallback = search == "grown"  # the query-by-query fallback of the radius search
+    monkeypatch.setattr(tensor_build, "_radius_pool", _recording(original, pools, fallback))
     capped = build_tensor(problem, recipe, 0, max_entries=cap)
+    assert len(pools) == 1
+    if fallback or cap == 30_000:  # at 250,000 (78 % of all pairs) the sample may refuse
+        assert (pools[0] is None) == fallback
     assert full.nnz == 560 * 576 and not full.info["capped"]
     assert capped.nnz == cap and capped.info["capped"]
     full_rows, kept = _rows(full), _rows(capped)
@@ -84,6 +104,18 @@ def test_cap_respects_the_per_triangle_neighbour_count():
     full = build_tensor(problem, "paper", 1, neighbours=5, max_entries=None)
     capped = build_tensor(problem, "paper", 1, neighbours=5, max_entries=full.nnz - 7)
     assert capped.nnz == full.nnz - 7 and _triples(capped) <= _triples(full)
+
+
+def test_radius_search_falls_back_on_a_grid_of_identical_triangles(monkeypatch):
+    # a 4 x 4 x 2 grid seen twice: thousands of congruent triangles at distance 0, so a radius
+    # cannot be vouched for by the sample; the query-by-query search must give the same set
+    grid = np.stack(np.meshgrid(range(4), range(4), range(2)), -1).reshape(-1, 3) * 2.0
+    problem = Problem(grid, grid[::-1] + 1.0)
+    calls = []
+    monkeypatch.setattr(tensor_build, "_radius_pool", _recording(tensor_build._radius_pool, calls))
+    capped = build_tensor(problem, "paper", 0, max_entries=50_000)
+    assert calls == [None]  # the radius was refused
+    assert capped.nnz == 50_000 and capped.values.max() == 1.0  # exact copies kept first
 
 
 def test_cap_does_not_bind_up_to_1000_candidate_matches():
