@@ -157,6 +157,8 @@ def matcher_function(name: str):
 
 def execute(task: RunTask) -> list[RunResult]:
     """Run every matcher of `task` on every frame pair of its dataset; one result per matcher."""
+    from matchers.tensor_sharing import shared_tensors
+
     dataset = open_dataset(task.dataset_dir)
     if dataset.checksum != task.dataset_checksum:
         raise ValueError(
@@ -177,8 +179,12 @@ def execute(task: RunTask) -> list[RunResult]:
             pair = pair.localise(*task.localisation, seed=task.seed)
         problem = pair.problem()
         gt = np.asarray(pair.gt_pairs, dtype=np.int64).reshape(-1, 2)
-        for spec, fn, result in zip(task.matchers, functions, results, strict=True):
-            matching = fn(problem, seed=task.seed, threshold=None, **dict(spec.options))
+        with shared_tensors():  # the hypergraph matchers of a pair build its tensor once
+            matchings = [
+                fn(problem, seed=task.seed, threshold=None, **dict(spec.options))
+                for spec, fn in zip(task.matchers, functions, strict=True)
+            ]
+        for matching, result in zip(matchings, results, strict=True):
             scores = np.asarray(matching.scores, dtype=float).reshape(problem.n1, problem.n2)
             result.outcomes.append(
                 PairOutcome(

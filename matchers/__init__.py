@@ -28,6 +28,7 @@ from .registry import (
 )
 from .sparse_tensor import SparseTensor
 from .tensor_build import build_tensor
+from .tensor_sharing import shared_tensors
 
 __all__ = [
     "ENTRY_POINT_GROUP",
@@ -42,4 +43,5 @@ __all__ = [
     "register",
     "requires",
     "search_space",
+    "shared_tensors",
 ]

@@ -35,14 +35,18 @@ def finish(
 ) -> Matching:
     """Discretise ``scores`` (already in [0, 1]) and wrap everything in a :class:`Matching`.
 
-    ``started`` is the ``time.perf_counter()`` value taken when the matcher was called.
+    ``started`` is the ``time.perf_counter()`` value taken when the matcher was called. A tensor
+    reused from another matcher's build (``info["tensor"]["reused"]``,
+    :mod:`matchers.tensor_sharing`) is charged its build time, as if built here.
     """
     pairs = discretise(scores, threshold)
+    tensor = (info or {}).get("tensor")
+    charged = tensor.get("build_s", 0.0) if isinstance(tensor, dict) and tensor.get("reused") else 0
     return Matching(
         pairs=pairs,
         scores=scores,
         name=name,
         iterations=int(iterations),
-        time_s=time.perf_counter() - started,
+        time_s=time.perf_counter() - started + charged,
         info=dict(info or {}),
     )

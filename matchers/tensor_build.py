@@ -56,6 +56,7 @@ from .jit import njit
 from .memory_budget import check_memory
 from .problem import Problem
 from .sparse_tensor import SparseTensor
+from .tensor_sharing import build_or_reuse
 from .triangles import (
     PERMUTATIONS,
     all_triangles,
@@ -445,7 +446,8 @@ def resolve_tensor(
     max_entries: int | None = MAX_ENTRIES,
 ) -> SparseTensor:
     """The ``tensor=`` option of the hypergraph matchers: a recipe name, or a prebuilt tensor
-    (so that several matchers can be run on exactly the same tensor)."""
+    (so that several matchers can be run on exactly the same tensor). A recipe's tensor is
+    reused inside :func:`matchers.shared_tensors`."""
     if isinstance(tensor, SparseTensor):
         if (tensor.n, tensor.m) != (problem.n1, problem.n2):
             raise ValueError(
@@ -455,4 +457,9 @@ def resolve_tensor(
         return tensor
     if not isinstance(tensor, str):
         raise ValueError(f"tensor: expected a recipe name or a SparseTensor, got {tensor!r}")
-    return build_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_entries)
+    return build_or_reuse(
+        problem,
+        rng,
+        (tensor, triangles, neighbours, sigma, max_entries),
+        lambda: build_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_entries),
+    )

@@ -133,7 +133,9 @@ register(
 )
 register(
     lazy_section(
-        "targets", "the speed targets of issue 2, PASS/FAIL", "eval.bench.matchers:targets_section"
+        "targets",
+        "the speed and memory targets of issues 2 and 11, PASS/FAIL",
+        "eval.bench.matchers:targets_section",
     )
 )
 register(
