@@ -27,6 +27,11 @@ import numpy as np
 SIZES = (10, 20, 40, 80)
 SLOW_CALL_S = 2.0  # calls slower than this are not repeated
 
+# pygmtools' RRWM defaults, in its own names and in ours (jump = its alpha: the weight of the
+# reweighted jump). Our Sinkhorn runs to tolerance 1e-3 (cap 1000 sweeps) instead of 20 half-steps.
+PYGM_RRWM_NATIVE = {"max_iter": 50, "sk_iter": 20, "alpha": 0.2, "beta": 30}
+PYGM_RRWM = {"jump": 0.2, "beta": 30.0, "max_iter": 50}
+
 
 @dataclass(frozen=True)
 class Target:

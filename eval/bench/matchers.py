@@ -5,7 +5,15 @@ from __future__ import annotations
 
 import argparse
 
-from eval.bench import Target, _peak_rss_mb, _row, bench_problem, timed
+from eval.bench import (
+    PYGM_RRWM,
+    PYGM_RRWM_NATIVE,
+    Target,
+    _peak_rss_mb,
+    _row,
+    bench_problem,
+    timed,
+)
 
 
 def tensor_section(args: argparse.Namespace) -> list[Target]:
@@ -107,9 +115,3 @@ def targets_section(args: argparse.Namespace) -> list[Target]:
         peak = point["peak_mb"] if point["peak_mb"] is not None else float("inf")
         targets.append(Target(f"{name}, 100 vs 100, peak RSS of its process", peak, 600, "MB"))
     return targets
-
-
-# pygmtools' RRWM defaults, in its own names and in ours (jump = its alpha: the weight of the
-# reweighted jump). Our Sinkhorn runs to tolerance 1e-3 (cap 1000 sweeps) instead of 20 half-steps.
-PYGM_RRWM_NATIVE = {"max_iter": 50, "sk_iter": 20, "alpha": 0.2, "beta": 30}
-PYGM_RRWM = {"jump": 0.2, "beta": 30.0, "max_iter": 50}

@@ -48,7 +48,7 @@ def _call(name: str):
         return lambda problem: matcher(problem, seed=0)
     import pygmtools as pygm
 
-    from eval.bench.matchers import PYGM_RRWM_NATIVE
+    from eval.bench import PYGM_RRWM_NATIVE
     from matchers.indexing import to_column_major
     from matchers.pairwise import pairwise_affinity
 
