@@ -36,12 +36,12 @@ def finish(
     """Discretise ``scores`` (already in [0, 1]) and wrap everything in a :class:`Matching`.
 
     ``started`` is the ``time.perf_counter()`` value taken when the matcher was called. A tensor
-    reused from another matcher's build (``info["tensor"]["reused"]``,
-    :mod:`matchers.tensor_sharing`) is charged its build time, as if built here.
+    search reused from another matcher (``info["tensor"]["reused_s"]``,
+    :mod:`matchers.tensor_sharing`) is charged its time, as if done here.
     """
     pairs = discretise(scores, threshold)
     tensor = (info or {}).get("tensor")
-    charged = tensor.get("build_s", 0.0) if isinstance(tensor, dict) and tensor.get("reused") else 0
+    charged = tensor.get("reused_s", 0.0) if isinstance(tensor, dict) else 0.0
     return Matching(
         pairs=pairs,
         scores=scores,

@@ -109,12 +109,6 @@ class SparseTensor:
         indices = indices[order[starts]]
         return cls(np.ascontiguousarray(indices), values, n, m, info)
 
-    def reused(self) -> SparseTensor:
-        """This tensor as handed to a second matcher (:mod:`matchers.tensor_sharing`): same
-        arrays and product plan, its own ``info`` marked ``"reused": True``."""
-        info = dict(self.info or {}) | {"reused": True}
-        return SparseTensor(self.indices, self.values, self.n, self.m, info, self._plan)
-
     def with_values(self, values: np.ndarray) -> SparseTensor:
         """Same sparsity pattern, new values (e.g. re-weighted or normalised)."""
         values = np.asarray(values, dtype=float)

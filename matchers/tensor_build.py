@@ -132,9 +132,69 @@ def build_tensor(
     started = time.perf_counter()
     rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
     n, m = problem.n1, problem.n2
+    found, reused = build_or_reuse(
+        problem,
+        rng,
+        (recipe, triangles, neighbours, max_entries),
+        lambda: _candidates(problem, spec, rng, triangles, neighbours, max_entries),
+    )
     info = {"recipe": recipe}
-    if n < 3 or m < 3:
+    if found.matches is None:
         return SparseTensor.empty(n, m, info | {"entries_raw": 0})
+    bandwidth = sigma if sigma is not None else spec.sigma
+    if bandwidth is None:
+        mean = float(found.dist.mean())
+        bandwidth = mean if mean > 0 else 1.0
+    dist = found.dist
+    values = (
+        np.exp(-dist / bandwidth) if _decay_jit is None else _decay_jit(dist, float(bandwidth))
+    ).reshape(-1)
+    info |= {
+        "triangles": found.triangles,
+        "neighbours": found.neighbours,
+        "bandwidth": float(bandwidth),
+        "entries_raw": int(values.size),
+        "capped": found.capped,
+        "max_entries": max_entries,
+        "build_s": time.perf_counter() - started + (found.search_s if reused else 0.0),
+    }
+    if reused:  # the search was another matcher's (matchers.tensor_sharing): charge it here
+        info |= {"reused": True, "reused_s": found.search_s}
+    # distinct sampled triangles x distinct ordered triples => no triple occurs twice
+    return SparseTensor.from_entries(
+        found.matches.reshape(3, -1).T, values, n, m, info, assume_unique=True
+    )
+
+
+@dataclass(frozen=True)
+class Candidates:
+    """The k-NN search's result, before values: ``matches`` (3, ...) match indices of slot 0, 1,
+    2 (None: no tensor), ``dist`` the descriptor distances (same shape), the counts, and
+    ``search_s`` the seconds it took. It does not depend on the bandwidth, so matchers that
+    differ only in ``sigma`` can share it."""
+
+    matches: np.ndarray | None
+    dist: np.ndarray | None
+    triangles: int = 0
+    neighbours: int = 0
+    capped: bool = False
+    search_s: float = 0.0
+
+
+def _candidates(
+    problem: Problem,
+    spec: TensorRecipe,
+    rng: np.random.Generator,
+    triangles: int | None,
+    neighbours: int | None,
+    max_entries: int | None,
+) -> Candidates:
+    """Sample the triangles (``rng``'s only draw) and find their k-NN candidate triples."""
+    started = time.perf_counter()
+    n, m = problem.n1, problem.n2
+    none = Candidates(None, None)
+    if n < 3 or m < 3:
+        return none
     swap = m < n  # sample in the smaller view
     sampled_pts, full_pts = (
         (problem.points2, problem.points1) if swap else (problem.points1, problem.points2)
@@ -148,7 +208,7 @@ def build_tensor(
     tri_s, desc_s = tri_s[valid_s], desc_s[valid_s]
     oriented = spec.signed_in_2d and problem.dim == 2
     if not len(tri_s):
-        return SparseTensor.empty(n, m, info | {"entries_raw": 0})
+        return none
     ordered = 6 * math.comb(len(full_pts), 3)
     capped = max_entries is not None and len(tri_s) * min(k, ordered) > max_entries
     if capped:  # the count of valid ordered triples decides
@@ -163,7 +223,7 @@ def build_tensor(
         tri_f, desc_f = tri_f[valid_f], desc_f[valid_f]
         k = min(k, len(tri_f))
         if k == 0:
-            return SparseTensor.empty(n, m, info | {"entries_raw": 0})
+            return none
         # Rounded to 1e-9, far below any meaningful difference: a rotation/translation/scaling
         # of a view perturbs descriptors by ~1e-16, and rounding makes them bit-identical, so
         # the k-NN choice — including which of several exactly tied candidates (common under
@@ -184,14 +244,6 @@ def build_tensor(
             base, base_desc, desc_s, k, max_entries, spec.minkowski_p, oriented
         )
         mine = tri_s[rows]  # (E, 3)
-    bandwidth = sigma if sigma is not None else spec.sigma
-    if bandwidth is None:
-        mean = float(dist.mean())
-        bandwidth = mean if mean > 0 else 1.0
-    values = (
-        np.exp(-dist / bandwidth) if _decay_jit is None else _decay_jit(dist, float(bandwidth))
-    ).reshape(-1)
-
     if matches is None:  # slot-major (3, ...): the tensor's column-major indices need no copy
         matches = np.empty((3, *dist.shape), dtype=np.intp)
         for f in range(3):
@@ -200,18 +252,8 @@ def build_tensor(
                 np.add(theirs[f] * m, mine_f, out=matches[f])
             else:
                 np.add(mine_f * m, theirs[f], out=matches[f])
-    info |= {
-        "triangles": int(len(tri_s)),
-        "neighbours": int(k),
-        "bandwidth": float(bandwidth),
-        "entries_raw": int(values.size),
-        "capped": bool(capped),
-        "max_entries": max_entries,
-        "build_s": time.perf_counter() - started,
-    }
-    # distinct sampled triangles x distinct ordered triples => no triple occurs twice
-    return SparseTensor.from_entries(
-        matches.reshape(3, -1).T, values, n, m, info, assume_unique=True
+    return Candidates(
+        matches, dist, int(len(tri_s)), int(k), bool(capped), time.perf_counter() - started
     )
 
 
@@ -446,7 +488,7 @@ def resolve_tensor(
     max_entries: int | None = MAX_ENTRIES,
 ) -> SparseTensor:
     """The ``tensor=`` option of the hypergraph matchers: a recipe name, or a prebuilt tensor
-    (so that several matchers can be run on exactly the same tensor). A recipe's tensor is
+    (so that several matchers can be run on exactly the same tensor). A recipe's k-NN search is
     reused inside :func:`matchers.shared_tensors`."""
     if isinstance(tensor, SparseTensor):
         if (tensor.n, tensor.m) != (problem.n1, problem.n2):
@@ -457,9 +499,4 @@ def resolve_tensor(
         return tensor
     if not isinstance(tensor, str):
         raise ValueError(f"tensor: expected a recipe name or a SparseTensor, got {tensor!r}")
-    return build_or_reuse(
-        problem,
-        rng,
-        (tensor, triangles, neighbours, sigma, max_entries),
-        lambda: build_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_entries),
-    )
+    return build_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_entries)

@@ -1,22 +1,23 @@
-"""One problem's tensor built once for all the hypergraph matchers run on it.
+"""One problem's k-NN tensor search done once for all the hypergraph matchers run on it.
 
-TM, HGM, BCAGM, RRWHM, MOS and maximin each build the third-order tensor of a problem from the
-same inputs — the two views' positions, the tensor options and the state of the seeded generator
-(the triangle sampling is its first draw) — so when several of them run on one problem with the
-same seed, they build the same tensor. Inside ``with shared_tensors():`` the first build is kept
-and the others reuse it::
+TM, HGM, BCAGM, RRWHM, MOS and maximin each build the third-order tensor of a problem. Its costly
+part, the triangle sampling and k-NN candidate search (:func:`matchers.tensor_build.build_tensor`),
+depends only on the two views' positions, the recipe, the triangle/neighbour counts, the cap and
+the state of the seeded generator (the sampling is its only draw) — not on the bandwidth
+``sigma``, which matchers tune separately. Inside ``with shared_tensors():`` the first search is
+kept and later matchers with the same inputs reuse it, computing only their own values::
 
     with shared_tensors():
         for name in ("tm", "rrwhm", "maximin"):
-            get(name)(problem, seed=seed)
+            get(name)(problem, seed=seed, sigma=tuned[name])
 
-A reused tensor is the same tensor (same entries, same order), and the generator is left in the
-state the build would have left it in, so every result is bit for bit what it is without sharing.
-Its ``info`` gains ``"reused": True`` and each matcher is charged the original build time
-(:func:`matchers.result.finish` adds ``info["build_s"]``), so a matcher's reported time does
-not depend on which matcher happened to run first. Outside the block nothing is kept, so timing a
-matcher in a loop measures its build every time. The block keeps at most ``limit`` tensors
-(least recently used dropped first): several option sets may run on one problem.
+A reused search is the same search (same entries, same order), and the generator is left in the
+state the search would have left it in, so every result is bit for bit what it is without
+sharing. The tensor's ``info`` gains ``"reused": True`` and ``reused_s`` (the search's seconds),
+and :func:`matchers.result.finish` charges ``reused_s`` to the matcher, so a matcher's reported
+time does not depend on which matcher happened to run first. Outside the block nothing is kept,
+so timing a matcher in a loop measures its search every time. The block keeps at most ``limit``
+searches (least recently used dropped first).
 """
 
 from __future__ import annotations
@@ -24,11 +25,13 @@ from __future__ import annotations
 import contextlib
 from collections import OrderedDict
 from collections.abc import Callable, Iterator
+from typing import TypeVar
 
 import numpy as np
 
 from .problem import Problem
-from .sparse_tensor import SparseTensor
+
+T = TypeVar("T")
 
 _MEMOS: list[tuple[OrderedDict, int]] = []
 
@@ -50,13 +53,14 @@ def build_or_reuse(
     problem: Problem,
     rng: np.random.Generator,
     options: tuple,
-    build: Callable[[], SparseTensor],
-) -> SparseTensor:
-    """``build()`` — or, inside :func:`shared_tensors`, the tensor an identical earlier call
-    built (same positions, same ``options``, same generator state), with ``rng`` moved on as
-    ``build()`` would have moved it."""
+    build: Callable[[], T],
+) -> tuple[T, bool]:
+    """(``build()``, False) — or, inside :func:`shared_tensors`, (what an identical earlier call
+    built, True): same positions, same ``options``, same generator state, with ``rng`` moved on
+    as ``build()`` would have moved it. ``build()`` must draw from ``rng`` and nothing else
+    random, and its result must not be modified by its users."""
     if not _MEMOS:
-        return build()
+        return build(), False
     memo, limit = _MEMOS[-1]
     key = (
         options,
@@ -68,12 +72,12 @@ def build_or_reuse(
     )
     kept = memo.get(key)
     if kept is None:
-        tensor = build()
-        memo[key] = (tensor, rng.bit_generator.state)
+        built = build()
+        memo[key] = (built, rng.bit_generator.state)
         while len(memo) > limit:
             memo.popitem(last=False)
-        return tensor
+        return built, False
     memo.move_to_end(key)
-    tensor, state = kept
+    built, state = kept
     rng.bit_generator.state = state
-    return tensor.reused()
+    return built, True
