@@ -102,8 +102,8 @@ def rrwhm(
     Tensor options (every hypergraph matcher): ``tensor`` "paper" | "duchenne" | a prebuilt
     :class:`~matchers.sparse_tensor.SparseTensor`; ``triangles``, ``neighbours``, ``sigma``
     override the recipe's sampled-triangle count, k-NN count and bandwidth;
-    ``max_tensor_entries`` (250,000; None = no cap) bounds triangles x neighbours, keeping the
-    best-ranked entries — it binds only above n*m = 500 with the defaults
+    ``max_tensor_entries`` (10^6; None = no cap) bounds triangles x neighbours, keeping the
+    best-ranked entries — it binds only above n*m = 1000 with the defaults
     (:func:`~matchers.tensor_build.build_tensor`); ``seed`` drives the triangle sampling.
     Walk options (reference defaults): ``jump`` 0.8 (c = 0.2 on the walk), ``beta`` 30,
     ``max_iter`` 300, ``tol`` 1e-6 (squared L2 change), ``sinkhorn_iter`` 100 (our cap).

@@ -103,7 +103,7 @@ def build_tensor(
 
     triangles: number of sampled triangles (default n*m); neighbours: k of the k-NN search per
     triangle (default n*m); sigma: bandwidth override (default: the recipe's); max_entries: cap
-    on triangles x neighbours (default 250,000; None = no cap), keeping the highest-valued
+    on triangles x neighbours (default 1,000,000; None = no cap), keeping the highest-valued
     entries (module docstring). The tensor's ``info`` records the recipe, counts, bandwidth,
     whether the cap bound and ``build_s`` (seconds). ``rng`` (a numpy Generator or seed) drives
     the triangle sampling. Fewer than 3 objects in a view, or no non-degenerate triangle, gives
