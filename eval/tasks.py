@@ -179,7 +179,7 @@ def execute(task: RunTask) -> list[RunResult]:
             pair = pair.localise(*task.localisation, seed=task.seed)
         problem = pair.problem()
         gt = np.asarray(pair.gt_pairs, dtype=np.int64).reshape(-1, 2)
-        with shared_tensors():  # the hypergraph matchers of a pair build its tensor once
+        with shared_tensors():  # the hypergraph matchers of a pair share its k-NN search
             matchings = [
                 fn(problem, seed=task.seed, threshold=None, **dict(spec.options))
                 for spec, fn in zip(task.matchers, functions, strict=True)

@@ -48,3 +48,11 @@ def row_sum(a: np.ndarray, n: int) -> float:
 
 
 row_sum_jit = njit(row_sum)
+
+
+def reproducible(mat: np.ndarray) -> bool:
+    """Whether a kernel using these orders gives numpy's bits on ``mat``: C-contiguous float64
+    with 2 to :data:`PAIRWISE_BLOCK` columns."""
+    return (
+        mat.dtype == np.float64 and mat.flags.c_contiguous and 2 <= mat.shape[1] <= PAIRWISE_BLOCK
+    )

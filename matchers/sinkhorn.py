@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .jit import njit
-from .numpy_sum import PAIRWISE_BLOCK, row_sum_jit
+from .numpy_sum import reproducible, row_sum_jit
 
 
 def sinkhorn(
@@ -93,8 +93,6 @@ def _positive_sweeps(
     return work, sweeps
 
 
-# numpy sums a contiguous row pairwise (8 partial sums per block of at most this many entries,
-# recursion above it); the compiled kernel reproduces the block case only.
 def _positive_kernel(
     work: np.ndarray, max_iter: int, tol: float, row_target: float, col_target: float
 ) -> tuple[int, bool]:
@@ -147,12 +145,7 @@ def positive_sweeps(
     """:func:`_positive_sweeps`, compiled when numba is available (:mod:`matchers.jit`) and the
     matrix is C-contiguous float64 with 2 to 128 columns (numpy sums a single column, and rows
     longer than 128, differently); bit-identical either way."""
-    if (
-        _positive_kernel_jit is None
-        or not 2 <= work.shape[1] <= PAIRWISE_BLOCK
-        or work.dtype != np.float64
-        or not work.flags.c_contiguous
-    ):
+    if _positive_kernel_jit is None or not reproducible(work):
         return _positive_sweeps(work, max_iter, tol, row_target, col_target)
     sweeps, finite = _positive_kernel_jit(work, max_iter, float(tol), row_target, col_target)
     return (work, sweeps) if finite else None

@@ -8,7 +8,7 @@ import numpy as np
 
 from .jit import njit
 from .matching import Matching
-from .numpy_sum import PAIRWISE_BLOCK, row_sum_jit
+from .numpy_sum import reproducible, row_sum_jit
 from .options import check_count, check_problem, rng_from_seed
 from .problem import Problem
 from .result import finish, max_normalised
@@ -91,12 +91,7 @@ def doubly_positive(mat: np.ndarray, rounds: int) -> np.ndarray:
     """:func:`_doubly_positive`, compiled when numba is available and the matrix has 2 to
     :data:`~matchers.numpy_sum.PAIRWISE_BLOCK` columns (numpy's summation order is reproduced
     only there); bit-identical either way. In place; returns ``mat``."""
-    if (
-        _doubly_kernel_jit is None
-        or not 2 <= mat.shape[1] <= PAIRWISE_BLOCK
-        or mat.dtype != np.float64
-        or not mat.flags.c_contiguous
-    ):
+    if _doubly_kernel_jit is None or not reproducible(mat):
         return _doubly_positive(mat, rounds)
     _doubly_kernel_jit(mat, rounds)
     return mat
@@ -124,7 +119,7 @@ def tensor_power(
     """
     n, m = tensor.n, tensor.m
     if max_iter >= FUSE_AFTER:
-        tensor.prepare_products()  # a fixed number of products: sort the fused layout now
+        tensor.prepare_products()  # a fixed number of products: sort the layout now (no numba)
     x0 = np.full(n * m, 1.0 / max(m, 1))
     x = x0.copy()
     for _ in range(max_iter):
