@@ -3,9 +3,9 @@ it completes, so a re-run computes only what changed and an interrupted sweep re
 the first N frame pairs is read from the cached run of the whole dataset when there is one.
 
 Missing runs are grouped into :class:`eval.tasks.RunTask` s: with a noise rate or a localisation
-re-draw, all matchers of one (dataset, seed, rate, draw) share a task (they share its
-re-detection and its reading of the records); without, each run is its
-own task (finer load balancing). A matcher that ignores its seed (``matchers.deterministic``) is
+re-draw, all matchers and noise rates of one (dataset, seed, draw) share a task (they share its
+reading of the records and one re-detection plan per pair; split by rates while there are fewer
+tasks than workers); without, each run is its own task (finer load balancing). A matcher that ignores its seed (``matchers.deterministic``) is
 run with seed 0 only where nothing else uses the seed (no noise re-draw, no localisation re-draw):
 its runs for other seeds are that run, read once and relabelled — same bits, a quarter of Table
 I's cost. Tasks go to an :class:`eval.executor.Executor`; results come back to this process, which writes the cache — workers need no access to it (only to the
@@ -117,24 +117,33 @@ def _seed_free(req: RunRequest) -> RunRequest:
     return dataclasses.replace(req, seed=0) if free else req
 
 
-def _group(missing: Sequence[RunRequest], version: str) -> list[RunTask]:
-    groups: dict[tuple, list[MatcherSpec]] = {}
+def _group(missing: Sequence[RunRequest], version: str, workers: int = 1) -> list[RunTask]:
+    """Tasks for the missing runs. Runs that re-detect (a noise rate) or re-localise share a task
+    per (dataset, seed, pairs, keep, localisation) — its matchers × its noise rates, rates with
+    the same missing matchers together; every other run is its own task. A grouped task is split
+    by rates while there are fewer tasks than `workers`."""
+    groups: dict[tuple, dict[float | None, list[MatcherSpec]]] = {}
     for req in missing:
         shared = req.noise_rate is not None or req.localisation is not None
-        key = (
-            req.dataset_dir,
-            req.dataset_checksum,
-            req.seed,
-            req.noise_rate,
-            req.limit,
-            req.keep,
-            req.localisation,
-        )
-        key = key if shared else (*key, req.matcher)
-        groups.setdefault(key, []).append(req.matcher)
+        key = (req.dataset_dir, req.dataset_checksum, req.seed, req.limit, req.keep)
+        key = (*key, req.localisation) if shared else (*key, req.localisation, req.matcher)
+        groups.setdefault(key, {}).setdefault(req.noise_rate, []).append(req.matcher)
+    blocks: list[tuple[tuple, tuple[MatcherSpec, ...], list[float | None]]] = []
+    for key, by_rate in groups.items():
+        same: dict[tuple[MatcherSpec, ...], list[float | None]] = {}
+        for rate, matchers in by_rate.items():
+            same.setdefault(tuple(dict.fromkeys(matchers)), []).append(rate)
+        blocks += [(key, matchers, rates) for matchers, rates in same.items()]
+    while len(blocks) < workers:
+        widest = max(range(len(blocks)), key=lambda b: len(blocks[b][2]), default=None)
+        if widest is None or len(blocks[widest][2]) < 2:
+            break
+        key, matchers, rates = blocks.pop(widest)
+        half = (len(rates) + 1) // 2
+        blocks += [(key, matchers, rates[:half]), (key, matchers, rates[half:])]
     return [
-        RunTask(k[0], k[1], k[2], k[3], tuple(dict.fromkeys(ms)), version, k[4], k[5], k[6])
-        for k, ms in groups.items()
+        RunTask(k[0], k[1], k[2], tuple(rates), matchers, version, k[3], k[4], k[5])
+        for k, matchers, rates in blocks
     ]
 
 
@@ -197,7 +206,7 @@ class Runner:
         )
         self.stats = RunStats(cached=len(set(specs)) - len(missing))
         if missing:
-            tasks = _group(missing, self.version)
+            tasks = _group(missing, self.version, self.executor.workers)
             log.info(
                 "%s: %d cached, %d to compute in %d tasks",
                 desc,
@@ -211,7 +220,7 @@ class Runner:
                 for done in self.executor.map_unordered(self.task_fn, tasks):
                     task = tasks[done.index]
                     if done.error is not None:
-                        self.stats.failed += len(task.matchers)
+                        self.stats.failed += task.runs
                         detail = "".join(traceback.format_exception(done.error)).rstrip()
                         failures.append(f"{task}: {done.error!r}")
                         errors.append(done.error)
@@ -224,7 +233,7 @@ class Runner:
                         for result in done.value:
                             self.cache.store(result)
                         self.stats.computed += len(done.value)
-                    bar.update(len(task.matchers))
+                    bar.update(task.runs)
             if failures:
                 raise RunFailed(
                     f"{len(failures)} of {len(tasks)} tasks failed (the rest are cached; re-run "

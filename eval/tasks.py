@@ -8,8 +8,10 @@ Its identity, :class:`RunSpec`, holds everything that determines the result — 
 matcher name and options (tuned parameters and protocol options such as ``pairwise="image"``
 are options), seed, noise rate, keep level, localisation sigmas, code version — and hashes to
 the cache key (the localisation draw is fixed by the sigmas, the seed and the record identity). A
-:class:`RunTask` is the unit of work handed to an executor: one dataset, seed and noise rate and
-one or more matchers, which then share the (costly) re-detection of every frame pair. Tasks carry
+:class:`RunTask` is the unit of work handed to an executor: one dataset and seed, one or more
+noise rates and one or more matchers (every combination is a run). Its runs share the reading of
+every frame pair and its re-detection: which objects are detected and the seeded noise field are
+decided once per pair, then scaled to each rate (``FramePair.redetect_rates``). Tasks carry
 only plain data (paths, names, numbers), so any executor, local or remote, gives the same result.
 
 The run seed is passed to the matcher (random initialisation, triangle sampling) and, with a noise
@@ -71,30 +73,44 @@ class RunSpec:
 
 @dataclass(frozen=True)
 class RunTask:
-    """One dataset × seed × noise rate, for one or more matchers (one run each)."""
+    """One dataset × seed, for one or more noise rates (``(None,)``: the stored detections) and
+    one or more matchers: one run per (rate, matcher), rate-major."""
 
     dataset_dir: str
     dataset_checksum: str
     seed: int
-    noise_rate: float | None
+    noise_rates: tuple[float | None, ...]
     matchers: tuple[MatcherSpec, ...]
     code_version: str
     limit: int | None = None
     keep: float | None = None
     localisation: tuple[float, float] | None = None
 
+    def __post_init__(self) -> None:
+        if not self.noise_rates or (None in self.noise_rates and len(self.noise_rates) > 1):
+            raise ValueError(
+                f"noise_rates: expected (None,) or one or more rates, got {self.noise_rates!r}"
+            )
+
+    @property
+    def runs(self) -> int:
+        """How many runs the task computes: rates × matchers."""
+        return len(self.noise_rates) * len(self.matchers)
+
     def specs(self) -> list[RunSpec]:
+        """One spec per run, rate-major (the order of :func:`execute`'s results)."""
         return [
             RunSpec(
                 self.dataset_checksum,
                 m,
                 self.seed,
-                self.noise_rate,
+                rate,
                 self.code_version,
                 self.limit,
                 self.keep,
                 self.localisation,
             )
+            for rate in self.noise_rates
             for m in self.matchers
         ]
 
@@ -155,10 +171,47 @@ def matcher_function(name: str):
     return get(name)
 
 
-def execute(task: RunTask) -> list[RunResult]:
-    """Run every matcher of `task` on every frame pair of its dataset; one result per matcher."""
+def _pair_outcomes(pair, task: RunTask, functions: list) -> list[PairOutcome]:
+    """Every matcher of `task` (``functions``: theirs, in order) on one frame pair, already
+    re-detected at the run's noise rate; thinned and re-localised as the task says."""
     from matchers.tensor_sharing import shared_tensors
 
+    if task.keep is not None:
+        pair = thin_pair(pair, task.keep)
+    if task.localisation is not None:
+        pair = pair.localise(*task.localisation, seed=task.seed)
+    problem = pair.problem()
+    gt = np.asarray(pair.gt_pairs, dtype=np.int64).reshape(-1, 2)
+    with shared_tensors():  # the hypergraph matchers of a pair share its k-NN search
+        matchings = [
+            fn(problem, seed=task.seed, threshold=None, **dict(spec.options))
+            for spec, fn in zip(task.matchers, functions, strict=True)
+        ]
+    outcomes = []
+    for matching in matchings:
+        scores = np.asarray(matching.scores, dtype=float).reshape(problem.n1, problem.n2)
+        outcomes.append(
+            PairOutcome(
+                index=pair.index,
+                name=pair.name,
+                episode=pair.episode,
+                sim_seed=pair.sim_seed,
+                checksum=pair.checksum,
+                n1=problem.n1,
+                n2=problem.n2,
+                gt_pairs=gt,
+                assigned=np.asarray(matching.pairs, dtype=np.int64).reshape(-1, 2),
+                scores=scores,
+                time_s=float(matching.time_s),
+                iterations=int(matching.iterations),
+            )
+        )
+    return outcomes
+
+
+def execute(task: RunTask) -> list[RunResult]:
+    """Run every matcher of `task` at each of its noise rates on every frame pair of its dataset;
+    one result per run, in :meth:`RunTask.specs` order."""
     dataset = open_dataset(task.dataset_dir)
     if dataset.checksum != task.dataset_checksum:
         raise ValueError(
@@ -171,37 +224,14 @@ def execute(task: RunTask) -> list[RunResult]:
     count = len(dataset) if task.limit is None else min(task.limit, len(dataset))
     for k in range(count):
         pair = dataset[k]
-        if task.noise_rate is not None:
-            pair = pair.redetect(task.noise_rate, seed=task.seed)
-        if task.keep is not None:
-            pair = thin_pair(pair, task.keep)
-        if task.localisation is not None:
-            pair = pair.localise(*task.localisation, seed=task.seed)
-        problem = pair.problem()
-        gt = np.asarray(pair.gt_pairs, dtype=np.int64).reshape(-1, 2)
-        with shared_tensors():  # the hypergraph matchers of a pair share its k-NN search
-            matchings = [
-                fn(problem, seed=task.seed, threshold=None, **dict(spec.options))
-                for spec, fn in zip(task.matchers, functions, strict=True)
-            ]
-        for matching, result in zip(matchings, results, strict=True):
-            scores = np.asarray(matching.scores, dtype=float).reshape(problem.n1, problem.n2)
-            result.outcomes.append(
-                PairOutcome(
-                    index=pair.index,
-                    name=pair.name,
-                    episode=pair.episode,
-                    sim_seed=pair.sim_seed,
-                    checksum=pair.checksum,
-                    n1=problem.n1,
-                    n2=problem.n2,
-                    gt_pairs=gt,
-                    assigned=np.asarray(matching.pairs, dtype=np.int64).reshape(-1, 2),
-                    scores=scores,
-                    time_s=float(matching.time_s),
-                    iterations=int(matching.iterations),
-                )
-            )
+        if task.noise_rates == (None,):
+            variants = [pair]
+        else:  # the pair re-detected at every rate: one plan and one noise field per view
+            variants = pair.redetect_rates(task.noise_rates, seed=task.seed)
+        for r, variant in enumerate(variants):
+            runs = results[r * len(functions) : (r + 1) * len(functions)]
+            for result, outcome in zip(runs, _pair_outcomes(variant, task, functions), strict=True):
+                result.outcomes.append(outcome)
     wall = time.perf_counter() - started
     for result in results:
         result.wall_s = wall / len(results)

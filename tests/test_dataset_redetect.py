@@ -99,3 +99,52 @@ def test_redetect_reuses_stored_features_instead_of_recomputing(dataset, monkeyp
     assert calls == []  # every detected object already had stored features
     np.testing.assert_array_equal(again.view1.features, recomputed.features)
     np.testing.assert_array_equal(again.view1.features, pair.view1.features)
+
+
+def test_redetect_rates_gives_the_bits_of_one_redetect_per_rate(dataset):
+    rates = [0.0, 0.002, 0.05, 0.0]
+    for pair in dataset:
+        together = pair.redetect_rates(rates, seed=7)
+        for rate, got in zip(rates, together, strict=True):
+            alone = dataset[pair.index].redetect(rate, seed=7)  # a fresh pair: nothing shared
+            assert got.noise_rate == rate
+            assert got.view1.equals(alone.view1) and got.view2.equals(alone.view2)
+            for a, b in ((got.view1, alone.view1), (got.view2, alone.view2)):
+                np.testing.assert_array_equal(a.positions, b.positions)
+        assert not np.array_equal(together[1].view1.positions, together[2].view1.positions)
+    with pytest.raises(ValueError, match="noise_rate: expected a finite value >= 0"):
+        dataset[0].redetect_rates([0.01, float("nan")], seed=1)
+
+
+def test_redetection_plan_locates_exactly_as_detect_on_the_full_noisy_image(dataset):
+    from cadsim.render.view import RenderedView
+    from cadsim.sensing.depth_noise import (
+        NoiseConfig,
+        apply_depth_noise,
+        noisy_depth_values,
+        unit_noise,
+    )
+    from cadsim.sensing.detection import DetectionConfig, detect, plan_detections
+
+    pair = dataset[1]
+    cfg, det_cfg = NoiseConfig(noise_rate=0.03), DetectionConfig(**SCENARIO.detection)
+    noisy = apply_depth_noise(pair.depth1, cfg, np.random.default_rng(11))
+    view = RenderedView(pair.color1, pair.depth1, pair.instance1)
+    direct = detect(view, noisy, pair.objects, pair.cameras[0], det_cfg)
+    plan = plan_detections(
+        pair.instance1, pair.depth1, pair.objects, pair.cameras[0], det_cfg, lambda: pair.color1
+    )
+    assert len(plan) == len(direct) > 0
+    # The noise at the plan's pixels alone is the full image's noise there, bit for bit.
+    unit = unit_noise(pair.depth1.shape, cfg, np.random.default_rng(11)).ravel()[plan.pixels]
+    clean = pair.depth1.astype(np.float64).ravel()[plan.pixels]
+    values = noisy_depth_values(clean, cfg.noise_rate, unit)
+    np.testing.assert_array_equal(values, noisy.ravel()[plan.pixels])
+    for located in (plan.locate(values), plan.locate(noisy)):
+        np.testing.assert_array_equal(located.positions, direct.positions)
+        np.testing.assert_array_equal(located.features, direct.features)
+        np.testing.assert_array_equal(located.boxes, direct.boxes)
+        np.testing.assert_array_equal(located.pixels, direct.pixels)
+        assert located.object_ids == direct.object_ids
+    with pytest.raises(ValueError, match="plan's pixels"):
+        plan.locate(values[:-1])

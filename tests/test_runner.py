@@ -28,7 +28,8 @@ class FakePair:
         self.name, self.checksum = f"e{index:05d}_s00", f"{sim_seed:064x}"
         self.n1, self.n2, self.k, self.noise = n1, n2, k, noise
         self.gt_pairs = np.stack([np.arange(k), np.arange(k)[::-1] + (n2 - k)], axis=1)
-        self.redetect_calls = 0
+        self.redetect_calls = 0  # re-detections asked for, one per rate
+        self.redetect_passes = 0  # calls of redetect_rates (one per task that re-detects)
 
     def problem(self) -> Problem:
         rng = np.random.default_rng(self.sim_seed)
@@ -43,6 +44,10 @@ class FakePair:
         return FakePair(
             self.index, self.sim_seed, self.n1, self.n2, self.k, noise=noise_rate * (1 + seed)
         )
+
+    def redetect_rates(self, noise_rates, seed: int) -> list[FakePair]:
+        self.redetect_passes += 1
+        return [self.redetect(rate, seed) for rate in noise_rates]
 
 
 class FakeDataset(list):
@@ -131,6 +136,7 @@ def test_noise_runs_share_one_redetection_per_pair(fake_world, tmp_path):
     results = runner.run(reqs)
     assert runner.stats.computed == 6
     assert [p.redetect_calls for p in fake_world["data/cad"]] == [2, 2, 2]  # once per rate
+    assert [p.redetect_passes for p in fake_world["data/cad"]] == [1, 1, 1]  # in one task
     by_rate = {r.spec.noise_rate for r in results}
     assert by_rate == {0.0, 0.1}
     # The rate reaches the detections: noisy scores differ from clean ones.
@@ -235,3 +241,30 @@ def test_a_seed_free_matcher_runs_once_for_every_seed(fake_world, tmp_path, monk
     # the seed also draws the noise of a re-detection: then every seed is its own run
     runner.run(requests_for(data, [MatcherSpec("fixed")], seeds, [0.1]))
     assert runner.stats.computed == 4
+
+
+def test_noise_rates_are_split_into_tasks_only_to_keep_every_worker_busy():
+    from eval.runner import _group
+
+    data = [("data/cad", "sum")]
+    rates = [0.0, 0.001, 0.01, 0.1, 0.3]
+    one_seed = requests_for(data, [MatcherSpec("a"), MatcherSpec("b")], [0], rates)
+    assert [t.noise_rates for t in _group(one_seed, "v", workers=1)] == [tuple(rates)]
+    split = _group(one_seed, "v", workers=2)
+    assert sorted(r for t in split for r in t.noise_rates) == rates and len(split) == 2
+    assert len(_group(one_seed, "v", workers=64)) == len(rates)  # no task without a rate
+    two_seeds = requests_for(data, [MatcherSpec("a")], [0, 1], rates)
+    assert [(t.seed, len(t.noise_rates)) for t in _group(two_seeds, "v", workers=2)] == [
+        (0, 5),
+        (1, 5),
+    ]
+    # Every (rate, matcher) of a task is a run that was asked for: a rate with other missing
+    # matchers gets its own task.
+    partial = one_seed[:4] + [r for r in one_seed[4:] if r.matcher.name == "a"]
+    tasks = _group(partial, "v", workers=1)
+    asked = {(r.noise_rate, r.matcher) for r in partial}
+    assert {(s.noise_rate, s.matcher) for t in tasks for s in t.specs()} == asked
+    assert sum(t.runs for t in tasks) == len(partial)
+    # Runs on the stored detections stay one task each.
+    stored = requests_for(data, [MatcherSpec("a"), MatcherSpec("b")], [0, 1])
+    assert [t.runs for t in _group(stored, "v", workers=1)] == [1, 1, 1, 1]

@@ -15,6 +15,7 @@ import json
 from collections.abc import Iterator, Sequence
 from functools import cached_property
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -28,6 +29,10 @@ from cadsim.dataset.seeds import localisation_seed, noise_seed
 from cadsim.observer_pose import ObserverPose, camera_to_world
 from cadsim.sensing.localisation import LocalisationConfig, PoseError, perturbed_world
 from cadsim.world import WorldObject
+
+if TYPE_CHECKING:  # imported where used: reading a dataset needs neither
+    from cadsim.sensing.depth_noise import NoiseConfig
+    from cadsim.sensing.detection import DetectionPlan
 
 
 class FramePair:
@@ -333,12 +338,49 @@ class FramePair:
         detections; the dataset's root seed and noise rate ⇒ the stored detections. Features are
         the stored ones (they depend on colour, instance map and the record's attribute errors,
         ``attribute_seed``, not on depth), so only positions are re-estimated."""
-        from cadsim.render.view import RenderedView
-        from cadsim.sensing.depth_noise import NoiseConfig, apply_depth_noise
-        from cadsim.sensing.detection import DetectionConfig, detect
+        return self.redetect_rates([noise_rate], seed)[0]
 
-        if not np.isfinite(noise_rate) or noise_rate < 0:
-            raise ValueError(f"noise_rate: expected a finite value >= 0, got {noise_rate!r}")
+    def redetect_rates(self, noise_rates: Sequence[float], seed: int) -> list[FramePair]:
+        """``[self.redetect(rate, seed) for rate in noise_rates]`` (the same bits), at a fraction
+        of the cost: which objects are detected, their pixels and features are decided once per
+        view (:func:`cadsim.sensing.detection.plan_detections`, kept on this pair), the seeded
+        unit noise field is drawn once per view (every rate scales the same field), and only the
+        pixels of detected objects are made noisy."""
+        from cadsim.sensing.depth_noise import noisy_depth_values, unit_noise
+
+        rates = [float(r) for r in noise_rates]
+        for rate in rates:
+            if not np.isfinite(rate) or rate < 0:
+                raise ValueError(f"noise_rate: expected a finite value >= 0, got {rate!r}")
+        noise_cfg, plans = self._detection_plans
+        per_view = []
+        for v, depth, plan in ((1, self.depth1, plans[0]), (2, self.depth2, plans[1])):
+            clean = np.asarray(depth, dtype=np.float64).ravel()[plan.pixels]
+            unit = None
+            if any(rate > 0 for rate in rates):
+                rng = np.random.default_rng(noise_seed(seed, self.episode, self.slot, v))
+                unit = unit_noise(depth.shape, noise_cfg, rng).ravel()[plan.pixels]
+            per_view.append(
+                [
+                    ViewDetections.from_detections(
+                        plan.locate(noisy_depth_values(clean, rate, unit))
+                    )
+                    for rate in rates
+                ]
+            )
+        return [
+            self._derived((view1, view2), rate, self._localisation)
+            for rate, view1, view2 in zip(rates, *per_view, strict=True)
+        ]
+
+    @cached_property
+    def _detection_plans(self) -> tuple[NoiseConfig, tuple[DetectionPlan, DetectionPlan]]:
+        """The dataset's noise configuration and, per view, what its detector decides without the
+        noisy depth (from the stored clean depth, instance map and attribute seed; the current
+        detections' features are reused, so colour is decoded only for an object they lack)."""
+        from cadsim.sensing.depth_noise import NoiseConfig, check_depth
+        from cadsim.sensing.detection import DetectionConfig, plan_detections
+
         if not self.has_images:
             raise ValueError(f"{self.path}: record has no depth images to re-detect from")
         try:
@@ -349,30 +391,27 @@ class FramePair:
             raise DatasetError(
                 f"{manifest}: generation.noise / generation.detection rejected ({exc})"
             ) from None
-        noise_cfg = dataclasses.replace(noise_cfg, noise_rate=float(noise_rate))
-        views = []
+        plans = []
         for v, color, depth, instance, camera, stored in (
-            (1, self.color1, self.depth1, self.instance1, self.cameras[0], self.view1),
-            (2, self.color2, self.depth2, self.instance2, self.cameras[1], self.view2),
+            (1, "color1", self.depth1, self.instance1, self.cameras[0], self.view1),
+            (2, "color2", self.depth2, self.instance2, self.cameras[1], self.view2),
         ):
-            rng = np.random.default_rng(noise_seed(seed, self.episode, self.slot, v))
-            noisy = apply_depth_noise(depth, noise_cfg, rng)
-            # The attribute errors are the record's own, whatever ``seed``; appearance does not
-            # depend on depth, so the stored features are reused and only positions re-estimated.
+            check_depth(depth)
+            # The attribute errors are the record's own, whatever the noise seed.
             attributes = np.random.default_rng(self.record["observers"][v - 1]["attribute_seed"])
-            known = dict(zip(stored.object_ids, stored.features, strict=True))
-            view = RenderedView(color, depth, instance)
-            det = detect(
-                view,
-                noisy,
-                self.objects,
-                camera,
-                det_cfg,
-                attribute_rng=attributes,
-                known_features=known,
+            plans.append(
+                plan_detections(
+                    instance,
+                    depth,
+                    self.objects,
+                    camera,
+                    det_cfg,
+                    lambda name=color: getattr(self, name),
+                    attribute_rng=attributes,
+                    known_features=dict(zip(stored.object_ids, stored.features, strict=True)),
+                )
             )
-            views.append(ViewDetections.from_detections(det))
-        return self._derived(tuple(views), noise_rate, self._localisation)
+        return noise_cfg, (plans[0], plans[1])
 
 
 def _box_centres(boxes: np.ndarray) -> np.ndarray:

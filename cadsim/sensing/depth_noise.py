@@ -79,6 +79,39 @@ def correlated_field(
     return field / std if std > 0 else field
 
 
+def check_depth(depth: np.ndarray) -> np.ndarray:
+    """``depth`` ((H, W) metres along the optical axis, 0 = no hit) as float64; raises
+    ValueError unless it is 2-D, finite and >= 0."""
+    d = np.asarray(depth)
+    if d.ndim != 2:
+        raise ValueError(f"depth must be a 2-D (H, W) image, got shape {d.shape}")
+    d = d.astype(np.float64)
+    if not np.all(np.isfinite(d)) or np.any(d < 0):
+        raise ValueError("depth must be finite and >= 0 (0 = no hit)")
+    return d
+
+
+def unit_noise(shape: tuple[int, int], config: NoiseConfig, rng: np.random.Generator) -> np.ndarray:
+    """(H, W) float64 unit-variance noise ``√(1-f) · w + √f · c`` (module docstring), drawn from
+    ``rng`` in a fixed order (white noise, then the correlated field). It does not depend on
+    the noise rate: every rate scales the same field (common random numbers)."""
+    f = config.correlated_fraction
+    unit = np.sqrt(1.0 - f) * rng.standard_normal(shape)
+    if f > 0:
+        unit += np.sqrt(f) * correlated_field(shape, config.correlation_length_px, rng)
+    return unit
+
+
+def noisy_depth_values(depth: np.ndarray, noise_rate: float, unit: np.ndarray | None) -> np.ndarray:
+    """Noisy depth as float32, elementwise: ``depth`` (float64 metres, 0 = no hit, any shape) plus
+    ``noise_rate · d² · unit`` (``unit``: :func:`unit_noise`, or its values at the same pixels;
+    unused and may be None when the rate is 0). Hits stay ≥ ``MIN_NOISY_DEPTH_M``, misses 0."""
+    if noise_rate == 0:
+        return depth.astype(np.float32)
+    noisy = depth + noise_rate * depth * depth * unit
+    return np.where(depth > 0, np.maximum(noisy, MIN_NOISY_DEPTH_M), 0.0).astype(np.float32)
+
+
 def apply_depth_noise(
     depth: np.ndarray, config: NoiseConfig, rng: np.random.Generator
 ) -> np.ndarray:
@@ -86,17 +119,7 @@ def apply_depth_noise(
 
     Draws from ``rng`` in a fixed order (white noise, then the correlated field), so the same
     generator state gives the same image."""
-    d = np.asarray(depth)
-    if d.ndim != 2:
-        raise ValueError(f"depth must be a 2-D (H, W) image, got shape {d.shape}")
-    d = d.astype(np.float64)
-    if not np.all(np.isfinite(d)) or np.any(d < 0):
-        raise ValueError("depth must be finite and >= 0 (0 = no hit)")
+    d = check_depth(depth)
     if config.noise_rate == 0:
-        return d.astype(np.float32)
-    f = config.correlated_fraction
-    unit = np.sqrt(1.0 - f) * rng.standard_normal(d.shape)
-    if f > 0:
-        unit += np.sqrt(f) * correlated_field(d.shape, config.correlation_length_px, rng)
-    noisy = d + config.noise_rate * d * d * unit
-    return np.where(d > 0, np.maximum(noisy, MIN_NOISY_DEPTH_M), 0.0).astype(np.float32)
+        return noisy_depth_values(d, 0.0, None)
+    return noisy_depth_values(d, config.noise_rate, unit_noise(d.shape, config, rng))

@@ -24,7 +24,7 @@ id and class are kept beside the features, never in them.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -123,56 +123,107 @@ def centre_offset_along(obj: WorldObject, ray_world: np.ndarray) -> float:
     return 0.5 * L * W * Hh / projected
 
 
-def detect(
-    view: RenderedView,
-    noisy_depth: np.ndarray,
+@dataclass
+class DetectionPlan:
+    """Everything a view's detector decides without looking at the noisy depth: which objects are
+    detected, their pixels, boxes and features (:func:`plan_detections`). :meth:`locate` adds the
+    positions from a noisy depth, so one plan serves every noise rate and seed of a view.
+
+    pixels: flat indices (row · W + column) of every detection's mask, concatenated in detection
+    order; ``starts[i]:starts[i + 1]`` are detection i's. centres: (k, 2) mask centroids (u, v),
+    pixels. The other fields are those of :class:`Detections`, and the detected objects."""
+
+    pixels: np.ndarray
+    starts: np.ndarray
+    centres: np.ndarray
+    boxes: np.ndarray
+    features: np.ndarray
+    objects: list[WorldObject]
+    classes: list[str]
+    camera: Camera
+    surface_to_center: bool
+    shape: tuple[int, int]
+
+    def __len__(self) -> int:
+        return len(self.objects)
+
+    def locate(self, noisy: np.ndarray) -> Detections:
+        """The detections with positions from the noisy depth: ``noisy`` is the (H, W) noisy depth
+        image (metres), or its values at :attr:`pixels` (same order), as from
+        :func:`cadsim.sensing.depth_noise.noisy_depth_values`."""
+        values = np.asarray(noisy)
+        if values.shape == self.shape:
+            values = values.ravel()[self.pixels]
+        if values.shape != self.pixels.shape:
+            raise ValueError(
+                f"noisy depth must be the view's (H, W) = {self.shape} image or its "
+                f"{len(self.pixels)} values at the plan's pixels, got shape {values.shape}"
+            )
+        if not self.objects:
+            return Detections.empty()
+        R = self.camera.rotation_cam_to_world()
+        positions = []
+        for i, obj in enumerate(self.objects):
+            z = float(np.median(values[self.starts[i] : self.starts[i + 1]]))
+            p = self.camera.back_project(self.centres[i : i + 1], np.array([z]))[0]
+            if self.surface_to_center:
+                ray = p / np.linalg.norm(p)
+                p = p + centre_offset_along(obj, R @ ray) * ray
+            positions.append(p)
+        return Detections(
+            positions=np.array(positions, dtype=float),
+            boxes=self.boxes.copy(),
+            features=self.features.copy(),
+            object_ids=[o.id for o in self.objects],
+            classes=list(self.classes),
+            pixels=np.diff(self.starts),
+        )
+
+
+def plan_detections(
+    instance: np.ndarray,
+    clean_depth: np.ndarray,
     objects: Sequence[WorldObject],
     camera: Camera,
     config: DetectionConfig,
+    color: Callable[[], np.ndarray],
     attribute_rng: np.random.Generator | None = None,
     known_features: Mapping[str, np.ndarray] | None = None,
-) -> Detections:
-    """Detections of the ``target`` objects visible in ``view`` (see the module docstring).
+) -> DetectionPlan:
+    """Which ``target`` objects of a view are detected, and what they look like (see the module
+    docstring): everything but their positions, which :meth:`DetectionPlan.locate` adds.
 
-    objects: the snapshot's object list, which ``view.instance`` indexes. noisy_depth: (H, W)
-    metres, the view's depth after ``apply_depth_noise``. attribute_rng: the view's attribute
-    stream (class confusion, size noise); None: features carry the true class and size.
-    known_features: object id -> its feature row from an earlier detection of this same view;
-    used instead of recomputing it. Which objects are detected and what they look like depend
-    only on colour, instance map, clean depth and the attribute stream, never on the noisy depth,
-    so a re-detection at another noise rate may pass the stored features and only positions are
-    re-estimated."""
-    h, w = view.shape
-    noisy = np.asarray(noisy_depth)
-    if noisy.shape != (h, w):
-        raise ValueError(f"noisy_depth must have the view's shape {(h, w)}, got {noisy.shape}")
+    instance, clean_depth: the view's (H, W) instance map and clean depth (metres). color: returns
+    the view's (H, W, 3) uint8 colour image; called only if some detected object is missing from
+    ``known_features`` (object id -> its feature row from an earlier detection of this view).
+    attribute_rng: the view's attribute stream (class confusion, size noise); None: features carry
+    the true class and size. Which objects are detected and what they look like depend only on
+    colour, instance map, clean depth and the attribute stream, never on the noisy depth."""
+    instance = np.asarray(instance, dtype=np.int32)  # the dtypes of a RenderedView
+    h, w = instance.shape
     if (camera.width, camera.height) != (w, h):
         raise ValueError(f"camera is {camera.width}x{camera.height} but the view is {w}x{h}")
     n = len(objects)
-    inst = view.instance.ravel()
+    inst = instance.ravel()
     if inst.size and int(inst.max()) >= n:
         raise ValueError(
             f"view.instance refers to object index {int(inst.max())} but only {n} objects were given"
         )
     counts = np.bincount(inst + 1, minlength=n + 1)  # [0] = background
     candidates = [i for i in range(n) if objects[i].target and counts[i + 1] >= config.min_pixels]
-    if not candidates:
-        return Detections.empty()
-    if attribute_rng is None:
+    if attribute_rng is None or not candidates:
         seen_cls, seen_size = [o.cls for o in objects], [o.size for o in objects]
     else:
         seen_cls, seen_size = perceived_attributes(
             objects, config.class_confusion, config.size_noise, attribute_rng
         )
     # Pixels of every object, grouped: a stable sort by label, split at the cumulative counts.
-    order = np.argsort(inst, kind="stable")
+    order = np.argsort(inst, kind="stable") if candidates else inst
     starts = np.concatenate([[0], np.cumsum(counts)])
-    boxes_px = ndimage.find_objects(view.instance + 1, max_label=n)
-    clean = view.depth.ravel()
-    noisy = noisy.ravel()
-    R = camera.rotation_cam_to_world()
+    boxes_px = ndimage.find_objects(instance + 1, max_label=n) if candidates else []
+    clean = np.asarray(clean_depth, dtype=np.float32).ravel()
     m = config.border_margin_px
-    out_pos, out_box, out_feat, out_ids, out_cls, out_pix = [], [], [], [], [], []
+    kept, masks, centres, boxes, features = [], [], [], [], []
     for i in candidates:
         obj = objects[i]
         pix = order[starts[i + 1] : starts[i + 2]]
@@ -187,30 +238,58 @@ def detect(
         if in_image > 0 and len(pix) / in_image < config.min_visible_fraction:
             continue
         v, u = np.divmod(pix, w)
-        z = float(np.median(noisy[pix]))
-        p = camera.back_project(np.array([[u.mean() + 0.5, v.mean() + 0.5]]), np.array([z]))[0]
-        if config.surface_to_center:
-            ray = p / np.linalg.norm(p)
-            p = p + centre_offset_along(obj, R @ ray) * ray
         if known_features is not None and obj.id in known_features:
-            out_feat.append(known_features[obj.id])
+            features.append(known_features[obj.id])
         else:
             mask_crop = np.zeros((y1 - y0, x1 - x0), dtype=np.uint8)
             mask_crop[v - y0, u - x0] = 255
             box = (x0, y0, x1, y1)
-            out_feat.append(object_features(view.color, box, mask_crop, seen_cls[i], seen_size[i]))
-        out_pos.append(p)
-        out_box.append((x0, y0, x1, y1))
-        out_ids.append(obj.id)
-        out_cls.append(obj.cls)
-        out_pix.append(len(pix))
-    if not out_ids:
-        return Detections.empty()
-    return Detections(
-        positions=np.array(out_pos, dtype=float),
-        boxes=np.array(out_box, dtype=float),
-        features=np.array(out_feat, dtype=np.float32),
-        object_ids=out_ids,
-        classes=out_cls,
-        pixels=np.array(out_pix, dtype=np.int64),
+            features.append(object_features(color(), box, mask_crop, seen_cls[i], seen_size[i]))
+        kept.append(obj)
+        masks.append(pix)
+        centres.append((u.mean() + 0.5, v.mean() + 0.5))
+        boxes.append((x0, y0, x1, y1))
+    return DetectionPlan(
+        pixels=np.concatenate(masks) if masks else np.zeros(0, dtype=np.int64),
+        starts=np.concatenate([[0], np.cumsum([len(p) for p in masks], dtype=np.int64)]),
+        centres=np.array(centres, dtype=float).reshape(-1, 2),
+        boxes=np.array(boxes, dtype=float).reshape(-1, 4),
+        features=np.array(features, dtype=np.float32).reshape(-1, FEATURE_DIM),
+        objects=kept,
+        classes=[o.cls for o in kept],
+        camera=camera,
+        surface_to_center=config.surface_to_center,
+        shape=(h, w),
     )
+
+
+def detect(
+    view: RenderedView,
+    noisy_depth: np.ndarray,
+    objects: Sequence[WorldObject],
+    camera: Camera,
+    config: DetectionConfig,
+    attribute_rng: np.random.Generator | None = None,
+    known_features: Mapping[str, np.ndarray] | None = None,
+) -> Detections:
+    """Detections of the ``target`` objects visible in ``view`` (see the module docstring):
+    :func:`plan_detections` then :meth:`DetectionPlan.locate`.
+
+    objects: the snapshot's object list, which ``view.instance`` indexes. noisy_depth: (H, W)
+    metres, the view's depth after ``apply_depth_noise``. attribute_rng, known_features: as for
+    :func:`plan_detections`; a re-detection at another noise rate may pass the stored features
+    and only positions are re-estimated."""
+    noisy = np.asarray(noisy_depth)
+    if noisy.shape != view.shape:
+        raise ValueError(f"noisy_depth must have the view's shape {view.shape}, got {noisy.shape}")
+    plan = plan_detections(
+        view.instance,
+        view.depth,
+        objects,
+        camera,
+        config,
+        lambda: view.color,
+        attribute_rng=attribute_rng,
+        known_features=known_features,
+    )
+    return plan.locate(noisy)
