@@ -2,11 +2,12 @@
 it completes, so a re-run computes only what changed and an interrupted sweep resumes. A run of
 the first N frame pairs is read from the cached run of the whole dataset when there is one.
 
-Missing runs are grouped into :class:`eval.tasks.RunTask` s: with a noise rate or a localisation
-re-draw, all matchers and noise rates of one (dataset, seed, draw) share a task (they share its
-reading of the records and one re-detection plan per pair; split by rates while there are fewer
-tasks than workers); without, each run is its own task (finer load balancing). A matcher that ignores its seed (``matchers.deterministic``) is
-run with seed 0 only where nothing else uses the seed (no noise re-draw, no localisation re-draw):
+Missing runs are grouped into :class:`eval.tasks.RunTask` s: all matchers and noise rates of one
+(dataset, seed, pairs, keep level, localisation draw) share a task — the reading of every record,
+its re-detection plan and the hypergraph matchers' k-NN search (``matchers.shared_tensors``) —
+split into interleaved halves while there are fewer than two tasks per worker. A matcher that
+ignores its seed (``matchers.deterministic``) is run with seed 0 only where nothing else uses the
+seed (no noise re-draw, no localisation re-draw):
 its runs for other seeds are that run, read once and relabelled — same bits, a quarter of Table
 I's cost. Tasks go to an :class:`eval.executor.Executor`; results come back to this process, which writes the cache — workers need no access to it (only to the
 datasets), whichever executor runs them (local processes or a Dask cluster, docs/scale-out.md).
@@ -118,31 +119,38 @@ def _seed_free(req: RunRequest) -> RunRequest:
 
 
 def _group(missing: Sequence[RunRequest], version: str, workers: int = 1) -> list[RunTask]:
-    """Tasks for the missing runs. Runs that re-detect (a noise rate) or re-localise share a task
-    per (dataset, seed, pairs, keep, localisation) — its matchers × its noise rates, rates with
-    the same missing matchers together; every other run is its own task. A grouped task is split
-    by rates while there are fewer tasks than `workers`."""
+    """Tasks for the missing runs: one per (dataset, seed, pairs, keep, localisation), holding its
+    matchers × its noise rates (rates with the same missing matchers together, so that every run
+    of a task was asked for). Its runs share the reading of every frame pair, its re-detection
+    plan and the hypergraph matchers' k-NN search. While there are fewer than two tasks per
+    worker (one worker: one task each), the task with the most runs is split in two, by rates
+    when it has several, else by matchers — interleaved halves, so that they cost about the
+    same."""
     groups: dict[tuple, dict[float | None, list[MatcherSpec]]] = {}
     for req in missing:
-        shared = req.noise_rate is not None or req.localisation is not None
         key = (req.dataset_dir, req.dataset_checksum, req.seed, req.limit, req.keep)
-        key = (*key, req.localisation) if shared else (*key, req.localisation, req.matcher)
-        groups.setdefault(key, {}).setdefault(req.noise_rate, []).append(req.matcher)
-    blocks: list[tuple[tuple, tuple[MatcherSpec, ...], list[float | None]]] = []
+        groups.setdefault((*key, req.localisation), {}).setdefault(req.noise_rate, []).append(
+            req.matcher
+        )
+    blocks: list[tuple[tuple, tuple[MatcherSpec, ...], tuple[float | None, ...]]] = []
     for key, by_rate in groups.items():
         same: dict[tuple[MatcherSpec, ...], list[float | None]] = {}
         for rate, matchers in by_rate.items():
             same.setdefault(tuple(dict.fromkeys(matchers)), []).append(rate)
-        blocks += [(key, matchers, rates) for matchers, rates in same.items()]
-    while len(blocks) < workers:
-        widest = max(range(len(blocks)), key=lambda b: len(blocks[b][2]), default=None)
-        if widest is None or len(blocks[widest][2]) < 2:
+        blocks += [(key, matchers, tuple(rates)) for matchers, rates in same.items()]
+    target = 2 * workers if workers > 1 else 1
+    while blocks and len(blocks) < target:
+        widest = max(range(len(blocks)), key=lambda b: len(blocks[b][1]) * len(blocks[b][2]))
+        key, matchers, rates = blocks[widest]
+        if len(rates) > 1:
+            halves = [(key, matchers, rates[0::2]), (key, matchers, rates[1::2])]
+        elif len(matchers) > 1:
+            halves = [(key, matchers[0::2], rates), (key, matchers[1::2], rates)]
+        else:
             break
-        key, matchers, rates = blocks.pop(widest)
-        half = (len(rates) + 1) // 2
-        blocks += [(key, matchers, rates[:half]), (key, matchers, rates[half:])]
+        blocks[widest : widest + 1] = halves
     return [
-        RunTask(k[0], k[1], k[2], tuple(rates), matchers, version, k[3], k[4], k[5])
+        RunTask(k[0], k[1], k[2], rates, matchers, version, k[3], k[4], k[5])
         for k, matchers, rates in blocks
     ]
 

@@ -28,6 +28,7 @@ from .tensor_product import (
     compiled_bilinear,
     compiled_degrees,
     compiled_min_weighted,
+    compiled_restricted,
     compiled_slot_sums,
 )
 
@@ -185,6 +186,9 @@ class SparseTensor:
         ``bilinear(y, z)`` of the result equals that of the full tensor whenever y and z vanish
         outside ``mask`` — BCAGM's block updates use this to skip the entries that cannot
         contribute (its reference code keeps an (i, j)-pair index for the same purpose)."""
+        if COMPILED:  # one pass, straight into the column-major layout
+            by_slot, values = compiled_restricted(self._compact_slots, self.values, mask)
+            return SparseTensor(by_slot.T, values, self.n, self.m, self.info)
         inside = np.asarray(mask, dtype=bool)[self.indices].sum(axis=1) >= 2
         return SparseTensor(self.indices[inside], self.values[inside], self.n, self.m, self.info)
 

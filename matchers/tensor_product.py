@@ -119,13 +119,40 @@ def _min_weighted_kernel(slots: np.ndarray, values: np.ndarray, b: np.ndarray):
     return out
 
 
+def _restricted_kernel(slots: np.ndarray, values: np.ndarray, mask: np.ndarray):
+    # the triples with at least two of their three matches in mask, in order: (3, K) slot-major
+    # match indices (the column-major layout SparseTensor keeps) and their (K,) values
+    count = values.shape[0]
+    kept = 0
+    for i in range(count):
+        if mask[slots[i]] + mask[slots[count + i]] + mask[slots[2 * count + i]] >= 2:
+            kept += 1
+    indices = np.empty((3, kept), dtype=np.intp)
+    out = np.empty(kept)
+    k = 0
+    for i in range(count):
+        if mask[slots[i]] + mask[slots[count + i]] + mask[slots[2 * count + i]] >= 2:
+            for f in range(3):
+                indices[f, k] = slots[f * count + i]
+            out[k] = values[i]
+            k += 1
+    return indices, out
+
+
 _slot_sums_jit = njit(_slot_sums_kernel)
+_restricted_jit = njit(_restricted_kernel)
 _bilinear_jit = njit(_bilinear_kernel)
 _degrees_jit = njit(_degrees_kernel)
 _min_weighted_jit = njit(_min_weighted_kernel)
 COMPILED = all(
     kernel is not None
-    for kernel in (_slot_sums_jit, _bilinear_jit, _degrees_jit, _min_weighted_jit)
+    for kernel in (
+        _slot_sums_jit,
+        _bilinear_jit,
+        _degrees_jit,
+        _min_weighted_jit,
+        _restricted_jit,
+    )
 )
 
 
@@ -153,3 +180,9 @@ def compiled_min_weighted(slots: np.ndarray, values: np.ndarray, b: np.ndarray):
     """``SparseTensor.min_weighted``: each value times the smallest of b over its triple's
     three matches; needs numba."""
     return _min_weighted_jit(slots, values, np.ascontiguousarray(b, dtype=np.float64))
+
+
+def compiled_restricted(slots: np.ndarray, values: np.ndarray, mask: np.ndarray):
+    """``SparseTensor.restricted``'s triples and values: ((3, K) slot-major match indices, (K,)
+    values) of the triples with at least two matches in the bool ``mask``; needs numba."""
+    return _restricted_jit(slots, values, np.ascontiguousarray(mask, dtype=np.uint8))

@@ -131,3 +131,19 @@ def test_compiled_degrees_and_worst_case_weights_are_bit_identical():
     expected = np.bincount(slots, np.tile(tensor.values, 3), minlength=tensor.size)
     assert np.array_equal(tensor.degrees(), expected)
     assert np.array_equal(tensor.min_weighted(b), tensor.values * b[tensor.indices].min(axis=1))
+
+
+def test_compiled_restriction_keeps_the_same_triples_in_the_same_order(monkeypatch):
+    rng = np.random.default_rng(5)
+    problem = Problem(rng.uniform(0, 20, (14, 3)), rng.uniform(0, 20, (16, 3)))
+    tensor = build_tensor(problem, "paper", 0)
+    masks = [rng.random(tensor.size) < q for q in (0.0, 0.1, 0.5, 1.0)]
+    compiled = [tensor.restricted(mask) for mask in masks]
+    monkeypatch.setattr(sparse_tensor, "COMPILED", False)
+    for mask, fast in zip(masks, compiled, strict=True):
+        slow = tensor.restricted(mask)
+        assert np.array_equal(fast.indices, slow.indices) and fast.indices.dtype == np.intp
+        assert np.array_equal(fast.values, slow.values)
+        y, z = rng.random((2, tensor.size)) * mask
+        assert np.array_equal(fast.bilinear(y, z), tensor.bilinear(y, z))
+    assert compiled[0].nnz == 0 and compiled[-1].nnz == tensor.nnz

@@ -243,20 +243,23 @@ def test_a_seed_free_matcher_runs_once_for_every_seed(fake_world, tmp_path, monk
     assert runner.stats.computed == 4
 
 
-def test_noise_rates_are_split_into_tasks_only_to_keep_every_worker_busy():
+def test_runs_of_a_seed_share_a_task_split_only_to_keep_every_worker_busy():
     from eval.runner import _group
 
     data = [("data/cad", "sum")]
     rates = [0.0, 0.001, 0.01, 0.1, 0.3]
     one_seed = requests_for(data, [MatcherSpec("a"), MatcherSpec("b")], [0], rates)
-    assert [t.noise_rates for t in _group(one_seed, "v", workers=1)] == [tuple(rates)]
-    split = _group(one_seed, "v", workers=2)
-    assert sorted(r for t in split for r in t.noise_rates) == rates and len(split) == 2
-    assert len(_group(one_seed, "v", workers=64)) == len(rates)  # no task without a rate
-    two_seeds = requests_for(data, [MatcherSpec("a")], [0, 1], rates)
-    assert [(t.seed, len(t.noise_rates)) for t in _group(two_seeds, "v", workers=2)] == [
-        (0, 5),
-        (1, 5),
+    assert [(t.noise_rates, t.runs) for t in _group(one_seed, "v", workers=1)] == [
+        (tuple(rates), 10)
+    ]
+    split = _group(one_seed, "v", workers=2)  # two tasks per worker, interleaved rates
+    assert [t.noise_rates for t in split] == [(0.0,), (0.3,), (0.01,), (0.001, 0.1)]
+    assert sorted(r for t in split for r in t.noise_rates) == rates
+    assert all(t.matchers == (MatcherSpec("a"), MatcherSpec("b")) for t in split)
+    assert len(_group(one_seed, "v", workers=64)) == len(rates) * 2  # at most one run each
+    four_seeds = requests_for(data, [MatcherSpec("a")], [0, 1, 2, 3], rates)
+    assert [(t.seed, len(t.noise_rates)) for t in _group(four_seeds, "v", workers=2)] == [
+        (s, 5) for s in range(4)
     ]
     # Every (rate, matcher) of a task is a run that was asked for: a rate with other missing
     # matchers gets its own task.
@@ -264,7 +267,10 @@ def test_noise_rates_are_split_into_tasks_only_to_keep_every_worker_busy():
     tasks = _group(partial, "v", workers=1)
     asked = {(r.noise_rate, r.matcher) for r in partial}
     assert {(s.noise_rate, s.matcher) for t in tasks for s in t.specs()} == asked
-    assert sum(t.runs for t in tasks) == len(partial)
-    # Runs on the stored detections stay one task each.
-    stored = requests_for(data, [MatcherSpec("a"), MatcherSpec("b")], [0, 1])
-    assert [t.runs for t in _group(stored, "v", workers=1)] == [1, 1, 1, 1]
+    assert sum(t.runs for t in tasks) == len(partial) and len(tasks) == 2
+    # Runs on the stored detections: the matchers of a seed together, split by matchers.
+    names = [MatcherSpec(c) for c in "abcdef"]
+    stored = _group(requests_for(data, names, [0]), "v", workers=2)
+    assert sorted(m.name for t in stored for m in t.matchers) == list("abcdef")
+    assert [t.noise_rates for t in stored] == [(None,)] * 4
+    assert {len(t.matchers) for t in stored} <= {1, 2}
