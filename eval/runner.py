@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import threading
 import traceback
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
@@ -155,6 +156,61 @@ def _group(missing: Sequence[RunRequest], version: str, workers: int = 1) -> lis
     ]
 
 
+class _TaskProgress:
+    """A tqdm bar counting runs, moved as tasks report frame pairs done (``("runs", token, runs)``
+    messages of :func:`eval.tasks.execute`, polled from the executor twice a second on a
+    background thread) and set right as each task finishes."""
+
+    POLL_S = 0.5
+
+    def __init__(self, tasks: Sequence[RunTask], desc: str, executor: Executor, show: bool):
+        self.executor = executor
+        self.bar = tqdm(
+            total=sum(t.runs for t in tasks),
+            desc=desc,
+            unit="run",
+            disable=not show,
+            bar_format="{l_bar}{bar}| {n:.0f}/{total} [{elapsed}<{remaining}]",
+        )
+        self.reported = {t.token: 0.0 for t in tasks}  # runs reported by each unfinished task
+        self.done = 0.0  # runs counted so far (the bar's position, also when it is hidden)
+        self.lock = threading.Lock()
+        self.stop = threading.Event()
+        self.poller = threading.Thread(target=self._poll_loop, name="cadsim-progress", daemon=True)
+
+    def __enter__(self) -> _TaskProgress:
+        self.poller.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop.set()
+        self.poller.join()
+        self.bar.close()
+
+    def _poll_loop(self) -> None:
+        while not self.stop.wait(self.POLL_S):
+            self.poll()
+
+    def poll(self) -> None:
+        """Move the bar by the runs that running tasks reported since the last poll."""
+        with self.lock:
+            for message in self.executor.progress():
+                if isinstance(message, tuple) and len(message) == 3 and message[0] == "runs":
+                    _, token, runs = message
+                    if token in self.reported:  # a late message of a finished task: counted
+                        self.reported[token] += runs
+                        self._advance(runs)
+
+    def finished(self, task: RunTask) -> None:
+        """Count the rest of `task`'s runs (all of them when it reported none)."""
+        with self.lock:
+            self._advance(task.runs - self.reported.pop(task.token, 0.0))
+
+    def _advance(self, runs: float) -> None:
+        self.done += runs
+        self.bar.update(runs)
+
+
 class Runner:
     """Cache-aware execution of runs through an executor. `task_fn` computes one task (a
     picklable module-level function; default :func:`eval.tasks.execute`)."""
@@ -223,8 +279,7 @@ class Runner:
                 len(tasks),
             )
             failures, errors = [], []
-            bar = tqdm(total=len(missing), desc=desc, unit="run", disable=not self.progress)
-            with bar:
+            with _TaskProgress(tasks, desc, self.executor, self.progress) as bar:
                 for done in self.executor.map_unordered(self.task_fn, tasks):
                     task = tasks[done.index]
                     if done.error is not None:
@@ -241,7 +296,7 @@ class Runner:
                         for result in done.value:
                             self.cache.store(result)
                         self.stats.computed += len(done.value)
-                    bar.update(task.runs)
+                    bar.finished(task)
             if failures:
                 raise RunFailed(
                     f"{len(failures)} of {len(tasks)} tasks failed (the rest are cached; re-run "

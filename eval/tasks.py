@@ -97,6 +97,11 @@ class RunTask:
         """How many runs the task computes: rates × matchers."""
         return len(self.noise_rates) * len(self.matchers)
 
+    @property
+    def token(self) -> str:
+        """A short name of this task for its progress messages (its first run's cache key)."""
+        return self.specs()[0].key()[:16]
+
     def specs(self) -> list[RunSpec]:
         """One spec per run, rate-major (the order of :func:`execute`'s results)."""
         return [
@@ -211,7 +216,10 @@ def _pair_outcomes(pair, task: RunTask, functions: list) -> list[PairOutcome]:
 
 def execute(task: RunTask) -> list[RunResult]:
     """Run every matcher of `task` at each of its noise rates on every frame pair of its dataset;
-    one result per run, in :meth:`RunTask.specs` order."""
+    one result per run, in :meth:`RunTask.specs` order. After each frame pair it reports
+    ``("runs", task.token, runs)`` (``report_progress``): the share of its runs now done."""
+    from cadsim.generation.executor import report_progress
+
     dataset = open_dataset(task.dataset_dir)
     if dataset.checksum != task.dataset_checksum:
         raise ValueError(
@@ -232,6 +240,7 @@ def execute(task: RunTask) -> list[RunResult]:
             runs = results[r * len(functions) : (r + 1) * len(functions)]
             for result, outcome in zip(runs, _pair_outcomes(variant, task, functions), strict=True):
                 result.outcomes.append(outcome)
+        report_progress(("runs", task.token, task.runs / count))
     wall = time.perf_counter() - started
     for result in results:
         result.wall_s = wall / len(results)

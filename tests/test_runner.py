@@ -274,3 +274,25 @@ def test_runs_of_a_seed_share_a_task_split_only_to_keep_every_worker_busy():
     assert sorted(m.name for t in stored for m in t.matchers) == list("abcdef")
     assert [t.noise_rates for t in stored] == [(None,)] * 4
     assert {len(t.matchers) for t in stored} <= {1, 2}
+
+
+def test_a_task_reports_its_runs_pair_by_pair_and_the_bar_counts_each_run_once(fake_world):
+    from eval.runner import _group, _TaskProgress
+
+    reqs = requests_for(
+        [("data/cad", "sum-data/cad-100")], [MatcherSpec("a"), MatcherSpec("b")], [0], [0.0, 0.1]
+    )
+    (task,) = _group(reqs, "v1", workers=1)
+    executor = SerialExecutor()
+    results = executor._call(tasks.execute, task)
+    messages = executor.progress()
+    assert len(results) == task.runs == 4
+    assert messages == [("runs", task.token, 4 / 3)] * 3  # 3 frame pairs
+    with _TaskProgress([task], "t", executor, show=False) as bar:
+        executor._messages.extend(messages[:2] + [("record", 1)])  # two pairs reported, noise
+        bar.poll()
+        assert bar.done == pytest.approx(8 / 3)
+        bar.finished(task)
+        executor._messages.append(messages[2])  # late: its task is already counted
+        bar.poll()
+        assert bar.done == pytest.approx(4)
