@@ -249,12 +249,13 @@ def plan_detections(
         masks.append(pix)
         centres.append((u.mean() + 0.5, v.mean() + 0.5))
         boxes.append((x0, y0, x1, y1))
+    empty = Detections.empty()  # its shapes, for a view without detections
     return DetectionPlan(
         pixels=np.concatenate(masks) if masks else np.zeros(0, dtype=np.int64),
         starts=np.concatenate([[0], np.cumsum([len(p) for p in masks], dtype=np.int64)]),
         centres=np.array(centres, dtype=float).reshape(-1, 2),
         boxes=np.array(boxes, dtype=float).reshape(-1, 4),
-        features=np.array(features, dtype=np.float32).reshape(-1, FEATURE_DIM),
+        features=np.array(features, dtype=np.float32) if features else empty.features,
         objects=kept,
         classes=[o.cls for o in kept],
         camera=camera,
