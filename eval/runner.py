@@ -173,6 +173,8 @@ class _TaskProgress:
             bar_format="{l_bar}{bar}| {n:.0f}/{total} [{elapsed}<{remaining}]",
         )
         self.reported = {t.token: 0.0 for t in tasks}  # runs reported by each unfinished task
+        self.runs = {t.token: t.runs for t in tasks}
+        self.finished_runs = 0  # runs of the finished tasks
         self.done = 0.0  # runs counted so far (the bar's position, also when it is hidden)
         self.lock = threading.Lock()
         self.stop = threading.Event()
@@ -199,16 +201,23 @@ class _TaskProgress:
                     _, token, runs = message
                     if token in self.reported:  # a late message of a finished task: counted
                         self.reported[token] += runs
-                        self._advance(runs)
+                        self._show()
 
     def finished(self, task: RunTask) -> None:
         """Count the rest of `task`'s runs (all of them when it reported none)."""
         with self.lock:
-            self._advance(task.runs - self.reported.pop(task.token, 0.0))
+            self.reported.pop(task.token, None)
+            self.finished_runs += task.runs
+            self._show()
 
-    def _advance(self, runs: float) -> None:
-        self.done += runs
-        self.bar.update(runs)
+    def _show(self) -> None:
+        # finished tasks count whole (so the bar ends exactly at its total), running ones as
+        # far as they reported, each at most all of its runs
+        target = self.finished_runs + sum(
+            min(runs, self.runs[token]) for token, runs in self.reported.items()
+        )
+        self.bar.update(target - self.done)
+        self.bar.n = self.done = target  # exact, not a running sum of float steps
 
 
 class Runner:
