@@ -230,6 +230,7 @@ def execute(task: RunTask) -> list[RunResult]:
     results = [RunResult(spec, task.dataset_dir) for spec in task.specs()]
     started = time.perf_counter()
     count = len(dataset) if task.limit is None else min(task.limit, len(dataset))
+    token = task.token
     for k in range(count):
         pair = dataset[k]
         if task.noise_rates == (None,):
@@ -240,7 +241,7 @@ def execute(task: RunTask) -> list[RunResult]:
             runs = results[r * len(functions) : (r + 1) * len(functions)]
             for result, outcome in zip(runs, _pair_outcomes(variant, task, functions), strict=True):
                 result.outcomes.append(outcome)
-        report_progress(("runs", task.token, task.runs / count))
+        report_progress(("runs", token, task.runs / count))
     wall = time.perf_counter() - started
     for result in results:
         result.wall_s = wall / len(results)

@@ -148,3 +148,7 @@ def test_redetection_plan_locates_exactly_as_detect_on_the_full_noisy_image(data
         assert located.object_ids == direct.object_ids
     with pytest.raises(ValueError, match="plan's pixels"):
         plan.locate(values[:-1])
+    with pytest.raises(ValueError, match="clean depth must have the instance map's shape"):
+        plan_detections(
+            pair.instance1, pair.depth1[:-1], pair.objects, pair.cameras[0], det_cfg, lambda: None
+        )

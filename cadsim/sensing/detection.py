@@ -200,7 +200,12 @@ def plan_detections(
     the true class and size. Which objects are detected and what they look like depend only on
     colour, instance map, clean depth and the attribute stream, never on the noisy depth."""
     instance = np.asarray(instance, dtype=np.int32)  # the dtypes of a RenderedView
+    clean_depth = np.asarray(clean_depth, dtype=np.float32)
     h, w = instance.shape
+    if clean_depth.shape != (h, w):
+        raise ValueError(
+            f"clean depth must have the instance map's shape {(h, w)}, got {clean_depth.shape}"
+        )
     if (camera.width, camera.height) != (w, h):
         raise ValueError(f"camera is {camera.width}x{camera.height} but the view is {w}x{h}")
     n = len(objects)
@@ -221,7 +226,7 @@ def plan_detections(
     order = np.argsort(inst, kind="stable") if candidates else inst
     starts = np.concatenate([[0], np.cumsum(counts)])
     boxes_px = ndimage.find_objects(instance + 1, max_label=n) if candidates else []
-    clean = np.asarray(clean_depth, dtype=np.float32).ravel()
+    clean = clean_depth.ravel()
     m = config.border_margin_px
     kept, masks, centres, boxes, features = [], [], [], [], []
     for i in candidates:
