@@ -147,3 +147,29 @@ def test_compiled_restriction_keeps_the_same_triples_in_the_same_order(monkeypat
         y, z = rng.random((2, tensor.size)) * mask
         assert np.array_equal(fast.bilinear(y, z), tensor.bilinear(y, z))
     assert compiled[0].nnz == 0 and compiled[-1].nnz == tensor.nnz
+
+
+def test_a_numba_that_fails_to_import_is_reported_once_and_numpy_takes_over(monkeypatch, caplog):
+    import builtins
+    import sys
+
+    from matchers import jit
+
+    real_import = builtins.__import__
+
+    def broken(name, *args, **kwargs):
+        if name == "numba":
+            raise ImportError("Numba needs NumPy 1.x")  # what a version clash looks like
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", broken)
+    monkeypatch.setattr(jit, "_WARNED", [])
+    monkeypatch.delitem(sys.modules, "numba", raising=False)
+    jit._numba.cache_clear()
+    try:
+        with caplog.at_level("WARNING", logger="matchers.jit"):
+            assert jit.njit(lambda x: x) is None and jit.njit(lambda x: x) is None
+        warnings = [r for r in caplog.records if "failed to import" in r.getMessage()]
+        assert len(warnings) == 1 and "Numba needs NumPy 1.x" in warnings[0].getMessage()
+    finally:
+        jit._numba.cache_clear()
