@@ -129,10 +129,15 @@ def _group(missing: Sequence[RunRequest], version: str, workers: int = 1) -> lis
     same."""
     groups: dict[tuple, dict[float | None, list[MatcherSpec]]] = {}
     for req in missing:
-        key = (req.dataset_dir, req.dataset_checksum, req.seed, req.limit, req.keep)
-        groups.setdefault((*key, req.localisation), {}).setdefault(req.noise_rate, []).append(
-            req.matcher
+        key = (
+            req.dataset_dir,
+            req.dataset_checksum,
+            req.seed,
+            req.limit,
+            req.keep,
+            req.localisation,
         )
+        groups.setdefault(key, {}).setdefault(req.noise_rate, []).append(req.matcher)
     blocks: list[tuple[tuple, tuple[MatcherSpec, ...], tuple[float | None, ...]]] = []
     for key, by_rate in groups.items():
         same: dict[tuple[MatcherSpec, ...], list[float | None]] = {}

@@ -139,7 +139,6 @@ class DetectionPlan:
     boxes: np.ndarray
     features: np.ndarray
     objects: list[WorldObject]
-    classes: list[str]
     camera: Camera
     surface_to_center: bool
     shape: tuple[int, int]
@@ -175,7 +174,7 @@ class DetectionPlan:
             boxes=self.boxes.copy(),
             features=self.features.copy(),
             object_ids=[o.id for o in self.objects],
-            classes=list(self.classes),
+            classes=[o.cls for o in self.objects],
             pixels=np.diff(self.starts),
         )
 
@@ -223,9 +222,9 @@ def plan_detections(
             objects, config.class_confusion, config.size_noise, attribute_rng
         )
     # Pixels of every object, grouped: a stable sort by label, split at the cumulative counts.
-    order = np.argsort(inst, kind="stable") if candidates else inst
+    order = np.argsort(inst, kind="stable")
     starts = np.concatenate([[0], np.cumsum(counts)])
-    boxes_px = ndimage.find_objects(instance + 1, max_label=n) if candidates else []
+    boxes_px = ndimage.find_objects(instance + 1, max_label=n)
     clean = clean_depth.ravel()
     m = config.border_margin_px
     kept, masks, centres, boxes, features = [], [], [], [], []
@@ -262,7 +261,6 @@ def plan_detections(
         boxes=np.array(boxes, dtype=float).reshape(-1, 4),
         features=np.array(features, dtype=np.float32) if features else empty.features,
         objects=kept,
-        classes=[o.cls for o in kept],
         camera=camera,
         surface_to_center=config.surface_to_center,
         shape=(h, w),
