@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cadsim import portable_math as pm
+
 # OpenCV camera axes expressed in the OpenGL camera frame: flip y and z.
 _CV_TO_GL = np.diag([1.0, -1.0, -1.0])
 
@@ -32,11 +34,11 @@ class Camera:
 
     @property
     def fx(self) -> float:
-        return self.width / (2.0 * np.tan(np.radians(self.hfov_deg) / 2.0))
+        return self.width / (2.0 * pm.tan(np.radians(self.hfov_deg) / 2.0))
 
     @property
     def vfov_rad(self) -> float:
-        return 2.0 * np.arctan(self.height / (2.0 * self.fx))
+        return 2.0 * pm.arctan(self.height / (2.0 * self.fx))
 
     def intrinsics(self) -> np.ndarray:
         """3x3 K (pixels)."""

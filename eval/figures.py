@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from eval.crossovers import PAIRS
 from eval.tables import PAPER_DATASETS, dataset_order, matcher_order, method_name
 
 log = logging.getLogger(__name__)
@@ -101,6 +102,9 @@ def write_fig4(out_dir: str | Path) -> list[Path]:
 REGIME_PANELS = (("f1_mean", "F1"), ("balanced_accuracy_mean", "Balanced accuracy"))
 
 
+CROSSOVER_RIVALS = tuple(b for _, b in PAIRS)
+
+
 def write_fig_regime(out_dir: str | Path) -> list[Path]:
     """The regime-sweep figure from ``regime_sweep.csv``; none without the CSV."""
     out_dir = Path(out_dir)
@@ -132,6 +136,19 @@ def write_fig_regime(out_dir: str | Path) -> list[Path]:
                     label=method_name(matcher),
                     **style,
                 )
+                if (
+                    column == "f1_mean"
+                    and matcher in ("maximin", *CROSSOVER_RIVALS)
+                    and {"f1_ci_low", "f1_ci_high"} <= set(c.columns)
+                ):  # the curves a crossover is read from, with their 95 % band
+                    ax.fill_between(
+                        100 * c["share"],
+                        100 * c["f1_ci_low"],
+                        100 * c["f1_ci_high"],
+                        color=colors[matcher],
+                        alpha=0.15,
+                        lw=0,
+                    )
             ax.set_xlabel("non-covisible share of all objects (%)")
             ax.set_ylabel(f"{title} (%)")
             ax.set_title(f"{dataset}: {title.lower()} against the share of distractors")

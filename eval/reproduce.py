@@ -75,10 +75,11 @@ DEFAULT_VAL_PAIRS = 25
 SWEEP_PAIRS = 25
 SWEEP_RUNS = 4
 SWEEP_DATASET = "CAD"
-# Regime sweep: every dataset, the first REGIME_PAIRS test pairs × REGIME_RUNS seeds per level, τ
-# recalibrated per level on the thinned validation set with seed 0 alone.
+# Regime sweep: every dataset, the first REGIME_PAIRS test pairs × REGIME_RUNS runs per level (each
+# run its own thinning draw: 5 independent draws), τ recalibrated per level on the thinned
+# validation set with run 0 alone.
 REGIME_PAIRS = 25
-REGIME_RUNS = 2
+REGIME_RUNS = 5
 REGIME_VAL_RUNS = 1
 # Dataset spread: the default CAD generated again with these scenario-seed offsets.
 SPREAD_DATASET = "CAD"
@@ -156,7 +157,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--regime-runs",
         type=int,
         default=REGIME_RUNS,
-        help=f"runs per keep level (default {REGIME_RUNS})",
+        help=f"runs (= thinning draws) per keep level (default {REGIME_RUNS})",
     )
     p.add_argument(
         "--spread-pairs",
@@ -368,6 +369,7 @@ def main(argv: list[str] | None = None) -> int:
         with timer.stage("regime_sweep"):
             before = asdict(runner.totals)
             (out / "regime_sweep.csv").unlink(missing_ok=True)
+            (out / "crossovers.csv").unlink(missing_ok=True)
             for entry in entries if keeps else []:
                 log.info(
                     "[regime sweep] %s: keep %s × %d runs, first %s test pairs",
@@ -377,10 +379,10 @@ def main(argv: list[str] | None = None) -> int:
                     regime_pairs or "all",
                 )
                 named, _ = chosen_specs(out, entry.label, matchers)
-                rows = sweep_regime(
+                result = sweep_regime(
                     entry, named, regime_seeds, keeps, runner, regime_pairs, regime_val_seeds
                 )
-                write_sweep(out, rows)
+                write_sweep(out, result)
         count("regime_sweep", before)
         with timer.stage("dataset_spread"):
             before = asdict(runner.totals)

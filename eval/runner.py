@@ -107,8 +107,10 @@ def requests_for(
 
 def _seed_free(req: RunRequest) -> RunRequest:
     """`req` with seed 0 when its matcher ignores the seed and nothing else in the run uses it
-    (no noise re-detection, no localisation re-draw; thinning is seeded per pair, not per run)."""
+    (no noise re-detection, no localisation re-draw, no thinning: the run's seed is its draw)."""
     if req.seed == 0 or req.noise_rate is not None or req.localisation is not None:
+        return req
+    if req.keep is not None:
         return req
     from matchers.registry import deterministic
 

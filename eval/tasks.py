@@ -182,7 +182,7 @@ def _pair_outcomes(pair, task: RunTask, functions: list) -> list[PairOutcome]:
     from matchers.tensor_sharing import shared_tensors
 
     if task.keep is not None:
-        pair = thin_pair(pair, task.keep)
+        pair = thin_pair(pair, task.keep, draw=task.seed)  # each run: its own thinning draw
     if task.localisation is not None:
         pair = pair.localise(*task.localisation, seed=task.seed)
     problem = pair.problem()

@@ -1,5 +1,11 @@
-"""The compiled kernels (matchers.jit) are bit-identical to the numpy code they replace, and the
-matchers give the same bits with and without them."""
+"""The compiled kernels (matchers.jit) agree with the numpy code they replace, and the matchers give
+the same matchings with and without them.
+
+Kernels that only add and multiply follow numpy's summation order and are compared bit for bit.
+Where a kernel calls a transcendental function (``exp`` in the tensor values), numba calls the C
+library while numpy may dispatch to AVX-512 code that differs in the last bit
+(``../shared/DESIGN.md`` §10), so values are compared with ``RTOL`` and matchings exactly, on
+problems whose solution is not a near-tie."""
 
 from __future__ import annotations
 
@@ -8,6 +14,8 @@ import pytest
 
 from matchers import Problem, get, sinkhorn, sparse_tensor, tensor_build, tensor_product, tm
 from matchers.tensor_build import build_tensor
+
+RTOL = 1e-12  # compiled (C library exp) vs numpy (possibly AVX-512 exp): a few ulp at most
 
 
 def test_numba_is_installed_and_the_kernels_compile():
@@ -94,7 +102,7 @@ def _problem(seed: int) -> Problem:
 
 
 @pytest.mark.parametrize("name", ["rrwm", "rrwhm", "tm", "mos", "maximin", "bcagm", "hgm"])
-def test_matchers_give_the_same_bits_without_numba(name, monkeypatch):
+def test_matchers_give_the_same_matchings_without_numba(name, monkeypatch):
     problems = [_problem(seed) for seed in range(3)]
     compiled = [get(name)(p, seed=1) for p in problems]
     monkeypatch.setattr(sparse_tensor, "COMPILED", False)
@@ -105,12 +113,12 @@ def test_matchers_give_the_same_bits_without_numba(name, monkeypatch):
     for problem, fast in zip(problems, compiled, strict=True):
         slow = get(name)(problem, seed=1)
         assert np.array_equal(fast.pairs, slow.pairs)
-        assert np.array_equal(fast.scores, slow.scores)
+        np.testing.assert_allclose(fast.scores, slow.scores, rtol=RTOL, atol=1e-300)
 
 
 @pytest.mark.parametrize("recipe", ["paper", "duchenne"])
 @pytest.mark.parametrize("size", [(9, 11), (20, 20), (40, 38)])  # the last one capped
-def test_compiled_tensor_assembly_is_bit_identical(recipe, size, monkeypatch):
+def test_compiled_tensor_assembly_agrees_with_numpy(recipe, size, monkeypatch):
     rng = np.random.default_rng(size[0])
     problem = Problem(rng.uniform(0, 20, (size[0], 3)), rng.uniform(0, 20, (size[1], 3)))
     compiled = build_tensor(problem, recipe, 3)
@@ -119,7 +127,7 @@ def test_compiled_tensor_assembly_is_bit_identical(recipe, size, monkeypatch):
     plain = build_tensor(problem, recipe, 3)
     assert compiled.nnz > 0
     assert np.array_equal(compiled.indices, plain.indices)
-    assert np.array_equal(compiled.values, plain.values)
+    np.testing.assert_allclose(compiled.values, plain.values, rtol=RTOL, atol=0)
 
 
 def test_compiled_degrees_and_worst_case_weights_are_bit_identical():

@@ -82,10 +82,15 @@ def test_agreement_is_written_from_the_tables(tmp_path):
         for m, f in (("maximin", fa), ("mos", fb))
     ]
     pd.DataFrame(sweep).to_csv(results / "regime_sweep.csv", index=False)
+    crossing = {"dataset": "CAD", "matcher_a": "maximin", "metric": "f1", "direction": "a_loses"}
     pd.DataFrame(
         [
-            {"dataset": "CAD", "matcher_a": "maximin", "matcher_b": "mos", "metric": "f1"}
-            | {"crossing_share": 0.35, "direction": "a_loses"}
+            crossing
+            | {"matcher_b": "mos", "crossing_share": 0.35, "share_ci_low": 0.3}
+            | {"share_ci_high": 0.41, "significant": True},
+            crossing  # a crossing within the noise: never stated as one
+            | {"matcher_b": "rrwhm", "crossing_share": 0.2, "share_ci_low": 0.1}
+            | {"share_ci_high": None, "significant": False},
         ]
     ).to_csv(results / "crossovers.csv", index=False)
     readme = tmp_path / "README.md"
@@ -98,4 +103,6 @@ def test_agreement_is_written_from_the_tables(tmp_path):
     assert "71 % non-covisible, appearance AUC 0.88" in text
     assert "an interval that includes 0" in text and "unlike the paper" in text
     assert "accuracy 71.0 (above 3 of 3 methods), balanced accuracy 50.0, 1 method below 50" in text
-    assert "maximin leads MOS below 35 % and trails above" in text
+    assert "maximin leads MOS below 35 % non-covisible (95 % interval 30–41 %) and trails" in text
+    assert "no crossover with RRWHM that its interval supports" in text
+    assert "RRWHM below" not in text

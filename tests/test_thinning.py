@@ -8,7 +8,7 @@ import pytest
 
 from cadsim.dataset.detections import ViewDetections
 from cadsim.dataset.reader import FramePair
-from eval.thinning import kept_rows, noncovisible_share, thin_pair
+from eval.thinning import PairIdentity, kept_rows, noncovisible_share, thin_pair
 
 LEVELS = (1.0, 0.75, 0.5, 0.25, 0.0)
 
@@ -67,17 +67,42 @@ def test_thinning_keeps_every_covisible_object_and_the_share_falls_with_keep():
 
 def test_levels_are_nested_and_the_draw_belongs_to_the_pair_not_the_call():
     pair = _pair(3)
+    identity = PairIdentity.of(pair)
     kept = {}
     for keep in LEVELS:
-        rows = kept_rows(pair.checksum, len(pair.view1), len(pair.view2), pair.gt_pairs, keep)
-        again = kept_rows(pair.checksum, len(pair.view1), len(pair.view2), pair.gt_pairs, keep)
+        rows = kept_rows(identity, len(pair.view1), len(pair.view2), pair.gt_pairs, keep)
+        again = kept_rows(identity, len(pair.view1), len(pair.view2), pair.gt_pairs, keep)
         assert all(np.array_equal(a, b) for a, b in zip(rows, again, strict=True))
         kept[keep] = [set(r.tolist()) for r in rows]
     for high, low in zip(LEVELS, LEVELS[1:], strict=False):
         assert kept[low][0] <= kept[high][0] and kept[low][1] <= kept[high][1]
     assert thin_pair(pair, 1.0) is pair
-    other = kept_rows("f" * 64, len(pair.view1), len(pair.view2), pair.gt_pairs, 0.5)
+    other = kept_rows(
+        identity._replace(slot=1), len(pair.view1), len(pair.view2), pair.gt_pairs, 0.5
+    )
     assert [set(r.tolist()) for r in other] != kept[0.5]  # another pair, other draws
+    redraw = kept_rows(identity, len(pair.view1), len(pair.view2), pair.gt_pairs, 0.5, draw=1)
+    assert [set(r.tolist()) for r in redraw] != kept[0.5]  # another draw of the same pair
+
+
+def test_the_draw_depends_on_the_identity_not_on_the_stored_bytes():
+    pair = _pair(4)
+    changed = _pair(4)
+    changed.checksum = "e" * 64  # a last-bit change of a stored pose changes the checksum ...
+    changed.view1.positions[0, 0] = np.nextafter(changed.view1.positions[0, 0], 1.0)
+    for draw in range(3):
+        a, b = thin_pair(pair, 0.5, draw), thin_pair(changed, 0.5, draw)
+        assert a.view1.object_ids == b.view1.object_ids  # ... but not which objects stay
+        assert a.view2.object_ids == b.view2.object_ids
+    with pytest.raises(ValueError, match="draw"):
+        thin_pair(pair, 0.5, draw=-1)
+
+
+def test_draws_of_one_level_are_independent_replicates():
+    pair = _pair(6, covisible=2, only1=40, only2=40)
+    kept = [len(thin_pair(pair, 0.5, d).view1) - 2 for d in range(40)]
+    assert len(set(kept)) > 5  # the kept count varies across draws ...
+    assert np.mean(kept) == pytest.approx(20, abs=2.5)  # ... around keep × 40
 
 
 def test_thinned_pair_problem_has_the_kept_detections():

@@ -15,6 +15,7 @@ from types import ModuleType
 
 import numpy as np
 
+from cadsim import portable_math as pm
 from cadsim.render.meshes import MeshSpec, Part, build_parts, mesh_spec, node_scale
 from cadsim.world import Snapshot, WorldObject
 
@@ -25,7 +26,7 @@ GROUND_HALF_SIZE = 2000.0  # metres
 def srgb_to_linear(c: np.ndarray) -> np.ndarray:
     """sRGB [0, 1] -> linear RGB (pyrender lights in linear space and gamma-encodes its output)."""
     c = np.clip(np.asarray(c, dtype=np.float32), 0.0, 1.0)
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return np.where(c <= 0.04045, c / 12.92, pm.power((c + 0.055) / 1.055, 2.4))
 
 
 def parts_to_mesh(pyrender: ModuleType, parts: list[Part], material) -> object:

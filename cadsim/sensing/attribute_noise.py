@@ -17,6 +17,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from cadsim import portable_math as pm
 from cadsim.world import WorldObject
 
 CONFUSION_GROUPS: tuple[tuple[str, ...], ...] = (
@@ -59,7 +60,7 @@ def perceived_attributes(
         step = 1 + np.floor(choice[own] * (len(group) - 1)).astype(int)
         reported[own] = members[(k + step) % len(group)]
     sizes = np.array([o.size for o in objects], dtype=float).reshape(n, 3)
-    return [str(c) for c in reported], sizes * np.exp(size_noise * eps)
+    return [str(c) for c in reported], sizes * pm.exp(size_noise * eps)
 
 
 __all__ = ["CONFUSION_GROUPS", "perceived_attributes"]

@@ -22,6 +22,7 @@ from itertools import combinations
 
 import numpy as np
 
+from cadsim import portable_math as pm
 from cadsim.camera import Camera
 from cadsim.scenario import CameraConfig
 from cadsim.sources.base import ObserverPair
@@ -49,7 +50,7 @@ def mount_camera(
     z = ground + (height + ROOF_CLEARANCE if config.mount_height == "roof" else config.mount_height)
     yaw = carrier.yaw
     if look_at is not None:
-        yaw = np.arctan2(look_at[1] - xy[1], look_at[0] - xy[0])
+        yaw = pm.arctan2(look_at[1] - xy[1], look_at[0] - xy[0])
     return Camera(
         position=(float(xy[0]), float(xy[1]), float(z)),
         yaw=float(yaw),

@@ -7,6 +7,11 @@ recalibrated on the thinned validation set, and the matchers run on the thinned 
 matchers run with the parameters ``DIR/thresholds.csv`` records for this dataset (tuned when the
 evaluation was; else their defaults). Level 1 is the untouched dataset and shares its cached runs.
 
+Each run is its own thinning draw (the run's seed is the draw index, :mod:`eval.thinning`), so
+``--runs`` sets how many independent draws each level averages; ``f1_ci_low``/``f1_ci_high`` is the
+95 % interval of the level's mean F1 with episodes and runs resampled together
+(:mod:`eval.episode_draw_bootstrap`), and every crossover carries such an interval too.
+
 Writes (rows of other datasets already there are kept, this dataset's replaced):
 ``regime_sweep.csv`` (:data:`SWEEP_COLUMNS`), ``crossovers.csv`` (:mod:`eval.crossovers`) and
 ``fig_regime.png/.pdf``.
@@ -17,9 +22,11 @@ from __future__ import annotations
 import argparse
 from collections.abc import Sequence
 from pathlib import Path
+from typing import NamedTuple
 
 import pandas as pd
 
+from eval import episode_draw_bootstrap as boot
 from eval.cache import ResultCache
 from eval.commands.evaluate import (
     DatasetEntry,
@@ -33,7 +40,7 @@ from eval.commands.evaluate import (
     score_runs,
     val_dirs,
 )
-from eval.crossovers import write_crossovers
+from eval.crossovers import find_crossovers
 from eval.executor import make_executor
 from eval.keyed_csv import upsert_csv
 from eval.runner import Runner
@@ -47,6 +54,8 @@ SWEEP_COLUMNS = (
     "matcher",
     "f1_mean",
     "f1_std",
+    "f1_ci_low",
+    "f1_ci_high",
     "balanced_accuracy_mean",
     "recall_mean",
     "tau",
@@ -71,8 +80,8 @@ def parse_keep(text: str) -> list[float]:
 def summarise_level(per_pair: pd.DataFrame, dataset: str, keep: float) -> pd.DataFrame:
     """Rows of ``regime_sweep.csv`` for one level: per matcher, per-run means over the frame
     pairs, then mean (and std of F1) over runs; ``share`` is the achieved non-covisible share of
-    the thinned test pairs (objects pooled)."""
-    pairs = per_pair.drop_duplicates("pair")
+    the thinned test pairs (objects pooled over pairs and draws)."""
+    pairs = per_pair.drop_duplicates(["pair", "seed"])
     share = noncovisible_share(pairs["n1"], pairs["n2"], pairs["n_gt"])
     per_run = per_pair.groupby(["matcher", "seed"], sort=False)[
         ["f1", "balanced_accuracy", "recall"]
@@ -92,7 +101,38 @@ def summarise_level(per_pair: pd.DataFrame, dataset: str, keep: float) -> pd.Dat
     out.insert(0, "share", share)
     out.insert(0, "keep", keep)
     out.insert(0, "dataset", dataset)
-    return out[list(SWEEP_COLUMNS)]
+    return out
+
+
+def level_intervals(per_pair: pd.DataFrame, metric: str = "f1") -> pd.DataFrame:
+    """Per (matcher, keep): the 95 % interval of the mean `metric` over frame pairs and runs,
+    episodes and runs resampled together (the same resamples at every level); columns
+    ``matcher``, ``keep``, ``{metric}_ci_low``, ``{metric}_ci_high``."""
+    rows = []
+    n_episodes, n_draws = per_pair["episode"].nunique(), per_pair["seed"].nunique()
+    weights = boot.resampling_weights(n_episodes, n_draws)
+    for matcher, group in per_pair.groupby("matcher", sort=False):
+        values = boot.table(group, metric)
+        counts = boot.table(group.assign(_one=1.0), "_one").sums
+        if values.sums.shape[1:] != (n_episodes, n_draws):  # a matcher missing some pairs/runs
+            weights_here = boot.resampling_weights(*values.sums.shape[1:])
+        else:
+            weights_here = weights
+        low, high = boot.interval(
+            boot.pooled(values.sums, weights_here) / boot.pooled(counts, weights_here)
+        )
+        rows += [
+            {"matcher": matcher, "keep": k, f"{metric}_ci_low": lo, f"{metric}_ci_high": hi}
+            for k, lo, hi in zip(values.levels, low, high, strict=True)
+        ]
+    return pd.DataFrame(rows)
+
+
+class SweepResult(NamedTuple):
+    """The sweep of one dataset: ``rows`` of ``regime_sweep.csv`` and of ``crossovers.csv``."""
+
+    rows: pd.DataFrame
+    crossovers: pd.DataFrame
 
 
 def sweep_regime(
@@ -103,13 +143,13 @@ def sweep_regime(
     runner: Runner,
     limit: int | None = None,
     val_seeds: Sequence[int] | None = None,
-) -> pd.DataFrame:
-    """The sweep's rows for `entry`: for each keep level, τ recalibrated on the thinned
-    validation dataset (runs `val_seeds`, default `seeds`), then the thinned test dataset's first
-    `limit` frame pairs (None: all) with `seeds`."""
+) -> SweepResult:
+    """The sweep of `entry`: for each keep level, τ recalibrated on the thinned validation
+    dataset (runs `val_seeds`, default `seeds`: their thinning draws), then the thinned test
+    dataset's first `limit` frame pairs (None: all) with `seeds` (one thinning draw each)."""
     if entry.val_dir is None:
         raise ValueError(f"{entry.test_dir}: the regime sweep needs a validation dataset (--val)")
-    rows = []
+    rows, scored = [], []
     for keep in keeps:
         keep_or_none = None if keep == 1.0 else keep
         _, fits = calibrate_entry(entry, named, list(val_seeds or seeds), runner, keep=keep_or_none)
@@ -125,18 +165,25 @@ def sweep_regime(
         )
         per_pair = score_runs(test_runs, taus, dataset=entry.label)
         rows.append(summarise_level(per_pair, entry.label, keep))
-    return pd.concat(rows, ignore_index=True)
+        scored.append(per_pair.assign(keep=keep))
+    per_pair = pd.concat(scored, ignore_index=True)
+    summary = pd.concat(rows, ignore_index=True).merge(
+        level_intervals(per_pair), on=["matcher", "keep"], how="left"
+    )
+    return SweepResult(summary[list(SWEEP_COLUMNS)], find_crossovers(per_pair))
 
 
-def write_sweep(out_dir: str | Path, rows: pd.DataFrame) -> list[Path]:
-    """Merge `rows` into ``regime_sweep.csv``, then rewrite ``crossovers.csv`` and the figure
-    from the whole table; returns the written paths."""
+def write_sweep(out_dir: str | Path, result: SweepResult) -> list[Path]:
+    """Merge the sweep's rows into ``regime_sweep.csv`` and ``crossovers.csv`` (its datasets'
+    rows replaced, the others kept), then redraw the figure from the whole table; returns the
+    written paths."""
     from eval.figures import write_fig_regime
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    upsert_csv(out_dir / "regime_sweep.csv", rows.round(6))
-    return [out_dir / "regime_sweep.csv", write_crossovers(out_dir), *write_fig_regime(out_dir)]
+    upsert_csv(out_dir / "regime_sweep.csv", result.rows.round(6))
+    upsert_csv(out_dir / "crossovers.csv", result.crossovers.round(4))
+    return [out_dir / "regime_sweep.csv", out_dir / "crossovers.csv", *write_fig_regime(out_dir)]
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -162,7 +209,7 @@ def run(args: argparse.Namespace) -> int:
     val_seeds = range(args.val_runs) if args.val_runs else None
     with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(ResultCache(args.cache), executor)
-        rows = sweep_regime(entry, named, range(args.runs), keeps, runner, args.pairs, val_seeds)
-    for path in write_sweep(args.out, rows):
+        result = sweep_regime(entry, named, range(args.runs), keeps, runner, args.pairs, val_seeds)
+    for path in write_sweep(args.out, result):
         print(path)
     return 0

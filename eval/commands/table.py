@@ -1,5 +1,5 @@
 """``cadsim table DIR``: re-render Table I (every variant present: tuned, untuned, paper protocol),
-the paired differences, the crossovers, the external table and the ranking agreement (when
+the paired differences, the external table and the ranking agreement (when
 ``DIR/external/`` holds an evaluation) and every figure from the CSV/JSON files an evaluation wrote
 into DIR (no matcher is run, no cache is needed; the qualitative figure needs the dataset)."""
 
@@ -9,7 +9,6 @@ import argparse
 from pathlib import Path
 
 from eval.agreement import write_agreement
-from eval.crossovers import write_crossovers
 from eval.external import SUBDIR, write_table_external
 from eval.figures import render_all
 from eval.protocol import VARIANTS, variant_path
@@ -37,8 +36,6 @@ def run(args: argparse.Namespace) -> int:
             "(run `cadsim evaluate`)"
         )
     markdown = write_tables(out, args.paper_table) if evaluated else ""
-    if (out / "regime_sweep.csv").is_file():
-        print(write_crossovers(out))
     if external:
         write_table_external(out)
         write_agreement(out)

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cadsim import portable_math as pm
 from cadsim.world import wrap_angle
 
 
@@ -118,7 +119,7 @@ class ArenaMotion:
         self.waypoint = self.pos.copy()
         self.time = 0.0
         # Ring movers: parameter angle on the ellipse, direction of travel, look offset.
-        self.ring_phase = np.arctan2(
+        self.ring_phase = pm.arctan2(
             self.pos[:, 1] / max(self.ring_axes[1], 1e-9),
             self.pos[:, 0] / max(self.ring_axes[0], 1e-9),
         )
@@ -168,7 +169,7 @@ class ArenaMotion:
 
     def _ring_facing(self) -> np.ndarray:
         """Yaw that points a ring mover at the arena centre, plus its look offset."""
-        return wrap_angle(np.arctan2(-self.pos[:, 1], -self.pos[:, 0]) + self.look_offset)
+        return wrap_angle(pm.arctan2(-self.pos[:, 1], -self.pos[:, 0]) + self.look_offset)
 
     def _ring_phase_rate(self) -> np.ndarray:
         """dphase/dt that moves a ring mover at ``speed`` m/s along the ellipse."""
@@ -186,7 +187,7 @@ class ArenaMotion:
         # Waypoint movers: turn at a bounded rate, drive forward when roughly facing the waypoint.
         to_wp = self.waypoint - self.pos
         dist = np.linalg.norm(to_wp, axis=1)
-        err = wrap_angle(np.arctan2(to_wp[:, 1], to_wp[:, 0]) - self.yaw)
+        err = wrap_angle(pm.arctan2(to_wp[:, 1], to_wp[:, 0]) - self.yaw)
         err = np.where(dist > 1e-9, err, 0.0)
         turn = np.clip(err, -self.yaw_rate * dt, self.yaw_rate * dt)
         new_yaw = np.where(wp, wrap_angle(self.yaw + turn), self.yaw)

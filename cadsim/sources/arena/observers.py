@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from cadsim import portable_math as pm
 from cadsim.camera import Camera
 from cadsim.sources.arena.config import AerialObserver, GroundObserver
 from cadsim.world import WorldObject
@@ -50,14 +51,14 @@ def overhead_cameras(
     left = np.array([-f[1], f[0]])
     target = np.asarray(side.position[:2]) + lead[:, None] * f + lateral[:, None] * left
     target = np.clip(target, -np.asarray(half_extent), np.asarray(half_extent))
-    back = altitude / np.tan(-pitch)
+    back = altitude / pm.tan(-pitch)
     xy = target - back[:, None] * np.column_stack([np.cos(heading), np.sin(heading)])
     cam = aerial.intrinsics
     return [
         (
             Camera(
                 position=(float(xy[i, 0]), float(xy[i, 1]), float(altitude[i])),
-                yaw=float(np.arctan2(np.sin(heading[i]), np.cos(heading[i]))),
+                yaw=float(pm.arctan2(np.sin(heading[i]), np.cos(heading[i]))),
                 pitch=float(pitch[i]),
                 width=cam.width,
                 height=cam.height,

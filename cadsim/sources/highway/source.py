@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cadsim import portable_math
 from cadsim.scenario import Scenario, ScenarioError
 from cadsim.sources.base import ObserverPair, TrafficSource
 from cadsim.sources.highway.appearance import Appearance, AppearanceSampler
@@ -95,6 +96,9 @@ class HighwaySource(TrafficSource):
         cls = _env_class(gymnasium, cfg)
         check_env_overrides(cfg, cls.default_config())
         self._env = gymnasium.make(cfg.env_id, config=dict(cfg.env), disable_env_checker=True)
+        # highway-env's kinematics call numpy's arctan/tan/…, whose last bits depend on the CPU's
+        # SIMD dispatch; its modules get the C-library versions so the dataset does not.
+        portable_math.use_portable_math_in("highway_env")
         try:
             self._prepare()
         except BaseException:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cadsim import portable_math as pm
 from cadsim.sources.highway.geometry import Approach, JunctionLayout
 from cadsim.sources.street_furniture import ROAD_COLOR, light_object, sign_object
 from cadsim.world import WorldObject
@@ -42,7 +43,7 @@ class StaticSceneConfig:
 
 
 def _yaw_of(direction: np.ndarray) -> float:
-    return float(np.arctan2(direction[1], direction[0]))
+    return float(pm.arctan2(direction[1], direction[0]))
 
 
 def _stop_line_distance(layout: JunctionLayout, approach: Approach) -> float:

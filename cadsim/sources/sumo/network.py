@@ -16,6 +16,8 @@ from pathlib import Path
 import numpy as np
 import sumolib
 
+from cadsim import portable_math as pm
+
 # A road that any of these may use can carry an observer.
 MOTOR_CLASSES = ("passenger", "delivery", "bus", "truck")
 _SKIPPED_NODE_TYPES = {"internal", "dead_end"}
@@ -134,5 +136,5 @@ def point_at(xy: np.ndarray, cum: np.ndarray, s: np.ndarray) -> tuple[np.ndarray
     seg_len = np.maximum(cum[k + 1] - cum[k], 1e-9)
     t = ((s - cum[k]) / seg_len)[:, None]
     points = xy[k] + t * seg[k]
-    headings = np.arctan2(seg[k, 1], seg[k, 0])
+    headings = pm.arctan2(seg[k, 1], seg[k, 0])
     return points, headings

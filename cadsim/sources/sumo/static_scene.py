@@ -25,6 +25,7 @@ import cv2
 import numpy as np
 from scipy.spatial import cKDTree
 
+from cadsim import portable_math as pm
 from cadsim.sources.street_furniture import (
     ROAD_COLOR,
     SIGNAL_COLORS,
@@ -146,7 +147,7 @@ def road_surface(network: RoadNetwork, region: Region) -> list[WorldObject]:
                         f"road:{lane.getID()}:{k}",
                         kind,
                         mid[k],
-                        float(np.arctan2(seg[k, 1], seg[k, 0])),
+                        float(pm.arctan2(seg[k, 1], seg[k, 0])),
                         (float(length[k]) + (0.0 if kind == "crossing" else 0.2), lane.getWidth()),
                     )
                 )
@@ -419,7 +420,7 @@ def _approach_sign(junction_type: str, is_major: bool) -> str:
 
 
 def _sign(oid: str, kind: str, value: str, xy: np.ndarray, yaw: float) -> WorldObject:
-    return sign_object(oid, kind, xy, float(np.arctan2(np.sin(yaw), np.cos(yaw))), value)
+    return sign_object(oid, kind, xy, float(pm.arctan2(np.sin(yaw), np.cos(yaw))), value)
 
 
 def traffic_lights(network: RoadNetwork, region: Region) -> list[SignalHead]:
@@ -436,7 +437,7 @@ def traffic_lights(network: RoadNetwork, region: Region) -> list[SignalHead]:
             xy, heading = _kerb_point(edge.getLanes()[0], 1.0, at_end=True)
             if not region.contains(xy)[0]:
                 continue
-            yaw = float(np.arctan2(np.sin(heading + np.pi), np.cos(heading + np.pi)))
+            yaw = float(pm.arctan2(np.sin(heading + np.pi), np.cos(heading + np.pi)))
             obj = light_object(f"tls:{tls.getID()}:{edge_id}", xy, yaw, "o")
             out.append(SignalHead(obj, tls.getID(), tuple(sorted(links[edge_id]))))
     return out
