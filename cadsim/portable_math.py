@@ -1,9 +1,10 @@
 """Transcendental functions whose results do not depend on the CPU numpy runs on.
 
 numpy dispatches float64 ``exp``, ``log``, ``tan``, ``arctan``, ``arctan2``, ``power``, … to
-AVX-512 code when the CPU has it, and that code differs from the C library's in the last bit on
-some inputs (``sin``, ``cos``, ``sqrt`` and the arithmetic operators are exact or identical on
-every dispatch level). Anything that reaches a dataset file — poses, yaws, sizes — is computed
+AVX-512 code when the CPU has it (``tanh`` already to AVX2 code), and that code differs from the
+C library's in the last bit on some inputs (``sin``, ``cos``, ``hypot``, ``sqrt`` and the
+arithmetic operators gave the same bits at every dispatch level; tests/cpu_dispatch.py lists what
+was measured). Anything that reaches a dataset file — poses, yaws, sizes — is computed
 here instead, through Python's :mod:`math` (the C library, one element at a time), so the same
 scenario and seed give the same bytes with and without AVX-512 (docs/dataset.md, "Byte-stable
 datasets"). The scope is numpy's dispatch levels on x86-64 with one C library; other CPU
@@ -30,8 +31,8 @@ import types
 import numpy as np
 
 __all__ = [
-    "arccos", "arcsin", "arctan", "arctan2", "arctanh", "cbrt", "cosh", "exp", "exp2", "expm1",
-    "log", "log10", "log1p", "log2", "power", "sinh", "tan", "tanh",
+    "arccos", "arccosh", "arcsin", "arcsinh", "arctan", "arctan2", "arctanh", "cbrt", "cosh",
+    "exp", "exp2", "expm1", "log", "log10", "log1p", "log2", "power", "sinh", "tan", "tanh",
 ]  # fmt: skip
 
 
@@ -79,6 +80,8 @@ arctan = _portable(math.atan, 1)
 arcsin = _portable(math.asin, 1)
 arccos = _portable(math.acos, 1)
 arctanh = _portable(math.atanh, 1)
+arcsinh = _portable(math.asinh, 1)
+arccosh = _portable(math.acosh, 1)
 tan = _portable(math.tan, 1)
 sinh = _portable(math.sinh, 1)
 cosh = _portable(math.cosh, 1)

@@ -179,6 +179,7 @@ def matcher_function(name: str):
 def _pair_outcomes(pair, task: RunTask, functions: list) -> list[PairOutcome]:
     """Every matcher of `task` (``functions``: theirs, in order) on one frame pair, already
     re-detected at the run's noise rate; thinned and re-localised as the task says."""
+    from matchers.discretise import canonical_scores
     from matchers.tensor_sharing import shared_tensors
 
     if task.keep is not None:
@@ -194,7 +195,11 @@ def _pair_outcomes(pair, task: RunTask, functions: list) -> list[PairOutcome]:
         ]
     outcomes = []
     for matching in matchings:
-        scores = np.asarray(matching.scores, dtype=float).reshape(problem.n1, problem.n2)
+        # canonical (grid) scores: τ and the ranking see the same values on every CPU, whatever
+        # the matcher (a third-party one may not use matchers.discretise)
+        scores = canonical_scores(
+            np.asarray(matching.scores, dtype=float).reshape(problem.n1, problem.n2)
+        )
         outcomes.append(
             PairOutcome(
                 index=pair.index,

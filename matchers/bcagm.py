@@ -5,8 +5,8 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
+from .discretise import hungarian
 from .matching import Matching
 from .options import check_count, check_problem, rng_from_seed
 from .problem import Problem
@@ -19,7 +19,7 @@ _ASCENT = 1e-12  # relative increase of the objective that counts as ascent
 
 def best_assignment(gradient: np.ndarray, n: int, m: int) -> np.ndarray:
     """Binary vector of the assignment (min(n, m) ones) maximising <gradient, x> (Hungarian)."""
-    rows, cols = linear_sum_assignment(gradient.reshape(n, m), maximize=True)
+    rows, cols = hungarian(gradient.reshape(n, m))
     x = np.zeros(n * m)
     x[rows * m + cols] = 1.0
     return x

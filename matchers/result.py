@@ -6,7 +6,7 @@ import time
 
 import numpy as np
 
-from .discretise import discretise
+from .discretise import canonical_scores, discretise
 from .matching import Matching
 
 
@@ -39,6 +39,7 @@ def finish(
     search reused from another matcher (``info["tensor"]["reused_s"]``,
     :mod:`matchers.tensor_sharing`) is charged its time, as if done here.
     """
+    scores = canonical_scores(scores)  # the same bits on every CPU (matchers.discretise)
     pairs = discretise(scores, threshold)
     tensor = (info or {}).get("tensor")
     charged = tensor.get("reused_s", 0.0) if isinstance(tensor, dict) else 0.0
