@@ -38,8 +38,23 @@ sysdeps:
 	  fi; \
 	fi
 
+# The tests that touch numerics run a second time with numpy's AVX-512 code paths off, so that both
+# dispatch levels are exercised on every machine that has them (DESIGN §10; docs/reproducibility.md).
+NUMERIC_TESTS := tests/test_matchers_*.py tests/test_jit_kernels.py tests/test_metrics.py \
+	tests/test_calibration.py tests/test_tuning.py tests/test_thinning.py tests/test_sweep_regime.py \
+	tests/test_paired_differences.py tests/test_depth_noise.py tests/test_detection.py \
+	tests/test_localisation.py tests/test_attribute_noise.py tests/test_camera.py \
+	tests/test_validation_synthetic.py tests/test_validation_metrics.py
+
 test: venv
 	$(PY) -m pytest -q
+	@features="$$($(PY) tests/cpu_dispatch.py --avx512-features)"; \
+	if [ -n "$$features" ]; then \
+	  echo "numeric tests again with NPY_DISABLE_CPU_FEATURES=\"$$features\""; \
+	  NPY_DISABLE_CPU_FEATURES="$$features" $(PY) -m pytest -q $(NUMERIC_TESTS); \
+	else \
+	  echo "no AVX-512 on this CPU: numpy has one dispatch level here (tests/test_cpu_independence.py injects last-bit faults instead)"; \
+	fi
 
 bench: venv
 	$(PY) -m eval.bench

@@ -3,6 +3,7 @@ whose transcendental functions move a seeded share of their results by one ulp.
 
     python tests/cpu_dispatch.py [--ulp-faults] MODULE ARG...   # runs ``python -m MODULE ARG...``
     python tests/cpu_dispatch.py [--ulp-faults] --path SCRIPT ARG...
+    python tests/cpu_dispatch.py --avx512-features   # what to disable (empty without AVX-512)
 
 ``NPY_DISABLE_CPU_FEATURES`` (:func:`avx512_env`) shows the real difference where the CPU has
 AVX-512; the fault injection makes a difference of the same kind visible on any CPU
@@ -79,6 +80,9 @@ def inject_ulp_faults(share: float = 0.3, seed: int = 0) -> None:
 
 
 def main(argv: list[str]) -> None:
+    if argv == ["--avx512-features"]:  # for the Makefile: what NPY_DISABLE_CPU_FEATURES gets
+        print(" ".join(avx512_features()))
+        return
     if argv and argv[0] == "--ulp-faults":
         # numba cannot compile a kernel that calls the wrapped functions: the numpy kernels run,
         # which also puts the compiled-vs-numpy difference under test.

@@ -26,6 +26,7 @@ import numpy as np
 
 from cadsim.sources.sumo.install import binary, sumo_env, sumo_home, sumo_version
 from cadsim.sources.sumo.options import check_netgenerate_args
+from cadsim.sources.sumo.xml_files import parse_xml
 
 log = logging.getLogger(__name__)
 
@@ -165,7 +166,7 @@ def write_person_types(vtypes: Path, out: Path) -> None:
     duarouter copies only the vTypes that routed vehicles use into its route files; pedestrian
     trips are left to sumo, so their types must be loaded separately (and loading the vehicle
     types twice is an error in sumo)."""
-    root = ET.parse(vtypes).getroot()
+    root = parse_xml(vtypes).getroot()
     types = {e.get("id"): e for e in root if e.tag == "vType"}
     pedestrian = {i for i, e in types.items() if e.get("vClass") == "pedestrian"}
     keep = [e for i, e in types.items() if i in pedestrian]

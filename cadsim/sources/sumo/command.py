@@ -16,7 +16,7 @@ from pathlib import Path
 from cadsim.sources.sumo.build import build_demand, build_network
 from cadsim.sources.sumo.config import read_sumocfg
 from cadsim.sources.sumo.confinement import confined_files
-from cadsim.sources.sumo.options import sumocfg_options
+from cadsim.sources.sumo.options import sumo_time, sumocfg_options
 
 log = logging.getLogger(__name__)
 
@@ -71,8 +71,8 @@ def sumo_run(traffic: dict, seed: int, workdir: Path, run_dir: Path, end: float 
         args += ["--step-length", f"{step:g}"]
     elif "step-length" in own:
         args += ["--step-length", own["step-length"]]
-    if end is not None:
-        args += ["--end", f"{end:g}"]
+    if end is not None:  # the scenario's max_time counts from the config's begin (SUMO time)
+        args += ["--end", f"{sumo_time(passed.get('begin', '0')) + end:.10g}"]
     elif "end" in own:
         args += ["--end", own["end"]]
     args += [

@@ -14,6 +14,8 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from cadsim.sources.sumo.xml_files import parse_xml
+
 # SUMO's option names and their synonyms for the inputs the source needs to know.
 NET_OPTIONS = ("net-file", "n", "net")
 ROUTE_OPTIONS = ("route-files", "r", "routes")
@@ -53,7 +55,7 @@ def read_sumocfg(path: str | Path) -> SumoConfig:
     """Parse ``path``; raise :class:`SumoConfigError` if it is not XML or names no network."""
     path = Path(path).resolve()
     try:
-        root = ET.parse(path).getroot()
+        root = parse_xml(path).getroot()
     except (ET.ParseError, OSError) as exc:
         raise SumoConfigError(f"{path}: not a readable SUMO config ({exc})") from None
     options: dict[str, str] = {}

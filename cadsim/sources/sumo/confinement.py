@@ -22,6 +22,8 @@ from functools import cache
 from pathlib import Path
 from xml.parsers import expat
 
+from cadsim.sources.sumo.xml_files import open_xml, parse_xml
+
 # (element, attribute) that name files SUMO reads; "*": any element.
 INPUT_ATTRIBUTES = frozenset(
     {
@@ -109,7 +111,7 @@ def _scan(path: Path, size: int, mtime_ns: int, inode: int) -> bool:
     parser = expat.ParserCreate()
     parser.StartElementHandler = start
     try:
-        with open(path, "rb") as f:
+        with open_xml(path) as f:  # gzip-compressed or plain, decompressed size bounded
             parser.ParseFile(f)
     except (expat.ExpatError, OSError) as exc:
         raise ConfinementError(f"{path}: not a readable XML file ({exc})") from None
@@ -123,7 +125,7 @@ def confine(path: Path, outputs: Path) -> tuple[ET.ElementTree | None, list[str]
     path = Path(path)
     if not needs_rewrite(path):
         return None, []
-    tree = ET.parse(path)
+    tree = parse_xml(path)
     rewritten: list[str] = []
     for element in tree.getroot().iter():
         tag = element.tag if isinstance(element.tag, str) else ""
@@ -148,10 +150,13 @@ def confined_files(files: list[Path], run_dir: Path, kind: str) -> list[Path]:
         outputs.mkdir(parents=True, exist_ok=True)
         folder = run_dir / kind / str(k)
         folder.mkdir(parents=True, exist_ok=True)
-        target = folder / Path(original).name
+        tree, _ = confine(Path(original), outputs)
+        name = Path(original).name
+        if tree is not None and name.endswith(".gz"):  # the rewritten copy is plain XML
+            name = name[: -len(".gz")]
+        target = folder / name
         if target.is_symlink() or target.exists():
             target.unlink()
-        tree, _ = confine(Path(original), outputs)
         if tree is None:
             target.symlink_to(Path(original).resolve())
         else:

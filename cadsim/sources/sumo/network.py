@@ -17,6 +17,7 @@ import numpy as np
 import sumolib
 
 from cadsim import portable_math as pm
+from cadsim.sources.sumo.xml_files import check_size
 
 # A road that any of these may use can carry an observer.
 MOTOR_CLASSES = ("passenger", "delivery", "bus", "truck")
@@ -48,6 +49,7 @@ class RoadNetwork:
 
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
+        check_size(self.path)  # sumolib reads .gz itself, whole: a bomb is refused before that
         self.net = sumolib.net.readNet(
             str(self.path), withInternal=True, withPedestrianConnections=True
         )

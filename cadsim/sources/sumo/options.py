@@ -16,6 +16,7 @@ configuration file, a file-valued device option).
 
 from __future__ import annotations
 
+import math
 import re
 import subprocess
 import xml.etree.ElementTree as ET
@@ -45,6 +46,21 @@ SUMO_INPUTS = frozenset({"net-file", "route-files", "additional-files"})
 SUMO_OWN = frozenset({"seed", "random", "end", "step-length", "ignore-route-errors"})
 
 _PATH_WORD = re.compile(r"(^|[.-])(file|files|output|log|prefix|save|dump)([.-]|$)")
+
+
+def sumo_time(value: str, name: str = "begin") -> float:
+    """A SUMO time value in seconds: a number ("54000", "0.5") or SUMO's clock format
+    "h:m:s" / "d:h:m:s" ("15:0:0" = 54000); :class:`OptionError` naming `name` otherwise."""
+    parts = str(value).strip().split(":")
+    try:
+        numbers = [float(p) for p in parts]
+    except ValueError:
+        numbers = []
+    if not numbers or len(numbers) == 2 or len(numbers) > 4 or not all(map(math.isfinite, numbers)):
+        raise OptionError(
+            f"{name}: expected seconds or SUMO's clock format h:m:s / d:h:m:s, got {value!r}"
+        )
+    return sum(n * unit for n, unit in zip(reversed(numbers), (1, 60, 3600, 86400), strict=False))
 
 
 class OptionError(ValueError):

@@ -19,6 +19,7 @@ from cadsim.sources.sumo.build import BUILTIN_TYPES
 from cadsim.sources.sumo.config import SumoConfigError, read_sumocfg
 from cadsim.sources.sumo.confinement import ConfinementError, check_loadable
 from cadsim.sources.sumo.options import OptionError, check_netgenerate_args, sumocfg_options
+from cadsim.sources.sumo.xml_files import parse_xml
 
 HEX_COLOR = "a list of colours written '#rrggbb'"
 # Bounds where memory or run time grows with the value (docs/reliability.md).
@@ -224,8 +225,8 @@ def _check_trip_counts(demand: dict, ctx: ScenarioContext, key: str) -> None:
 
 def _check_vtypes(demand: dict, ctx: ScenarioContext, key: str) -> None:
     try:
-        root = ET.parse(demand["vtypes"]).getroot()
-    except ET.ParseError as exc:
+        root = parse_xml(demand["vtypes"]).getroot()
+    except (ET.ParseError, OSError) as exc:
         raise ctx.error(
             key + ".vtypes", f"not XML ({exc})", "a SUMO additional file with vTypes"
         ) from None
