@@ -60,11 +60,28 @@ def scenario_file(path: str | Path) -> dict[str, str]:
     return {"path": str(path), "sha256": hashlib.sha256(data).hexdigest(), "text": data.decode()}
 
 
+def simd() -> dict[str, Any]:
+    """numpy's SIMD targets on this machine, as ``np.show_runtime()`` reports them: the compiled
+    baseline, the dispatch targets found and not found, and those ``NPY_DISABLE_CPU_FEATURES``
+    switched off. The results do not depend on them (``../shared/DESIGN.md`` §10); they are
+    recorded so that a reader can see which code paths produced a run."""
+    from numpy._core import _multiarray_umath as core
+
+    found = core.__cpu_features__
+    return {
+        "baseline": list(core.__cpu_baseline__),
+        "found": [f for f in core.__cpu_dispatch__ if found.get(f)],
+        "not_found": [f for f in core.__cpu_dispatch__ if not found.get(f)],
+        "disabled": os.environ.get("NPY_DISABLE_CPU_FEATURES", "").split(),
+    }
+
+
 def machine() -> dict[str, Any]:
     return {
         "python": sys.version.split()[0],
         "platform": platform.platform(),
         "cpus": os.cpu_count(),
+        "numpy_simd": simd(),
     }
 
 

@@ -143,6 +143,11 @@ def test_a_small_reproduce_gives_the_same_tables_on_every_dispatch_level(tmp_pat
             pd.testing.assert_frame_equal(other[file], frame, obj=f"{name}: {file}")
         again = json.loads((tmp_path / name / "out" / "run_record.json").read_text())
         assert _checksums(again) == _checksums(record), name
+        simd = again["machine"]["numpy_simd"]  # the record says which code paths ran
+        if name == "no_avx512":
+            assert simd["disabled"] == avx512_features()
+            assert not set(simd["found"]) & set(avx512_features())
+    assert record["machine"]["numpy_simd"]["disabled"] == []
 
 
 def _checksums(record: dict) -> list[tuple]:
