@@ -52,6 +52,10 @@ def test_netgenerate_extra_args_that_write_files_are_refused(tmp_path):
         (["-l", str(log)], 0),  # a short synonym of --log
         (["--sidewalks.guess", "true", str(log)], 2),  # a stray value
         (["--configuration-file", str(log)], 0),
+        (["--sidewalks.guess=--log=x.log"], 0),  # a boolean must be a boolean
+        (["--tls.cycle.time", "--log=x.log"], 1),  # a number expected: not another option
+        (["--tls.cycle.time=sixty"], 0),
+        (["--default.lanenumber", "1", "--grid.number", "2x"], 3),
     ):
         with pytest.raises(OptionError) as err:
             check_netgenerate_args(bad)
@@ -155,7 +159,7 @@ def test_outputs_declared_by_the_scenario_stay_in_the_run_folder(tmp_path):
     args = result["args"]
     assert "--tripinfo-output" not in args and "--log" not in args and "-c" not in args
     assert "--device.rerouting.output" not in args
-    assert args[args.index("--device.rerouting.probability") + 1] == "0.5"
+    assert "--device.rerouting.probability=0.5" in args
 
 
 @pytest.mark.parametrize(
@@ -176,6 +180,38 @@ def test_sumocfg_options_that_cannot_be_confined_are_refused(tmp_path, option, w
     with pytest.raises(ScenarioError) as info:
         load_scenario(tmp_path / "x.toml")
     assert info.value.key == "traffic.sumocfg" and words in str(info.value)
+
+
+@pytest.mark.parametrize(
+    "option, words",
+    [  # a value that SUMO's parser would take as the next option (issue: option injection)
+        ('<collision.check-junctions value="--tripinfo-output=/tmp/cadsim-x.xml"/>', "BOOL"),
+        ('<collision.check-junctions value="maybe"/>', "BOOL"),
+        ('<collision.action value="--tripinfo-output=/tmp/cadsim-x.xml"/>', "start with '-'"),
+        ('<time-to-teleport value="-tripinfo-output"/>', "TIME"),
+        ('<default.speeddev value="1e3x"/>', "FLOAT"),
+        ('<railsignal.default-classes value="rail,--log=/tmp/x"/>', "STR[]"),
+    ],
+)
+def test_sumocfg_values_that_are_not_data_of_their_type_are_refused(tmp_path, option, words):
+    (tmp_path / "x.sumocfg").write_text(
+        f'<configuration><net-file value="{GAME / "cross" / "cross.net.xml"}"/>'
+        f"<processing>{option}</processing></configuration>"
+    )
+    (tmp_path / "x.toml").write_text('[traffic]\nsource = "sumo"\nsumocfg = "x.sumocfg"\n')
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(tmp_path / "x.toml")
+    assert info.value.key == "traffic.sumocfg" and words in str(info.value)
+    assert not Path("/tmp/cadsim-x.xml").exists()
+
+
+def test_sumocfg_values_reach_sumo_as_one_argument_with_their_name():
+    from cadsim.sources.sumo.options import check_value, tool_options
+
+    options = tool_options("sumo")
+    assert check_value(options["time-to-teleport"], "-1", "t") == "-1"  # a negative number is data
+    assert check_value(options["begin"], "15:0:0", "b") == "15:0:0"
+    assert check_value(options["collision.check-junctions"], "true", "c") == "true"
 
 
 def test_include_in_an_additional_file_is_refused(tmp_path):

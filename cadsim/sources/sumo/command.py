@@ -62,19 +62,19 @@ def sumo_run(traffic: dict, seed: int, workdir: Path, run_dir: Path, end: float 
     if additional:
         linked = confined_files(additional, run_dir, "additional")
         args += ["--additional-files", ",".join(map(str, linked))]
-    for name, value in passed.items():
-        args += [f"--{name}", value]
+    for name, value in passed.items():  # one argument each: a value can never become an option
+        args.append(f"--{name}={value}")
     step = traffic["step_length"]
     if step is None and traffic["sumocfg"] is None:
         step = DEFAULT_STEP_LENGTH
     if step is not None:
         args += ["--step-length", f"{step:g}"]
     elif "step-length" in own:
-        args += ["--step-length", own["step-length"]]
+        args.append(f"--step-length={own['step-length']}")
     if end is not None:  # the scenario's max_time counts from the config's begin (SUMO time)
         args += ["--end", f"{sumo_time(passed.get('begin', '0')) + end:.10g}"]
     elif "end" in own:
-        args += ["--end", own["end"]]
+        args.append(f"--end={own['end']}")
     args += [
         *["--seed", str(int(seed) % 2**31), "--random", "false"],
         *["--no-step-log", "true", "--no-warnings", "true", "--verbose", "false"],

@@ -125,10 +125,10 @@ def check_netgenerate_args(args: list[str]) -> None:
     ``args`` is ``--name[=value]`` / ``--name value`` items of allowlisted netgenerate options.
     A value may start with a single dash (``-1``); short option names are refused."""
     options = tool_options("netgenerate")
-    expect_value = False
+    pending: ToolOption | None = None  # the option whose value comes next
     for i, arg in enumerate(args):
         if arg.startswith("--"):
-            name, has_value, _ = arg[2:].partition("=")
+            name, has_value, value = arg[2:].partition("=")
             option = options.get(name)
             if option is None:
                 raise OptionError(f"{arg!r} is not a netgenerate option", i)
@@ -139,13 +139,23 @@ def check_netgenerate_args(args: list[str]) -> None:
                     + ", ".join(sorted(NETGENERATE_CATEGORIES)),
                     i,
                 )
-            expect_value = not has_value and option.type != "BOOL"
+            if has_value:
+                _checked(option, value, arg, i)
+            pending = None if has_value or option.type == "BOOL" else option
         elif arg.startswith("-") and not _is_number(arg):
             raise OptionError(f"{arg!r}: write options as --name (short names are refused)", i)
-        elif not expect_value and not _is_bool(arg):
+        elif pending is not None:
+            _checked(pending, arg, f"--{pending.name}", i)
+            pending = None
+        elif not _is_bool(arg):
             raise OptionError(f"{arg!r} is a value with no option before it", i)
-        else:
-            expect_value = False
+
+
+def _checked(option: ToolOption, value: str, where: str, index: int) -> None:
+    try:
+        check_value(option, value, where)
+    except OptionError as exc:
+        raise OptionError(str(exc), index) from None
 
 
 @dataclass(frozen=True)
@@ -157,6 +167,40 @@ class SumocfgOptions:
     passed: dict[str, str]
     own: dict[str, str]
     dropped: list[str]
+
+
+def check_value(option: ToolOption, value: str, where: str) -> str:
+    """`value` if it is data of `option`'s type, else :class:`OptionError` naming `where`: a
+    BOOL must be a boolean word, INT/FLOAT numbers, TIME seconds or SUMO's clock format, lists
+    those element by element; no value may start with "-" unless it is a number. Values are
+    passed as ``--name=value`` as well, so even an unforeseen type cannot become an option."""
+    text = str(value).strip()
+    kind = option.type.removesuffix("[]")
+    items = split_values(text) if option.type.endswith("[]") else [text]
+    for item in items:
+        if kind == "BOOL":
+            ok = _is_bool(item)
+        elif kind in ("INT", "FLOAT"):
+            ok = _is_number(item)
+        elif kind == "TIME":
+            try:
+                sumo_time(item, where)
+                ok = True
+            except OptionError:
+                ok = False
+        else:
+            ok = not item.startswith("-") or _is_number(item)
+        if not ok:
+            raise OptionError(
+                f"{where}: {value!r} is not a valid {option.type} value"
+                + (" (a value may not start with '-')" if item.startswith("-") else "")
+            )
+    return text
+
+
+def split_values(text: str) -> list[str]:
+    """A SUMO list value's items (separated by commas or spaces)."""
+    return [v for v in re.split(r"[,\s]+", text) if v]
 
 
 def sumocfg_options(options: dict[str, str]) -> SumocfgOptions:
@@ -172,11 +216,11 @@ def sumocfg_options(options: dict[str, str]) -> SumocfgOptions:
         if option.name in SUMO_INPUTS:
             continue
         if option.name in SUMO_OWN:
-            out.own[option.name] = value
+            out.own[option.name] = check_value(option, value, f"<{name}>")
         elif option.category in SUMO_IGNORED_CATEGORIES or _is_output(option):
             out.dropped.append(option.name)
         elif sumo_option_allowed(option):
-            out.passed[option.name] = value
+            out.passed[option.name] = check_value(option, value, f"<{name}>")
         else:
             raise OptionError(
                 f"<{name}> ({option.category.replace('_', ' ')}) is not supported: a scenario "
