@@ -5,6 +5,7 @@ it aims at must not exist afterwards."""
 
 from __future__ import annotations
 
+import gzip
 import itertools
 import os
 from pathlib import Path
@@ -86,7 +87,19 @@ def _escaping_scenario(tmp_path: Path) -> tuple[Path, list[Path]]:
     folder = tmp_path / "scn"
     folder.mkdir()
     outside = tmp_path / "outside"
-    targets = [outside / f"escape{k}.xml" for k in range(6)]
+    targets = [outside / f"escape{k}.xml" for k in range(7)]
+    # The network itself (gzip-compressed) declares an output: an actuated light's detector file.
+    net = (GAME / "cross" / "cross.net.xml").read_text()
+    net = net.replace('<tlLogic id="0" type="static"', '<tlLogic id="0" type="actuated"').replace(
+        '<phase duration="33"', '<phase duration="33" minDur="5" maxDur="50"'
+    )
+    net = net.replace(
+        "    </tlLogic>",
+        f'<param key="file" value="{targets[6]}"/><param key="freq" value="5"/></tlLogic>',
+        1,
+    )
+    assert str(targets[6]) in net
+    (folder / "cross.net.xml.gz").write_bytes(gzip.compress(net.encode()))
     (folder / "escape.add.xml").write_text(
         "<additional>\n"
         f'  <edgeData id="a" file="{targets[0]}"/>\n'
@@ -106,7 +119,7 @@ def _escaping_scenario(tmp_path: Path) -> tuple[Path, list[Path]]:
     (folder / "cross.rou.xml").write_text(head + ">" + vtype + tail)
     (folder / "escape.sumocfg").write_text(
         "<configuration>\n"
-        f'  <input><net-file value="{GAME / "cross" / "cross.net.xml"}"/>\n'
+        '  <input><net-file value="cross.net.xml.gz"/>\n'
         '    <route-files value="cross.rou.xml"/>\n'
         f'    <additional-files value="{GAME / "cross" / "cross.tls.add.xml"},escape.add.xml"/>'
         "</input>\n"
@@ -148,12 +161,13 @@ def test_outputs_declared_by_the_scenario_stay_in_the_run_folder(tmp_path):
         assert not target.exists(), target
     assert not (tmp_path / "outside").exists()
     assert sorted(os.listdir(tmp_path / "scn")) == [
-        "cross.rou.xml", "escape.add.xml", "escape.sumocfg", "escape.toml",
+        "cross.net.xml.gz", "cross.rou.xml", "escape.add.xml", "escape.sumocfg", "escape.toml",
     ]  # fmt: skip
     assert sorted(os.listdir(Path.cwd())) == cwd_before
     # The rewritten declarations wrote where they were sent: the run folder's outputs.
     written = [p for p in result["outputs"] if p.startswith("outputs/")]
     assert any("escape0" in p for p in written), written
+    assert any("net0" in p and "escape6" in p for p in written), written  # the net's detector
     # The device parameter in the route file was rewritten too (SSM writes when vehicles leave).
     assert f'value="{tmp_path / "work"}' in result["routes"] and "escape3" in result["routes"]
     args = result["args"]

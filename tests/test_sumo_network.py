@@ -82,7 +82,8 @@ def test_sumo_run_passes_allowlisted_options_and_confines_additional_files(tmp_p
     run = sumo_run(traffic, 5, tmp_path / "cache", tmp_path / "run", end=300.0)
     args = run.args
     assert "-c" not in args  # SUMO never reads the sumocfg itself
-    assert args[:2] == ["-n", str((GAME / "square" / "square.net.xml").resolve())]
+    assert args[0] == "-n" and tmp_path / "run" in Path(args[1]).parents  # through the run folder
+    assert Path(args[1]).resolve() == (GAME / "square" / "square.net.xml").resolve()
     assert not any(a.startswith("--tripinfo") or a == "--gui-settings-file" for a in args)
     files = [Path(p) for p in args[args.index("--additional-files") + 1].split(",")]
     assert [p.name for p in files][-1] == "straight.rou.xml" and len(files) == 5

@@ -2,8 +2,9 @@
 
 SUMO is never given a configuration file to read on its own: a ``.sumocfg``'s options are sorted
 (:mod:`cadsim.sources.sumo.options`) and only allowlisted ones are passed, on the command line,
-with its inputs resolved to absolute paths. Route and additional files are loaded through the
-run folder (:mod:`cadsim.sources.sumo.confinement`): outputs they declare are rewritten into
+as ``--name=value`` with values checked against their types, its inputs resolved to absolute
+paths. Every file SUMO loads — network, route and additional files — is loaded through the run
+folder (:mod:`cadsim.sources.sumo.confinement`): outputs they declare are rewritten into
 ``run_dir/outputs``. Inputs stay where they are and are only read.
 """
 
@@ -56,7 +57,10 @@ def sumo_run(traffic: dict, seed: int, workdir: Path, run_dir: Path, end: float 
             demand = build_demand(net, traffic["demand"], seed, workdir)
             routes = [*demand.routes, *routes]
             additional = [*demand.additional, *additional]
-    args = ["-n", str(Path(net).resolve())]
+    # Every file SUMO loads goes through the run folder, the network too: an actuated traffic
+    # light's <param key="file"> or a detector in the net declares outputs like an additional.
+    (confined_net,) = confined_files([Path(net)], run_dir, "net")
+    args = ["-n", str(confined_net)]
     if routes:
         args += ["--route-files", ",".join(map(str, confined_files(routes, run_dir, "routes")))]
     if additional:

@@ -180,6 +180,7 @@ def check_traffic(t: dict, ctx: ScenarioContext, prefix: str) -> None:
         net = _check_sumocfg(t["sumocfg"], ctx, prefix + ".sumocfg")
         require_usable_junction(net, ctx, prefix + ".sumocfg")
     elif t["net"] is not None:
+        _check_confinable(t["net"], ctx, prefix + ".net")
         require_usable_junction(t["net"], ctx, prefix + ".net")
 
 
@@ -199,7 +200,7 @@ def _check_sumocfg(path: str, ctx: ScenarioContext, key: str) -> str:
         sumocfg_options(cfg.options)
     except OptionError as exc:
         raise ctx.error(key, f"{path}: {exc}", "a sumocfg SUMO can run confined") from None
-    for p in [*cfg.routes, *cfg.additional]:
+    for p in [cfg.net, *cfg.routes, *cfg.additional]:  # the network can declare outputs too
         _check_confinable(str(p), ctx, key)
     return str(cfg.net)
 
