@@ -479,3 +479,61 @@ def test_fuzz_corrupt_archives_give_a_view_or_import_format_error(blob):
             assert str(exc).startswith(str(path))
         else:
             assert view.x.shape == (len(view), 900)
+
+
+def _compressed_view(numel: int, compression: int, level: int | None = None) -> bytes:
+    """A one-tensor view whose storage (`numel` float32 zeros) is compressed with `compression`."""
+    pkl = data_pickle(
+        {
+            "x": op_tensor("0", "FloatStorage", numel, (numel,), (1,)),
+            "name": op_str("data/proc_s/1/069_0001"),
+        }
+    )
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_STORED) as z:
+        z.writestr("archive/data.pkl", pkl)
+        z.writestr(
+            "archive/data/0", b"\0" * (4 * numel), compress_type=compression, compresslevel=level
+        )
+        z.writestr("archive/version", b"3\n")
+    return buf.getvalue()
+
+
+@pytest.mark.parametrize(
+    "numel, compression, expected",
+    [  # a bzip2 member is refused before a byte is decompressed (its ratio makes small bombs)
+        (2**21, zipfile.ZIP_BZIP2, "compression method 12 refused"),
+        (2**21, zipfile.ZIP_LZMA, "compression method 14 refused"),
+        # a deflated storage larger than any view of this format: refused from the declared
+        # element count, before reading
+        (2**25, zipfile.ZIP_DEFLATED, "limit"),
+    ],
+)
+def test_decompression_bombs_are_refused_before_anything_is_allocated(
+    tmp_path, numel, compression, expected
+):
+    blob = _compressed_view(numel, compression)
+    assert len(blob) < 2**18  # a small file ...
+    path = write(tmp_path / "bomb.pt", blob)
+    tracemalloc.start()
+    try:
+        with pytest.raises(ImportFormatError, match=expected):
+            read_view(path)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 4 * 2**20  # ... that never gets to allocate what it declares (8-128 MiB)
+
+
+def test_a_deflated_view_within_the_limits_still_reads():
+    arrays = view_arrays(5)
+    buf = io.BytesIO()
+    with (
+        zipfile.ZipFile(io.BytesIO(view_archive(arrays))) as src,
+        zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as dst,
+    ):
+        for info in src.infolist():
+            dst.writestr(info.filename, src.read(info))
+    with tempfile.TemporaryDirectory() as tmp:
+        view = read_view(write(Path(tmp) / "v.pt", buf.getvalue()))
+    np.testing.assert_array_equal(view.x, arrays["x"])

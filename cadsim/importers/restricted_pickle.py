@@ -14,7 +14,10 @@ each stand-in accepts only the use this format makes of it (``_rebuild_tensor_v2
 Before unpickling, every opcode is parsed with ``pickletools`` and checked against the opcodes a
 protocol-2 pickler emits, so truncated length prefixes and huge memo indices are refused before
 the C unpickler would allocate for them; storage sizes and tensor extents are checked against the
-bytes actually present. Every failure is one ``ImportFormatError`` line naming the file.
+bytes actually present, and bounded (:data:`MAX_STORAGE_BYTES`); members are read stored or
+deflated only, in chunks with a running limit, so nothing is allocated from a declared size
+first and a decompression bomb stops at the limit. Every failure is one ``ImportFormatError``
+line naming the file.
 
 Must not import torch, torch_geometric, or anything outside numpy and the standard library.
 """
@@ -42,6 +45,14 @@ MAX_PICKLE_BYTES = 2**20
 """Largest ``data.pkl`` read (bytes); the DMGM pickles are 823 bytes."""
 MAX_MEMO_INDEX = 2**16
 """Largest memo index accepted: the C unpickler grows its memo table to the index it is given."""
+MAX_STORAGE_BYTES = 64 * 2**20
+"""Largest tensor storage read (bytes). A DMGM view holds a few hundred objects at most, each with
+a 900-value float32 feature: well under 2 MiB; the largest shipped storage is 22 KiB."""
+MAX_MEMBER_BYTES = 256 * 2**20
+"""Largest total of decompressed bytes read from one archive."""
+_COMPRESSIONS = (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED)
+"""What ``torch.save`` writes (stored; deflate from other zip tools). bzip2 and lzma, whose
+ratios make small bombs, are refused."""
 
 _PROTOCOL_2_OPCODES = frozenset(
     {
@@ -262,6 +273,7 @@ class _Unpickler(pickle.Unpickler):
 
     def __init__(self, data: bytes, archive: zipfile.ZipFile, prefix: str, path: Path) -> None:
         super().__init__(io.BytesIO(data))
+        self._budget = _ReadBudget(path)
         self._archive = archive
         self._prefix = prefix
         self._path = path
@@ -302,17 +314,54 @@ class _Unpickler(pickle.Unpickler):
         except KeyError:
             raise _Refused(f"storage {key!r} is referenced but {name} is missing") from None
         expected = numel * storage_type.dtype.itemsize
+        if expected > MAX_STORAGE_BYTES:
+            raise _Refused(
+                f"storage {key!r} declares {numel} elements = {expected} bytes (limit "
+                f"{MAX_STORAGE_BYTES}; this format holds a few hundred objects per view)"
+            )
         if info.file_size != expected:
             raise _Refused(
                 f"{name} holds {info.file_size} bytes; the pickle declares {numel} elements of "
                 f"{storage_type.global_name} = {expected} bytes"
             )
-        raw = self._archive.read(info)
+        raw = self._budget.read(self._archive, info, expected)
         if len(raw) != expected:
             raise _Refused(f"{name} holds {len(raw)} bytes, expected {expected}")
         storage = Storage(key, np.frombuffer(raw, dtype=storage_type.dtype))
         self._storages[key] = storage
         return storage
+
+
+class _ReadBudget:
+    """Reads archive members with a running limit: nothing is allocated from a declared size
+    first. A member is refused unless stored or deflated; it is read in 1 MiB chunks and the read
+    stops as soon as it passes the bytes it may hold or the archive's total passes
+    :data:`MAX_MEMBER_BYTES`."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.total = 0
+
+    def read(self, archive: zipfile.ZipFile, info: zipfile.ZipInfo, limit: int) -> bytes:
+        if info.compress_type not in _COMPRESSIONS:
+            raise ImportFormatError(
+                self.path,
+                f"{info.filename}: compression method {info.compress_type} refused "
+                "(stored or deflate only)",
+            )
+        chunks, size = [], 0
+        with archive.open(info) as member:
+            while chunk := member.read(min(2**20, limit - size + 1)):
+                size += len(chunk)
+                self.total += len(chunk)
+                if size > limit or self.total > MAX_MEMBER_BYTES:
+                    raise ImportFormatError(
+                        self.path,
+                        f"{info.filename}: more than {min(limit, MAX_MEMBER_BYTES)} bytes when "
+                        "decompressed (declared sizes are not trusted)",
+                    )
+                chunks.append(chunk)
+        return b"".join(chunks)
 
 
 def _archive_prefix(archive: zipfile.ZipFile, path: Path) -> str:
@@ -339,7 +388,7 @@ def _read_small(archive: zipfile.ZipFile, name: str, path: Path) -> bytes | None
         return None
     if info.file_size > 64:
         raise ImportFormatError(path, f"{name} is {info.file_size} bytes, expected a short text")
-    return archive.read(info)
+    return _ReadBudget(path).read(archive, info, 64)
 
 
 def load_torch_archive(path: str | Path) -> object:
@@ -365,7 +414,7 @@ def load_torch_archive(path: str | Path) -> object:
             size = archive.getinfo(entry).file_size
             if size > MAX_PICKLE_BYTES:
                 raise ImportFormatError(path, f"{entry} is {size} bytes (limit {MAX_PICKLE_BYTES})")
-            data = archive.read(entry)
+            data = _ReadBudget(path).read(archive, archive.getinfo(entry), MAX_PICKLE_BYTES)
             _check_opcodes(data, path, entry)
             try:
                 return _Unpickler(data, archive, prefix, path).load()
