@@ -73,7 +73,7 @@ def test_a_second_writer_is_refused_and_told_who_holds_the_folder(tmp_path):
             assert proc.poll() is None, proc.communicate()[1].decode()
             assert time.monotonic() < deadline, "the first run did not start within 60 s"
             time.sleep(0.02)
-        marker = out / f"{layout.TEMP_PREFIX}of-the-first-run"
+        marker = out / f"{layout.TEMP_PREFIX}e00000_s03-{proc.pid}-0123abcd"
         marker.mkdir()  # stands for its unfinished records
         with pytest.raises(DatasetBusy) as exc:
             _generate(SCENARIO, out, pairs=6)

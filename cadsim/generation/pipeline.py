@@ -56,6 +56,7 @@ from cadsim.dataset.manifest import (
     read_manifest,
     write_manifest,
 )
+from cadsim.dataset.output_folder import check_output_folder
 from cadsim.dataset.record_format import PairRecord, ViewCapture, encode_record
 from cadsim.dataset.seeds import attribute_seed, localisation_seed, noise_seed, simulation_seed
 from cadsim.dataset.writer_lock import exclusive_writer
@@ -469,6 +470,7 @@ def _plan(scenario, out, pairs, seed, workers, max_episodes) -> _Plan:
     config = generation_config(scenario, root_seed, crit.pairs_per_episode, acceptance)
     if max_episodes is None:
         max_episodes = 10 * math.ceil(n_pairs / crit.pairs_per_episode) + 10
+    out = check_output_folder(out)  # new, empty or a cadsim dataset: never a user's folder
     return _Plan(
         scenario, Path(out).resolve(), n_pairs, root_seed,
         "scenario" if seed is None else "--seed", crit, config, int(max_episodes),
