@@ -167,7 +167,10 @@ def test_iter_pairs_sorted_with_sequence(tmp_path):
 
 
 def test_iter_pairs_refuses_unpaired_and_mismatched_frames(tmp_path):
-    write(tmp_path / "proc_s" / "1" / "data.pt", view_archive(view_arrays(3)))
+    write(
+        tmp_path / "proc_s" / "1" / "data.pt",
+        view_archive(view_arrays(3), "data/proc_s/1/069_0001"),
+    )
     (tmp_path / "proc_t").mkdir()
     with pytest.raises(ImportFormatError, match=r"\['1'\] are in only one"):
         list(iter_pairs(tmp_path))
@@ -176,6 +179,40 @@ def test_iter_pairs_refuses_unpaired_and_mismatched_frames(tmp_path):
         view_archive(view_arrays(3), "data/proc_t/1/069_0002"),
     )
     with pytest.raises(ImportFormatError, match="differs from view 1"):
+        list(iter_pairs(tmp_path))
+
+
+def _pair_folder(root: Path, pairs: dict[str, tuple[str, str]], n: int = 3) -> Path:
+    """proc_s/<id> and proc_t/<id> for each id -> (name of view s, name of view t)."""
+    for pair_id, names in pairs.items():
+        for side, name in zip(("proc_s", "proc_t"), names, strict=True):
+            write(root / side / pair_id / "data.pt", view_archive(view_arrays(n), name))
+    return root
+
+
+@pytest.mark.parametrize(
+    "pairs, n, expected",
+    [  # issue 22 #6: names parsed strictly, collisions refused at import
+        ({"1": ("data/proc_s/1/069_0001",) * 2}, 3, "claims another pair or side"),  # side t
+        ({"1": ("data/proc_s/2/069_0001", "data/proc_t/2/069_0001")}, 3, "claims another pair"),
+        ({"1": ("data/proc_s/1/69_0001", "data/proc_t/1/69_0001")}, 3, "3 digits"),
+        ({"1": ("data/proc_s/1/069_0001 ", "data/proc_t/1/069_0001 ")}, 3, "is not data/"),
+        ({"1": ("data/proc_s/1/069_0001\n", "data/proc_t/1/069_0001\n")}, 3, "is not data/"),
+        ({"1": ("data/proc_s/1/\u066069_0001", "data/proc_t/1/069_0001")}, 3, "is not data/"),
+        ({"1": ("data/proc_s/1/069_0001", "data/proc_t/1/069_0001")}, 0, "no objects"),
+        (
+            {
+                "1": ("data/proc_s/1/069_0001", "data/proc_t/1/069_0001"),
+                "2": ("data/proc_s/2/069_0001", "data/proc_t/2/069_0001"),
+            },
+            3,
+            "pairs 1 and 2 are the same frame 069_0001",
+        ),
+    ],
+)
+def test_import_refuses_names_that_collide_or_lie(tmp_path, pairs, n, expected):
+    _pair_folder(tmp_path, pairs, n)
+    with pytest.raises(ImportFormatError, match=expected):
         list(iter_pairs(tmp_path))
 
 

@@ -23,7 +23,12 @@ from cadsim.importers.restricted_pickle import PickledObject, load_torch_archive
 FEATURE_DIM = 900
 """Length of the appearance descriptor ``x``."""
 
-_NAME = re.compile(r"^data/proc_[st]/(?P<pair>\d+)/(?P<sequence>\d+)_(?P<frame>\d+)$")
+# Strict: ASCII digits, a 3-digit sequence and a 4-digit frame as DMGM writes them (so "69" can
+# never stand for "069"), nothing after the frame (fullmatch: no trailing newline or space).
+_NAME = re.compile(
+    r"data/proc_(?P<side>[st])/(?P<pair>[0-9]+)/(?P<sequence>[0-9]{3})_(?P<frame>[0-9]{4})",
+    re.ASCII,
+)
 _FLOAT_FIELDS = {"x": FEATURE_DIM, "pos": 3, "pos_world": 3, "norm": 2}
 
 
@@ -49,12 +54,12 @@ class DmgmView:
     @property
     def sequence(self) -> str:
         """The driving sequence, e.g. ``"069"``."""
-        return _NAME.match(self.name)["sequence"]
+        return _NAME.fullmatch(self.name)["sequence"]
 
     @property
     def frame(self) -> str:
         """The frame within the sequence, e.g. ``"0914"``."""
-        return _NAME.match(self.name)["frame"]
+        return _NAME.fullmatch(self.name)["frame"]
 
     def __len__(self) -> int:
         return len(self.y)
@@ -121,9 +126,11 @@ def read_view(path: str | Path) -> DmgmView:
     path = Path(path)
     mapping = _mapping(load_torch_archive(path), path)
     name = mapping.get("name")
-    if not isinstance(name, str) or _NAME.match(name) is None:
+    if not isinstance(name, str) or _NAME.fullmatch(name) is None:
         raise ImportFormatError(
-            path, f"field 'name': {name!r:.80} is not data/proc_?/<id>/<seq>_<frame>"
+            path,
+            f"field 'name': {name!r:.80} is not data/proc_<s|t>/<id>/<sequence: 3 digits>_"
+            "<frame: 4 digits>",
         )
     label = _field(mapping, "label", path, np.int32, 1)
     ids = _field(mapping, "y", path, np.float32, 1)
@@ -178,12 +185,28 @@ def iter_pairs(src_dir: str | Path) -> Iterator[DmgmPair]:
     only = sorted(ids["proc_s"] ^ ids["proc_t"], key=int)[:5]
     if only:
         raise ImportFormatError(src_dir, f"pairs {only} are in only one of proc_s/ and proc_t/")
+    seen: dict[tuple[str, str], str] = {}
     for pair_id in sorted(ids["proc_s"], key=int):
-        view_s = read_view(src_dir / "proc_s" / pair_id / "data.pt")
+        path_s = src_dir / "proc_s" / pair_id / "data.pt"
         path_t = src_dir / "proc_t" / pair_id / "data.pt"
-        view_t = read_view(path_t)
+        view_s, view_t = read_view(path_s), read_view(path_t)
+        for path, view, side in ((path_s, view_s, "s"), (path_t, view_t, "t")):
+            claimed = _NAME.fullmatch(view.name)
+            if (claimed["side"], claimed["pair"]) != (side, pair_id):
+                raise ImportFormatError(
+                    path,
+                    f"its name {view.name!r} claims another pair or side than proc_{side}/{pair_id}",
+                )
+            if len(view) == 0:
+                raise ImportFormatError(path, "a view with no objects (nothing to match)")
         if (view_s.sequence, view_s.frame) != (view_t.sequence, view_t.frame):
             raise ImportFormatError(
                 path_t, f"frame {view_t.name!r} differs from view 1's {view_s.name!r}"
             )
+        frame = (view_s.sequence, view_s.frame)
+        if frame in seen:
+            raise ImportFormatError(
+                path_s, f"pairs {seen[frame]} and {pair_id} are the same frame {'_'.join(frame)}"
+            )
+        seen[frame] = pair_id
         yield DmgmPair(pair_id, view_s, view_t, view_s.sequence)
