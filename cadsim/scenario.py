@@ -391,9 +391,13 @@ def load_scenario(path: str | Path) -> Scenario:
         ) from None
     try:
         raw = tomllib.loads(text)
+        _reject_non_finite(raw, ctx, "")
     except tomllib.TOMLDecodeError as exc:
         raise ScenarioError(path, "", f"invalid TOML ({exc})", "a TOML document") from None
-    _reject_non_finite(raw, ctx, "")
+    except RecursionError:  # arrays or tables nested thousands deep
+        raise ScenarioError(
+            path, "", "nested too deeply to read", "a scenario file (a few levels of tables)"
+        ) from None
 
     for key in raw:
         if key not in TOP_LEVEL and key not in TABLES:

@@ -18,7 +18,15 @@ def is_user_error(exc: BaseException) -> bool:
     return isinstance(exc, ValueError | OSError)
 
 
+MAX_MESSAGE = 1000  # characters of an error line; a message quoting a huge value is cut
+
+
 def one_line(exc: BaseException) -> str:
-    """The message of ``exc`` on one line (further lines joined with " | "), never empty."""
+    """The message of ``exc`` on one line (further lines joined with " | "), never empty, at most
+    :data:`MAX_MESSAGE` characters (the middle of a longer one is cut, saying how much)."""
     lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
-    return " | ".join(lines) or type(exc).__name__
+    text = " | ".join(lines) or type(exc).__name__
+    if len(text) > MAX_MESSAGE:
+        cut = len(text) - MAX_MESSAGE
+        text = f"{text[: MAX_MESSAGE // 2]} … [{cut:,} characters cut] … {text[-MAX_MESSAGE // 2 :]}"
+    return text

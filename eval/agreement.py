@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import rankdata
 
+from eval.result_files import write_csv
 from eval.tables import PAPER_CSV, PAPER_NAMES, dataset_order, load_paper
 
 REFERENCE = "DMGM CAD 069+071"
@@ -121,7 +122,7 @@ def write_agreement(out_dir: str | Path, paper_csv: str | Path = PAPER_CSV) -> p
                 | agreement(None, reference, paper_f1=f1)
             )
     table = pd.DataFrame(rows, columns=COLUMNS)
-    table.round(4).to_csv(out_dir / "agreement.csv", index=False)
+    write_csv(table.round(4), out_dir / "agreement.csv")
     return table
 
 

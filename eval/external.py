@@ -24,6 +24,7 @@ import pandas as pd
 
 from eval.commands.evaluate import evaluate, open_entry, parse_matchers
 from eval.metrics import POOLED
+from eval.result_files import write_csv, write_text
 from eval.runner import Runner
 from eval.tables import build_table, params_text, pooled_text
 from eval.tasks import MatcherSpec
@@ -201,8 +202,8 @@ def write_table_external(out_dir: str | Path) -> pd.DataFrame:
     """Write ``out_dir/table_external.md`` and ``.csv`` from ``out_dir/external/``."""
     out_dir = Path(out_dir)
     table = build_external(out_dir)
-    (out_dir / "table_external.md").write_text(to_markdown(table), encoding="utf-8")
-    table.round(6).to_csv(out_dir / "table_external.csv", index=False)
+    write_text(out_dir / "table_external.md", to_markdown(table))
+    write_csv(table.round(6), out_dir / "table_external.csv")
     return table
 
 

@@ -24,6 +24,7 @@ import numpy as np
 import pandas as pd
 
 from eval.crossovers import PAIRS
+from eval.result_files import save_figure
 from eval.tables import PAPER_DATASETS, dataset_order, matcher_order, method_name
 
 log = logging.getLogger(__name__)
@@ -50,7 +51,7 @@ def _save(fig, base: Path, suffixes=(".png", ".pdf")) -> list[Path]:
     paths = []
     for suffix in suffixes:
         path = base.with_suffix(suffix)
-        fig.savefig(path, dpi=150)
+        save_figure(fig, path, dpi=150)
         paths.append(path)
     return paths
 

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from eval.result_files import write_csv
+
 
 def upsert_csv(path: str | Path, rows: pd.DataFrame, key: str = "dataset") -> pd.DataFrame:
     """Write `rows` into the CSV at `path`, replacing the rows whose `key` values they carry and
@@ -17,5 +19,5 @@ def upsert_csv(path: str | Path, rows: pd.DataFrame, key: str = "dataset") -> pd
         old = pd.read_csv(path, keep_default_na=False, na_values=[""])
         old = old[~old[key].isin(rows[key].unique())]
         rows = pd.concat([old, rows], ignore_index=True) if len(old) else rows
-    rows.to_csv(path, index=False)
+    write_csv(rows, path)
     return rows

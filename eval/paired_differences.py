@@ -20,6 +20,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from eval.result_files import write_csv
+
 COLUMNS = (
     "dataset",
     "matcher_a",
@@ -123,5 +125,5 @@ def write_paired_differences(out_dir: str | Path) -> Path | None:
         return None
     per_pair = pd.read_csv(source, keep_default_na=False, na_values=[""])
     path = out_dir / "paired_differences.csv"
-    paired_differences(per_pair).round(4).to_csv(path, index=False)
+    write_csv(paired_differences(per_pair).round(4), path)
     return path

@@ -21,6 +21,7 @@ import pandas as pd
 
 from eval.agreement import readme_part as agreement_readme
 from eval.external import readme_part as external_readme
+from eval.result_files import write_text
 from eval.tables import PAPER_COLUMN, PAPER_NAMES, dataset_order, method_name, params_text
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
@@ -435,5 +436,5 @@ def update_readme(readme: Path, results: Path) -> bool:
     head, rest = text.split(BEGIN, 1)
     _, tail = rest.split(END, 1)
     body = results_section(Path(results), readme.parent)
-    readme.write_text(f"{head}{BEGIN}\n{body}\n{END}{tail}")
+    write_text(readme, f"{head}{BEGIN}\n{body}\n{END}{tail}")
     return True

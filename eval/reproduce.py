@@ -55,6 +55,7 @@ from eval.external import CALIBRATION_DIR, TEST_DIR, evaluate_external, external
 from eval.figures import render_all
 from eval.protocol import PAPER_OPTIONS
 from eval.readme_results import update_readme
+from eval.result_files import write_csv
 from eval.run_record import StageTimer, scenario_file, write_run_record
 from eval.runner import Runner
 from eval.spread import spread_rows
@@ -400,7 +401,7 @@ def main(argv: list[str] | None = None) -> int:
                     ],
                     ignore_index=True,
                 )
-                table.round(6).to_csv(out / "dataset_spread.csv", index=False)
+                write_csv(table.round(6), out / "dataset_spread.csv")
         count("dataset_spread", before)
         loc_entry = next((e for e in entries if e.label == LOCALISATION_DATASET), None)
         loc_sigmas = (

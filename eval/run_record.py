@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from cadsim.provenance import git_state, package_versions
+from eval.result_files import write_text
 
 PACKAGES = (
     "cadsim",
@@ -97,5 +98,5 @@ def write_run_record(path: str | Path, timer: StageTimer, **content: Any) -> Pat
         | {"total": round(timer.total, 2)},
     }
     path = Path(path)
-    path.write_text(json.dumps(record, indent=1, default=str) + "\n", encoding="utf-8")
+    write_text(path, json.dumps(record, indent=1, default=str) + "\n")
     return path

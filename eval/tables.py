@@ -19,6 +19,7 @@ import pandas as pd
 
 from eval.metrics import METRICS, POOLED, summarise_pooled, summarise_runs
 from eval.protocol import MAIN, VARIANTS, variant_path
+from eval.result_files import write_csv, write_text
 
 PAPER_CSV = Path(__file__).parent / "data" / "paper-table1.csv"
 
@@ -259,10 +260,10 @@ def write_table1(
     out_dir = Path(out_dir)
     table = build_table(out_dir, paper_csv, variant)
     markdown = to_markdown(table)
-    variant_path(out_dir, "table1", variant, ".md").write_text(markdown, encoding="utf-8")
-    table.round(4).to_csv(variant_path(out_dir, "table1", variant, ".csv"), index=False)
+    write_text(variant_path(out_dir, "table1", variant, ".md"), markdown)
+    write_csv(table.round(4), variant_path(out_dir, "table1", variant, ".csv"))
     if variant == MAIN:
-        (out_dir / "table1.tex").write_text(to_latex(table), encoding="utf-8")
+        write_text(out_dir / "table1.tex", to_latex(table))
     return markdown
 
 

@@ -149,3 +149,123 @@ def test_show_prints_the_file_it_writes(dataset, tmp_path, capsys):
     written = Path(capsys.readouterr().out.split(":")[0])
     assert written == tmp_path / "noext.png" and written.is_file()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ds", "figures", "noext.png"]
+
+
+# --- issue 22 #7-#9: more hostile inputs, one line each; info/show verify; atomic result files ---
+
+
+def _edit_manifest(dataset: Path, **fields) -> None:
+    path = dataset / "manifest.json"
+    manifest = json.loads(path.read_text())
+    path.write_text(json.dumps(manifest | fields))
+
+
+@pytest.mark.parametrize(
+    "fields, words",
+    [
+        ({"record_files": 5}, "record_files: expected a list of file names"),
+        ({"records": []}, "records: a finished dataset with no record"),
+    ],
+)
+@pytest.mark.parametrize("command", ["info", "show"])
+def test_manifest_shapes_that_break_the_reader_are_one_line(
+    dataset, capsys, fields, words, command
+):
+    _edit_manifest(dataset, **fields)
+    assert (
+        main([command, str(dataset), *(["--out", str(dataset.parent)] * (command == "show"))]) == 2
+    )
+    line = _one_error_line(capsys, command)
+    assert str(dataset / "manifest.json") in line and words in line
+
+
+@pytest.mark.parametrize("command", ["info", "show"])
+def test_one_flipped_byte_is_caught_by_verification(dataset, capsys, command):
+    npz = dataset / "pairs" / "e00000_s00" / "detections.npz"
+    data = bytearray(npz.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    npz.write_bytes(bytes(data))
+    assert (
+        main([command, str(dataset), *(["--out", str(dataset.parent)] * (command == "show"))]) == 2
+    )
+    line = _one_error_line(capsys, command)
+    assert "e00000_s00" in line and "checksum mismatch" in line
+
+
+def test_info_and_show_say_that_they_verified(dataset, capsys, tmp_path):
+    assert main(["info", str(dataset)]) == 0
+    assert "every record verified" in capsys.readouterr().out
+    assert main(["info", str(dataset), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["verified"] is True
+    assert main(["show", str(dataset), "--out", str(tmp_path)]) == 0
+    assert "(record checksum verified)" in capsys.readouterr().out
+
+
+def test_a_corrupt_npz_is_named_even_unverified(dataset):
+    from cadsim.dataset.encoding import load_npz
+
+    npz = dataset / "pairs" / "e00000_s00" / "detections.npz"
+    data = bytearray(npz.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    with pytest.raises(ValueError, match="detections.npz: not a readable .npz"):
+        load_npz(bytes(data), str(npz))  # zlib's own error would not be a user error
+
+
+def test_a_deeply_nested_scenario_is_one_line(tmp_path, capsys):
+    path = tmp_path / "deep.toml"
+    path.write_text("a = " + "[" * 5000 + "]" * 5000 + "\n")
+    assert main(["generate", str(path), "--out", str(tmp_path / "o")]) == 2
+    line = _one_error_line(capsys, "generate")
+    assert str(path) in line and "nested too deeply" in line
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_huge_message_is_cut_to_a_readable_line(monkeypatch, capsys):
+    _fake_command(monkeypatch, ValueError("bad value " + "x" * 900_000 + " end"))
+    assert main(["boom"]) == 2
+    line = _one_error_line(capsys, "boom")
+    assert len(line) < 1200 and "characters cut" in line and line.endswith(" end")
+
+
+def test_a_full_disk_names_the_file_and_leaves_the_previous_result(tmp_path, monkeypatch):
+    import errno
+    import os
+
+    import pandas as pd
+
+    from cadsim.dataset import atomic_writer
+    from eval.result_files import write_csv, write_text
+
+    table = tmp_path / "table1.md"
+    write_text(table, "the previous table\n")
+
+    def full(fd):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(atomic_writer.os, "fsync", full)
+    with pytest.raises(OSError) as err:
+        write_text(table, "a new table\n")
+    assert str(table) in str(err.value) and "No space left" in str(err.value)
+    assert table.read_text() == "the previous table\n"  # never a 0-byte or half file
+    with pytest.raises(OSError, match="results.csv"):
+        write_csv(pd.DataFrame({"a": [1]}), tmp_path / "results.csv")
+    assert not (tmp_path / "results.csv").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["table1.md"]  # no temp file left
+
+
+def test_a_full_disk_during_generate_is_one_line_naming_the_file(tmp_path, monkeypatch, capsys):
+    import errno
+    import os
+
+    from cadsim.dataset import atomic_writer
+
+    def full(fd):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(atomic_writer.os, "fsync", full)
+    out = tmp_path / "ds"
+    with pytest.raises(OSError) as err:
+        generate_dataset(
+            FakeScenario(), out, pairs=1, workers=1, stages=FAKE_STAGES, progress=False
+        )
+    assert str(out) in str(err.value) and "No space left" in str(err.value)

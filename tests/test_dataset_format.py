@@ -98,11 +98,11 @@ def test_write_record_is_all_or_nothing(tmp_path, monkeypatch):
     real = aw._write_synced
     calls = []
 
-    def failing(path, data):
+    def failing(path, data, shown=None):
         calls.append(path.name)
         if len(calls) == 2:
             raise OSError("disk full")
-        real(path, data)
+        real(path, data, shown)
 
     monkeypatch.setattr(aw, "_write_synced", failing)
     with pytest.raises(OSError, match="disk full"):

@@ -111,7 +111,8 @@ def _text(s: dict) -> str:
     )
     lines = [
         f"{s['dataset']}: scenario {s['scenario']}, {s['n_pairs']} pairs, seed {s['seed']}, "
-        f"checksum {s['checksum'][:16]}",
+        f"checksum {s['checksum'][:16]}"
+        + (" (every record verified against it)" if s.get("verified") else ""),
         *(
             [f"  imported from           {src['repository']} @ {src['commit']} ({src['licence']})"]
             if (src := s.get("source"))
@@ -139,6 +140,7 @@ def _text(s: dict) -> str:
 def run(args: argparse.Namespace) -> int:
     from cadsim.dataset import Dataset
 
-    summary = summarise(Dataset(args.dataset))
+    # Verified first (every record re-hashed against the manifest): what it prints is the data.
+    summary = summarise(Dataset(args.dataset, verify=True)) | {"verified": True}
     print(json.dumps(summary, indent=1) if args.json else _text(summary))
     return 0

@@ -35,8 +35,12 @@ def run(args: argparse.Namespace) -> int:
     ds = Dataset(args.dataset)
     if not 0 <= args.pair < len(ds):
         raise ValueError(f"--pair: {args.pair} is out of range; expected 0..{len(ds) - 1}")
+    ds.verify_record(args.pair)  # the record drawn is the one the manifest vouches for
     pair = ds[args.pair]
     fig = draw_pair_from_record(pair, labels=not args.no_labels)
     path = save_figure(fig, output_path(args.out, pair.name))
-    print(f"{path}: pair {pair.index} ({pair.name}), {len(pair.gt_pairs)} ground-truth pairs")
+    print(
+        f"{path}: pair {pair.index} ({pair.name}), {len(pair.gt_pairs)} ground-truth pairs "
+        "(record checksum verified)"
+    )
     return 0

@@ -25,11 +25,18 @@ def _fsync_dir(path: Path) -> None:
         os.close(fd)
 
 
-def _write_synced(path: Path, data: bytes) -> None:
-    with open(path, "wb") as f:
-        f.write(data)
-        f.flush()
-        os.fsync(f.fileno())
+def _write_synced(path: Path, data: bytes, shown: Path | None = None) -> None:
+    """Write and fsync ``path``; an ``OSError`` (a full disk, a quota) names ``shown`` — the
+    file being written, not its temporary name — so the one-line error says where."""
+    try:
+        with open(path, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+    except OSError as exc:
+        if exc.filename is not None and shown is None:
+            raise
+        raise OSError(exc.errno, exc.strerror or str(exc), str(shown or path)) from exc
 
 
 def _temp_path(dataset_dir: Path, label: str) -> Path:
@@ -49,7 +56,7 @@ def write_record(dataset_dir: Path, name: str, files: Mapping[str, bytes]) -> bo
     tmp.mkdir()
     try:
         for fname, data in files.items():
-            _write_synced(tmp / fname, data)
+            _write_synced(tmp / fname, data, target / fname)
         _fsync_dir(tmp)
         try:
             os.replace(tmp, target)
@@ -70,7 +77,7 @@ def write_file_atomic(path: Path, data: bytes) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.parent / f"{TEMP_PREFIX}{path.name}-{os.getpid()}-{uuid.uuid4().hex[:8]}"
     try:
-        _write_synced(tmp, data)
+        _write_synced(tmp, data, path)
         os.replace(tmp, path)
         _fsync_dir(path.parent)
     finally:

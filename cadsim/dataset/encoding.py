@@ -10,6 +10,7 @@ from __future__ import annotations
 import io
 import json
 import zipfile
+import zlib
 from collections.abc import Mapping
 
 import numpy as np
@@ -42,7 +43,7 @@ def load_npz(data: bytes | str, what: str) -> dict[str, np.ndarray]:
         src = io.BytesIO(data) if isinstance(data, bytes) else data
         with np.load(src, allow_pickle=False) as z:
             return {k: z[k] for k in z.files}
-    except (OSError, ValueError, zipfile.BadZipFile) as exc:
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
         raise ValueError(f"{what}: not a readable .npz file ({exc})") from exc
 
 

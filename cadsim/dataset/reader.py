@@ -447,9 +447,17 @@ class Dataset(Sequence[FramePair]):
         gen = self.manifest["generation"]
         self.noise_config: dict = dict(gen.get("noise") or {})
         self.detection_config: dict = dict(gen.get("detection") or {})
-        self.record_files: tuple[str, ...] = tuple(
-            self.manifest.get("record_files") or layout.RECORD_FILES
-        )
+        files = self.manifest.get("record_files") or layout.RECORD_FILES
+        if not (isinstance(files, list | tuple) and all(isinstance(f, str) for f in files)):
+            raise DatasetError(
+                f"{self.path / layout.MANIFEST}: record_files: expected a list of file names, "
+                f"got {str(files)[:60]}"
+            )
+        self.record_files: tuple[str, ...] = tuple(files)
+        if not self._records:
+            raise DatasetError(
+                f"{self.path / layout.MANIFEST}: records: a finished dataset with no record"
+            )
         unknown = sorted(set(self.record_files) - set(layout.RECORD_FILES))
         if unknown or layout.DETECTIONS_NPZ not in self.record_files:
             raise DatasetError(
@@ -525,15 +533,20 @@ class Dataset(Sequence[FramePair]):
         self.verify()
         _VERIFIED[key] = signature
 
+    def verify_record(self, index: int) -> None:
+        """Re-hash record ``index`` (dataset order); ``DatasetError`` if it does not match."""
+        entry = self._records[index]
+        record_dir = self.path / layout.PAIRS_DIR / entry["name"]
+        missing = [n for n in self.record_files if not (record_dir / n).is_file()]
+        if missing:
+            raise DatasetError(f"{record_dir}: missing record files {missing}")
+        actual = record_dir_checksum(record_dir, self.record_files)
+        if actual != entry["checksum"]:
+            raise DatasetError(f"{record_dir}: checksum mismatch (record modified or corrupt)")
+
     def verify(self) -> None:
         """Re-hash every record and the dataset; ``DatasetError`` naming the first mismatch."""
-        for entry in self._records:
-            record_dir = self.path / layout.PAIRS_DIR / entry["name"]
-            missing = [n for n in self.record_files if not (record_dir / n).is_file()]
-            if missing:
-                raise DatasetError(f"{record_dir}: missing record files {missing}")
-            actual = record_dir_checksum(record_dir, self.record_files)
-            if actual != entry["checksum"]:
-                raise DatasetError(f"{record_dir}: checksum mismatch (record modified or corrupt)")
+        for index in range(len(self._records)):
+            self.verify_record(index)
         if dataset_checksum(r["checksum"] for r in self._records) != self.checksum:
             raise DatasetError(f"{self.path / layout.MANIFEST}: dataset checksum mismatch")

@@ -127,9 +127,10 @@ def read_view(path: str | Path) -> DmgmView:
     mapping = _mapping(load_torch_archive(path), path)
     name = mapping.get("name")
     if not isinstance(name, str) or _NAME.fullmatch(name) is None:
+        shown = f"{name[:80]!r}" if isinstance(name, str) else f"a {type(name).__name__}"
         raise ImportFormatError(
             path,
-            f"field 'name': {name!r:.80} is not data/proc_<s|t>/<id>/<sequence: 3 digits>_"
+            f"field 'name': {shown} is not data/proc_<s|t>/<id>/<sequence: 3 digits>_"
             "<frame: 4 digits>",
         )
     label = _field(mapping, "label", path, np.int32, 1)

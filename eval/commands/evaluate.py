@@ -31,6 +31,7 @@ from eval.cache import ResultCache
 from eval.executor import add_scheduler_argument, make_executor
 from eval.metrics import RankedAssignments, average_precision, pair_metrics, pooled_pr_curve
 from eval.protocol import MAIN, PAPER, PROTOCOLS, UNTUNED, check_protocol, paper_spec, variant_path
+from eval.result_files import write_csv, write_text
 from eval.runner import Runner, requests_for
 from eval.tables import PAPER_CSV, write_tables
 from eval.tasks import MatcherSpec, RunResult
@@ -347,23 +348,25 @@ def _write_variant(
         for label, fit in r.fits.items()
     ]
     if variant != PAPER:
-        pd.DataFrame(tau_rows, columns=list(THRESHOLD_COLUMNS)).to_csv(
-            variant_path(out_dir, "thresholds", variant, ".csv"), index=False
+        write_csv(
+            pd.DataFrame(tau_rows, columns=list(THRESHOLD_COLUMNS)),
+            variant_path(out_dir, "thresholds", variant, ".csv"),
         )
-    pd.concat([r.per_pair for r in results], ignore_index=True).to_csv(
-        variant_path(out_dir, "metrics_per_pair", variant, ".csv"), index=False
+    write_csv(
+        pd.concat([r.per_pair for r in results], ignore_index=True),
+        variant_path(out_dir, "metrics_per_pair", variant, ".csv"),
     )
-    pd.DataFrame([a for r in results for a in r.ap_rows]).to_csv(
-        variant_path(out_dir, "average_precision", variant, ".csv"), index=False
+    write_csv(
+        pd.DataFrame([a for r in results for a in r.ap_rows]),
+        variant_path(out_dir, "average_precision", variant, ".csv"),
     )
     if variant == MAIN:
-        pd.concat([r.pr for r in results], ignore_index=True).round(6).to_csv(
-            out_dir / "pr_curves.csv", index=False
+        write_csv(
+            pd.concat([r.pr for r in results], ignore_index=True).round(6),
+            out_dir / "pr_curves.csv",
         )
         qualitative = {r.entry.label: r.qualitative for r in results if r.qualitative}
-        (out_dir / "qualitative.json").write_text(
-            json.dumps(qualitative, indent=1), encoding="utf-8"
-        )
+        write_text(out_dir / "qualitative.json", json.dumps(qualitative, indent=1))
     record = {
         "datasets": [asdict(r.entry) for r in results],
         "matchers": list(results[0].named) if results else [],
@@ -377,9 +380,7 @@ def _write_variant(
         "code_version": runner.version,
         "cache": str(runner.cache.root),
     }
-    variant_path(out_dir, "evaluation", variant, ".json").write_text(
-        json.dumps(record, indent=1), encoding="utf-8"
-    )
+    write_text(variant_path(out_dir, "evaluation", variant, ".json"), json.dumps(record, indent=1))
 
 
 def evaluate(
@@ -447,7 +448,7 @@ def evaluate(
         }
         _write_variant(out_dir, variant, variant_results, seeds, runner, settings)
     if tune:
-        pd.DataFrame(tuning.tuning_rows(choices)).to_csv(out_dir / "tuning.csv", index=False)
+        write_csv(pd.DataFrame(tuning.tuning_rows(choices)), out_dir / "tuning.csv")
     main = results.get(PAPER if protocol == "paper" else MAIN, [])
     return {r.entry.label: r.taus for r in main}
 

@@ -38,6 +38,7 @@ from eval.commands.evaluate import (
     val_dirs,
 )
 from eval.executor import make_executor
+from eval.result_files import write_csv
 from eval.runner import Runner, requests_for
 from eval.tasks import MatcherSpec, RunResult
 
@@ -160,7 +161,7 @@ def write_sweep(out_dir: str | Path, rows: pd.DataFrame) -> Path:
     if path.is_file():
         old = pd.read_csv(path)
         rows = pd.concat([old[~old["dataset"].isin(rows["dataset"])], rows], ignore_index=True)
-    rows.round(6).to_csv(path, index=False)
+    write_csv(rows.round(6), path)
     return path
 
 

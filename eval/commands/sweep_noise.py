@@ -33,6 +33,7 @@ from eval.commands.evaluate import (
 )
 from eval.executor import make_executor
 from eval.metrics import METRICS
+from eval.result_files import write_csv
 from eval.runner import Runner
 from eval.tasks import MatcherSpec
 
@@ -103,7 +104,7 @@ def sweep(
         )
         .reset_index()
     )
-    per_run.to_csv(out_dir / "noise_runs.csv", index=False)
+    write_csv(per_run, out_dir / "noise_runs.csv")
     return per_run
 
 
