@@ -28,5 +28,7 @@ def one_line(exc: BaseException) -> str:
     text = " | ".join(lines) or type(exc).__name__
     if len(text) > MAX_MESSAGE:
         cut = len(text) - MAX_MESSAGE
-        text = f"{text[: MAX_MESSAGE // 2]} … [{cut:,} characters cut] … {text[-MAX_MESSAGE // 2 :]}"
+        text = (
+            f"{text[: MAX_MESSAGE // 2]} … [{cut:,} characters cut] … {text[-MAX_MESSAGE // 2 :]}"
+        )
     return text

@@ -6,11 +6,14 @@ import time
 
 from .appearance_similarity import appearance_similarity
 from .matching import Matching
+from .memory_budget import budgeted
+from .memory_models import unary_memory
 from .options import check_problem, rng_from_seed
 from .problem import Problem
 from .result import finish
 
 
+@budgeted(unary_memory, "the number of objects")
 def appearance(problem: Problem, seed: int | None = 0, threshold: float | None = None) -> Matching:
     """Match by appearance only: scores = b, the cosine similarity of the features in [0, 1]
     (:func:`~matchers.appearance_similarity.appearance_similarity`), used as is — an absolute

@@ -8,6 +8,8 @@ import numpy as np
 
 from .discretise import hungarian
 from .matching import Matching
+from .memory_budget import budgeted
+from .memory_models import tensor_matcher
 from .options import check_count, check_problem, rng_from_seed
 from .problem import Problem
 from .result import finish
@@ -111,6 +113,7 @@ def bcagm_solve(tensor: SparseTensor, max_iter: int = 50) -> tuple[np.ndarray, i
     return blocks[0], sweeps, {"converged": converged, "alpha": float(lifted.alpha)}
 
 
+@budgeted(tensor_matcher("bcagm"), "max_tensor_entries, triangles or neighbours")
 def bcagm(
     problem: Problem,
     seed: int | None = 0,

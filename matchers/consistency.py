@@ -30,6 +30,8 @@ import numpy as np
 from scipy.spatial.distance import cdist
 
 from .matching import Matching
+from .memory_budget import budgeted
+from .memory_models import consistency_memory
 from .options import check_count, check_problem, check_range, rng_from_seed
 from .problem import Problem
 from .result import finish
@@ -88,6 +90,7 @@ def consistent_set(weights: np.ndarray, starts: int = 64) -> np.ndarray:
     return cliques[best]
 
 
+@budgeted(consistency_memory, "the number of objects (a dense (nm)^2 consistency matrix)")
 def consistency(
     problem: Problem,
     seed: int | None = 0,

@@ -7,6 +7,8 @@ import time
 import numpy as np
 
 from .matching import Matching
+from .memory_budget import budgeted
+from .memory_models import tensor_matcher
 from .options import check_count, check_problem, check_range, rng_from_seed
 from .problem import Problem
 from .result import finish, max_normalised
@@ -74,6 +76,7 @@ def hgm_solve(
     return z.reshape(-1), cycles, converged
 
 
+@budgeted(tensor_matcher("hgm"), "max_tensor_entries, triangles or neighbours")
 def hgm(
     problem: Problem,
     seed: int | None = 0,

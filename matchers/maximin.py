@@ -8,6 +8,8 @@ import numpy as np
 
 from .appearance_similarity import appearance_similarity
 from .matching import Matching
+from .memory_budget import budgeted
+from .memory_models import tensor_matcher
 from .options import check_count, check_problem, check_range, rng_from_seed
 from .problem import Problem
 from .result import finish, max_normalised
@@ -99,6 +101,7 @@ def initial_x(init: str, b: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return x / max(x.sum(), 1e-300)
 
 
+@budgeted(tensor_matcher("maximin"), "max_tensor_entries, triangles or neighbours")
 def maximin(
     problem: Problem,
     seed: int | None = 0,

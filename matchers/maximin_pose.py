@@ -16,12 +16,15 @@ import time
 from .appearance_similarity import appearance_similarity
 from .matching import Matching
 from .maximin import maximin
+from .memory_budget import budgeted
+from .memory_models import tensor_matcher
 from .options import check_problem
 from .pose_refine import pose_likelihood
 from .prior import PRIOR_FIELDS
 from .problem import Problem
 
 
+@budgeted(tensor_matcher("maximin"), "max_tensor_entries, triangles or neighbours")
 def maximin_pose(
     problem: Problem,
     seed: int | None = 0,

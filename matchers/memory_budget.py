@@ -10,7 +10,9 @@ instead of exhausting the machine. The budget is ``$CADSIM_MAX_MATCHER_MB`` mega
 
 from __future__ import annotations
 
+import functools
 import os
+from collections.abc import Callable
 
 BUDGET_ENV = "CADSIM_MAX_MATCHER_MB"
 DEFAULT_BUDGET_MB = 4096
@@ -47,3 +49,30 @@ def check_memory(what: str, n_bytes: float, option: str) -> None:
             f"{what} needs about {need:,.0f} MB, over the {limit:,.0f} MB budget per process; "
             f"lower {option}, or raise ${BUDGET_ENV}"
         )
+
+
+def budgeted(estimate: Callable[..., float], option: str) -> Callable:
+    """Decorator: the matcher checks ``estimate(problem, **options)`` (bytes) against the budget
+    before it runs, and carries the estimate as ``memory_bytes`` (a third-party matcher registered
+    with ``register(..., memory=...)`` gets the same). ``option`` says what to change.
+
+    >>> @budgeted(lambda problem, **options: 8.0 * problem.n1 * problem.n2, "the view size")
+    ... def my_matcher(problem, seed=None, threshold=None): ...
+    """
+
+    def wrap(fn: Callable) -> Callable:
+        @functools.wraps(fn)
+        def call(problem, *args, **options):
+            n1, n2 = getattr(problem, "n1", None), getattr(problem, "n2", None)
+            if n1 is not None and n2 is not None:
+                check_memory(
+                    f"{getattr(fn, '__name__', 'matcher')} ({n1} x {n2} objects)",
+                    estimate(problem, **options),
+                    option,
+                )
+            return fn(problem, *args, **options)
+
+        call.memory_bytes = estimate
+        return call
+
+    return wrap

@@ -23,6 +23,8 @@ import scipy.sparse as sp
 
 from .appearance_similarity import appearance_similarity
 from .matching import Matching
+from .memory_budget import budgeted
+from .memory_models import mos_memory
 from .options import check_count, check_problem, check_range, rng_from_seed
 from .pairwise import NEIGHBOURS, resolve_affinity
 from .problem import Problem
@@ -54,6 +56,7 @@ def multi_order_step(b: np.ndarray, affinity: np.ndarray, tensor: SparseTensor, 
     return step
 
 
+@budgeted(mos_memory, "affinity_neighbours, max_tensor_entries, triangles or neighbours")
 def mos(
     problem: Problem,
     seed: int | None = 0,

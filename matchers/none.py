@@ -11,10 +11,13 @@ import time
 import numpy as np
 
 from .matching import Matching
+from .memory_budget import budgeted
+from .memory_models import unary_memory
 from .options import check_problem, rng_from_seed
 from .problem import Problem
 
 
+@budgeted(unary_memory, "the number of objects")
 def none(problem: Problem, seed: int | None = 0, threshold: float | None = None) -> Matching:
     """Declare no match: scores all 0 and no pairs, whatever ``threshold`` (also None — the one
     matcher that does not return the full assignment then, by definition). Deterministic;

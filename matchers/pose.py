@@ -8,12 +8,15 @@ from __future__ import annotations
 import time
 
 from .matching import Matching
+from .memory_budget import budgeted
+from .memory_models import unary_memory
 from .options import check_problem, rng_from_seed
 from .prior import PRIOR_FIELDS, check_prior_options, prior_likelihood, require_prior
 from .problem import Problem
 from .result import finish
 
 
+@budgeted(unary_memory, "the number of objects")
 def pose(
     problem: Problem,
     seed: int | None = 0,

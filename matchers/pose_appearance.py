@@ -6,6 +6,8 @@ import time
 
 from .appearance_similarity import appearance_similarity
 from .matching import Matching
+from .memory_budget import budgeted
+from .memory_models import unary_memory
 from .options import check_problem, rng_from_seed
 from .pose_refine import pose_likelihood
 from .prior import PRIOR_FIELDS
@@ -13,6 +15,7 @@ from .problem import Problem
 from .result import finish
 
 
+@budgeted(unary_memory, "the number of objects")
 def pose_appearance(
     problem: Problem,
     seed: int | None = 0,

@@ -26,6 +26,8 @@ import numpy as np
 
 from .discretise import discretise
 from .matching import Matching
+from .memory_budget import budgeted
+from .memory_models import pose_refine_memory
 from .options import check_count, check_problem, check_range, rng_from_seed
 from .prior import PRIOR_FIELDS, check_prior_options, prior_likelihood, require_prior
 from .problem import Problem
@@ -107,6 +109,7 @@ def pose_likelihood(
     return likelihood, info | {"refined": refined}
 
 
+@budgeted(pose_refine_memory, "the number of objects")
 def pose_refine(
     problem: Problem,
     seed: int | None = 0,

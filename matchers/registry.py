@@ -18,6 +18,7 @@ from functools import cache
 from importlib.metadata import EntryPoint, entry_points
 
 from .matching import Matching
+from .memory_budget import budgeted
 from .search_spaces import BUILTIN_SEARCH_SPACES, check_search_space
 
 log = logging.getLogger(__name__)
@@ -53,9 +54,16 @@ def register(
     *,
     search_space: list[dict] | None = None,
     replace: bool = False,
+    memory: Callable[..., float] | None = None,
 ) -> None:
     """Make ``fn`` available as ``get(name)``. Re-using a taken name (built-in, registered or
     entry point) raises ValueError unless ``replace=True``.
+
+    ``memory``: ``memory(problem, **options)`` -> bytes of working memory the call needs; the
+    matcher is then refused over the per-process budget before it runs
+    (:func:`matchers.memory_budget.budgeted`) and carries it as ``memory_bytes``. Default:
+    ``fn.memory_bytes`` if the callable carries one (every built-in does). The test suite holds
+    every registered matcher's estimate to its measured peak (docs/extending-matchers.md).
 
     ``search_space``: the matcher's tuning grid, a list of at most 12 option dicts (see
     :func:`search_space`); default: ``fn.search_space`` if the callable carries one, else
@@ -76,6 +84,8 @@ def register(
         space = check_search_space(getattr(fn, "search_space", None) or [{}], name)
     else:
         space = check_search_space(search_space, name, "search_space")
+    if memory is not None:
+        fn = budgeted(memory, "the view size or the matcher's options")(fn)
     _registered[name] = fn
     _registered_spaces[name] = space
 

@@ -8,6 +8,8 @@ from collections.abc import Callable
 import numpy as np
 
 from .matching import Matching
+from .memory_budget import budgeted
+from .memory_models import tensor_matcher
 from .options import check_count, check_problem, check_range, rng_from_seed
 from .problem import Problem
 from .result import finish, max_normalised
@@ -81,6 +83,7 @@ def hypergraph_walk(
     return jump_walk(tensor.slot_sums, tensor.n, tensor.m, jump, beta, max_iter, tol, sinkhorn_iter)
 
 
+@budgeted(tensor_matcher("rrwhm"), "max_tensor_entries, triangles or neighbours")
 def rrwhm(
     problem: Problem,
     seed: int | None = 0,

@@ -9,6 +9,8 @@ import scipy.sparse as sp
 
 from .indexing import conflict_mask
 from .matching import Matching
+from .memory_budget import budgeted
+from .memory_models import pairwise_matcher
 from .options import check_count, check_problem, check_range, rng_from_seed
 from .pairwise import NEIGHBOURS, resolve_affinity
 from .problem import Problem
@@ -81,6 +83,7 @@ def reweighted_walk(
     return x, max_iter, False
 
 
+@budgeted(pairwise_matcher("rrwm"), "affinity_neighbours")
 def rrwm(
     problem: Problem,
     seed: int | None = 0,

@@ -8,6 +8,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from .matching import Matching
+from .memory_budget import budgeted
+from .memory_models import pairwise_matcher
 from .options import check_count, check_problem, check_range, rng_from_seed
 from .pairwise import NEIGHBOURS, resolve_affinity
 from .problem import Problem
@@ -38,6 +40,7 @@ def spectral_vector(
     return np.abs(x), max_iter, False
 
 
+@budgeted(pairwise_matcher("sm"), "affinity_neighbours")
 def sm(
     problem: Problem,
     seed: int | None = 0,

@@ -8,6 +8,8 @@ import numpy as np
 
 from .jit import njit
 from .matching import Matching
+from .memory_budget import budgeted
+from .memory_models import tensor_matcher
 from .numpy_sum import reproducible, row_sum_jit
 from .options import check_count, check_problem, rng_from_seed
 from .problem import Problem
@@ -128,6 +130,7 @@ def tensor_power(
     return x * x if sparsity else x
 
 
+@budgeted(tensor_matcher("tm"), "max_tensor_entries, triangles or neighbours")
 def tm(
     problem: Problem,
     seed: int | None = 0,

@@ -31,6 +31,11 @@ def register_source(kind: str, factory: SourceFactory) -> None:
     _FACTORIES[kind] = factory
 
 
+def source_kinds() -> list[str]:
+    """Every ``[traffic] source`` kind: built-in and registered."""
+    return sorted(set(_BUILTIN) | set(_FACTORIES))
+
+
 def make_source(scenario: Scenario, seed: int, workdir: Path) -> TrafficSource:
     """The traffic source of ``scenario`` for ``seed``; ``workdir`` caches generated networks
     and routes (created if missing)."""
