@@ -11,11 +11,12 @@ would be followed out of the folder. It never changes anything.
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
 from cadsim.dataset import layout
-from cadsim.dataset.manifest import DatasetError, read_manifest
+from cadsim.dataset.manifest import FORMAT_NAME, DatasetError, read_manifest
 
 _TEMP = re.compile(re.escape(layout.TEMP_PREFIX) + r".+-\d+-[0-9a-f]{8}$")
 _OWN = {layout.MANIFEST, layout.PAIRS_DIR, layout.EPISODES_DIR, layout.WORK_DIR, layout.LOCK_FILE}
@@ -78,12 +79,23 @@ def check_output_folder(out: str | Path, option: str = "--out") -> Path:
         raise OutputFolderError(
             f"{path}: not a cadsim dataset (it holds {_listing(strays)}); give a new or empty folder"
         )
-    if (path / layout.MANIFEST).exists():
-        try:
-            read_manifest(path)
-        except DatasetError as exc:
-            raise OutputFolderError(
-                f"{path}: its manifest.json is not a cadsim manifest ({exc}); "
-                "give a new or empty folder"
-            ) from None
+    if (path / layout.MANIFEST).exists() and not _is_cadsim_manifest(path):
+        raise OutputFolderError(
+            f"{path}: its manifest.json is not a cadsim manifest; give a new or empty folder"
+        )
     return path
+
+
+def _is_cadsim_manifest(path: Path) -> bool:
+    """Whether ``path``'s manifest is one cadsim wrote, of this format version or another (the
+    resume check then decides, naming the version)."""
+    try:
+        read_manifest(path)
+        return True
+    except DatasetError:
+        pass
+    try:
+        manifest = json.loads((path / layout.MANIFEST).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        return False
+    return isinstance(manifest, dict) and manifest.get("format") == FORMAT_NAME
