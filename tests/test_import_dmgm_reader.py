@@ -410,14 +410,19 @@ def _one_tensor_view(tensor: bytes, storages: dict[str, bytes]) -> bytes:
 )  # fmt: skip
 def test_sizes_beyond_the_bytes_present_are_refused(tmp_path, tensor, storages, expected):
     path = write(tmp_path / "big.pt", _one_tensor_view(tensor, storages))
+    assert _refused_peak(path, expected) < 16 * 2**20
+
+
+def _refused_peak(path: Path, expected: str) -> int:
+    """Bytes traced at most while ``read_view(path)`` is refused with a message matching
+    `expected`."""
     tracemalloc.start()
     try:
         with pytest.raises(ImportFormatError, match=expected):
             read_view(path)
-        peak = tracemalloc.get_traced_memory()[1]
+        return tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
-    assert peak < 16 * 2**20
 
 
 @pytest.mark.parametrize(
@@ -552,14 +557,8 @@ def test_decompression_bombs_are_refused_before_anything_is_allocated(
     blob = _compressed_view(numel, compression)
     assert len(blob) < 2**18  # a small file ...
     path = write(tmp_path / "bomb.pt", blob)
-    tracemalloc.start()
-    try:
-        with pytest.raises(ImportFormatError, match=expected):
-            read_view(path)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
-    assert peak < 4 * 2**20  # ... that never gets to allocate what it declares (8-128 MiB)
+    # ... that never gets to allocate what it declares (8-128 MiB)
+    assert _refused_peak(path, expected) < 4 * 2**20
 
 
 def test_a_deflated_view_within_the_limits_still_reads():
