@@ -1,4 +1,10 @@
-"""``maximin``: maximin hypergraph matching (Gao et al.), Algorithm 1 of the paper, Eqs. (5)-(8)."""
+"""``maximin``: maximin hypergraph matching (Gao et al.), Algorithm 1 of the paper, Eqs. (5)-(8).
+
+Variant ``maximin_pose`` (below): maximin given what a connected vehicle knows — the
+localisation prior's likelihood L folded into the first-order term, b'_ij = b_ij * L_ij, which
+replaces b in the worst-case tensor of Eqs. (5)-(6) and in the jump of Eq. (7); everything else
+is :func:`maximin` unchanged.
+"""
 
 from __future__ import annotations
 
@@ -11,6 +17,8 @@ from .matching import Matching
 from .memory_budget import budgeted
 from .memory_models import tensor_matcher
 from .options import check_count, check_problem, check_range, rng_from_seed
+from .pose_refine import pose_likelihood
+from .prior import PRIOR_FIELDS
 from .problem import Problem
 from .result import finish, max_normalised
 from .sinkhorn import sinkhorn
@@ -180,3 +188,44 @@ def checked_first_order(first_order: np.ndarray, n: int, m: int) -> np.ndarray:
     if not np.all(np.isfinite(b)) or (b.size and (b.min() < 0 or b.max() > 1)):
         raise ValueError("first_order: entries must be finite and in [0, 1]")
     return b.reshape(-1)
+
+
+@budgeted(tensor_matcher("maximin"), "max_tensor_entries, triangles or neighbours")
+def maximin_pose(
+    problem: Problem,
+    seed: int | None = 0,
+    threshold: float | None = None,
+    *,
+    spread: float = 2.0,
+    gate: float = 8.0,
+    refine: bool = False,
+    **options,
+) -> Matching:
+    """Maximin with b' = b * L (module docstring). ``spread`` (2) and ``gate`` (8) shape the
+    prior likelihood L as for :func:`matchers.pose.pose` (multiples of world_sigma; ground
+    plane x, y, z up); ``refine`` (False) first corrects the prior's relative rigid error as
+    :func:`matchers.pose_refine.pose_refine` does; every other option is :func:`~matchers.maximin.maximin`'s (tensor,
+    alpha, beta, init, ...), except ``first_order``, which this matcher sets. Scores as
+    maximin's (x / max). Needs ``problem.world1/world2/world_sigma``.
+
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> xyz = rng.uniform(-20, 20, (6, 3)) * [1, 1, 0]
+    >>> p = Problem(xyz, xyz[::-1], world1=xyz, world2=xyz[::-1] + 0.5, world_sigma=1.0)
+    >>> maximin_pose(p, threshold=0.5).pairs[:, 1].tolist()
+    [5, 4, 3, 2, 1, 0]
+    """
+    started = time.perf_counter()
+    check_problem(problem)
+    if "first_order" in options:
+        raise TypeError("maximin_pose() sets first_order itself; pass spread/gate instead")
+    likelihood, info = pose_likelihood(problem, "maximin_pose", spread, gate, bool(refine))
+    b = appearance_similarity(problem) * likelihood
+    matching = maximin(problem, seed, threshold, first_order=b, **options)
+    matching.name = "maximin_pose"
+    matching.info |= info
+    matching.time_s = time.perf_counter() - started
+    return matching
+
+
+maximin_pose.requires = PRIOR_FIELDS
