@@ -19,10 +19,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from eval.agreement import readme_part as agreement_readme
-from eval.external import readme_part as external_readme
-from eval.result_files import write_text
-from eval.tables import PAPER_COLUMN, PAPER_NAMES, dataset_order, method_name, params_text
+from eval.core.result_files import write_text
+from eval.report.tables import PAPER_COLUMN, PAPER_NAMES, dataset_order, method_name, params_text
+from eval.studies.agreement import readme_part as agreement_readme
+from eval.studies.external import readme_part as external_readme
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
 RIVALS = ("mos", "rrwhm")
@@ -302,7 +302,7 @@ def agreement_bullets(results: Path) -> list[str]:
 
 def results_section(results: Path, readme_dir: Path) -> str:
     """Markdown: regime cards, Table I and its companions, figures, and the agreement summary."""
-    from eval.regime_cards import regime_markdown
+    from eval.studies.regime_cards import regime_markdown
 
     results = Path(results)
     rel = Path(os.path.relpath(results, readme_dir)).as_posix()

@@ -9,7 +9,7 @@ all matchers × runs (parameters tuned and τ calibrated on validation only; the
 beside); the paper's protocol; the CAD noise sweep (re-detection on stored clean depth); the regime
 sweep on every dataset; the dataset spread; the localisation sweep on CAD (prior re-drawn per
 position error); the external benchmark on the shipped DMGM CAD pairs (``eval/data/dmgm-cad``,
-:mod:`eval.external`) and the ranking agreement with it (:mod:`eval.agreement`); tables and
+:mod:`eval.studies.external`) and the ranking agreement with it (:mod:`eval.studies.agreement`); tables and
 figures; run record. Ends by printing Table I beside the paper's.
 
 Tiny run (the test suite's): ``python -m eval.reproduce --pairs 2 --matchers sm,maximin
@@ -28,16 +28,6 @@ from pathlib import Path
 
 import pandas as pd
 
-from eval.agreement import write_agreement
-from eval.cache import ResultCache, code_version
-from eval.commands.evaluate import (
-    DEFAULT_CACHE,
-    chosen_specs,
-    dataset_label,
-    evaluate,
-    open_entry,
-    parse_matchers,
-)
 from eval.commands.sweep_localisation import (
     DEFAULT_MATCHERS as LOCALISATION_MATCHERS,
 )
@@ -50,16 +40,26 @@ from eval.commands.sweep_localisation import (
 from eval.commands.sweep_localisation import write_sweep as write_localisation_sweep
 from eval.commands.sweep_noise import DEFAULT_RATES, parse_rates, sweep
 from eval.commands.sweep_regime import DEFAULT_KEEP, parse_keep, sweep_regime, write_sweep
-from eval.executor import add_scheduler_argument, make_executor
-from eval.external import CALIBRATION_DIR, TEST_DIR, evaluate_external, external_matchers
-from eval.figures import render_all
-from eval.protocol import PAPER_OPTIONS
+from eval.core.cache import ResultCache, code_version
+from eval.core.executor import add_scheduler_argument, make_executor
+from eval.core.result_files import write_csv
+from eval.core.runner import Runner
+from eval.protocol.variants import PAPER_OPTIONS
 from eval.readme_results import update_readme
-from eval.result_files import write_csv
-from eval.run_record import StageTimer, scenario_file, write_run_record
-from eval.runner import Runner
-from eval.spread import spread_rows
-from eval.tables import PAPER_CSV, write_tables
+from eval.report.figures import render_all
+from eval.report.run_record import StageTimer, scenario_file, write_run_record
+from eval.report.tables import PAPER_CSV, write_tables
+from eval.studies.agreement import write_agreement
+from eval.studies.evaluation import (
+    DEFAULT_CACHE,
+    chosen_specs,
+    dataset_label,
+    evaluate,
+    open_entry,
+    parse_matchers,
+)
+from eval.studies.external import CALIBRATION_DIR, TEST_DIR, evaluate_external, external_matchers
+from eval.studies.spread import spread_rows
 
 log = logging.getLogger("eval.reproduce")
 
@@ -513,7 +513,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _write_regime_cards(out: Path, entries) -> None:
     """``regime.csv`` for every evaluated test dataset."""
-    from eval.regime_cards import write_regime
+    from eval.studies.regime_cards import write_regime
 
     (out / "regime.csv").unlink(missing_ok=True)
     write_regime(out, {e.label: e.test_dir for e in entries})

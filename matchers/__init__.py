@@ -10,14 +10,14 @@ localisation prior ``world1/world2/world_sigma`` (for the ``pose*`` matchers and
 ``maximin_pose``; :func:`requires` names what a matcher needs). Each matcher has a tuning
 grid relative to the problem's own scale, :func:`search_space`.
 
-Index convention (a = i * m + j) in :mod:`matchers.indexing`; algorithms, defaults and grids in
+Index convention (a = i * m + j) in :mod:`matchers.core.indexing`; algorithms, defaults and grids in
 docs/matchers.md.
 """
 
-from .matching import Matching
-from .memory_budget import ProblemTooLarge
-from .problem import Problem
-from .registry import (
+from matchers.core.matching import Matching
+from matchers.core.memory_budget import ProblemTooLarge
+from matchers.core.problem import Problem
+from matchers.core.registry import (
     ENTRY_POINT_GROUP,
     available,
     deterministic,
@@ -26,9 +26,9 @@ from .registry import (
     requires,
     search_space,
 )
-from .sparse_tensor import SparseTensor
-from .tensor_build import build_tensor
-from .tensor_sharing import shared_tensors
+from matchers.hypergraph.sparse_tensor import SparseTensor
+from matchers.hypergraph.tensor_build import build_tensor
+from matchers.hypergraph.tensor_sharing import shared_tensors
 
 __all__ = [
     "ENTRY_POINT_GROUP",

@@ -6,15 +6,15 @@ import time
 
 import numpy as np
 
-from .discretise import hungarian
-from .matching import Matching
-from .memory_budget import budgeted
-from .memory_models import tensor_matcher
-from .options import check_count, check_problem, rng_from_seed
-from .problem import Problem
-from .result import finish
-from .sparse_tensor import SparseTensor
-from .tensor_build import MAX_ENTRIES, resolve_tensor
+from matchers.blocks.memory_models import tensor_matcher
+from matchers.core.discretise import hungarian
+from matchers.core.matching import Matching
+from matchers.core.memory_budget import budgeted
+from matchers.core.options import check_count, check_problem, rng_from_seed
+from matchers.core.problem import Problem
+from matchers.core.result import finish
+from matchers.hypergraph.sparse_tensor import SparseTensor
+from matchers.hypergraph.tensor_build import MAX_ENTRIES, resolve_tensor
 
 _ASCENT = 1e-12  # relative increase of the objective that counts as ascent
 

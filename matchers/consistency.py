@@ -29,14 +29,14 @@ import time
 import numpy as np
 from scipy.spatial.distance import cdist
 
-from .matching import Matching
-from .memory_budget import budgeted
-from .memory_models import consistency_memory
-from .options import check_count, check_problem, check_range, rng_from_seed
-from .problem import Problem
-from .result import finish
-from .scale import median_spacing
-from .sm import spectral_vector
+from matchers.blocks.memory_models import consistency_memory
+from matchers.core.matching import Matching
+from matchers.core.memory_budget import budgeted
+from matchers.core.options import check_count, check_problem, check_range, rng_from_seed
+from matchers.core.problem import Problem
+from matchers.core.result import finish
+from matchers.core.scale import median_spacing
+from matchers.sm import spectral_vector
 
 
 def consistency_weights(problem: Problem, tolerance: float) -> np.ndarray:
@@ -103,7 +103,7 @@ def consistency(
     """Largest mutually consistent set of candidate matches, then Hungarian (module docstring).
 
     Options: ``tolerance_scale`` (0.1) — eps as a multiple of the problem's median within-view
-    distance (:func:`~matchers.scale.median_spacing`); or ``tolerance`` — eps in position units
+    distance (:func:`~matchers.core.scale.median_spacing`); or ``tolerance`` — eps in position units
     (metres), which replaces it; ``starts`` (64) — clique growths from the candidates of largest
     eigenvector weight. Needs no features and no prior (ignores both). Deterministic; ``seed``
     unused. Memory (nm)^2 like the pairwise matchers.

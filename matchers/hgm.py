@@ -6,14 +6,14 @@ import time
 
 import numpy as np
 
-from .matching import Matching
-from .memory_budget import budgeted
-from .memory_models import tensor_matcher
-from .options import check_count, check_problem, check_range, rng_from_seed
-from .problem import Problem
-from .result import finish, max_normalised
-from .sparse_tensor import SparseTensor
-from .tensor_build import MAX_ENTRIES, resolve_tensor
+from matchers.blocks.memory_models import tensor_matcher
+from matchers.core.matching import Matching
+from matchers.core.memory_budget import budgeted
+from matchers.core.options import check_count, check_problem, check_range, rng_from_seed
+from matchers.core.problem import Problem
+from matchers.core.result import finish, max_normalised
+from matchers.hypergraph.sparse_tensor import SparseTensor
+from matchers.hypergraph.tensor_build import MAX_ENTRIES, resolve_tensor
 
 
 def nearest_substochastic_kl(

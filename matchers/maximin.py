@@ -12,18 +12,18 @@ import time
 
 import numpy as np
 
-from .appearance_similarity import appearance_similarity
-from .matching import Matching
-from .memory_budget import budgeted
-from .memory_models import tensor_matcher
-from .options import check_count, check_problem, check_range, rng_from_seed
-from .pose_refine import pose_likelihood
-from .prior import PRIOR_FIELDS
-from .problem import Problem
-from .result import finish, max_normalised
-from .sinkhorn import sinkhorn
-from .sparse_tensor import SparseTensor
-from .tensor_build import MAX_ENTRIES, resolve_tensor
+from matchers.blocks.appearance_similarity import appearance_similarity
+from matchers.blocks.memory_models import tensor_matcher
+from matchers.blocks.prior import PRIOR_FIELDS
+from matchers.blocks.sinkhorn import sinkhorn
+from matchers.core.matching import Matching
+from matchers.core.memory_budget import budgeted
+from matchers.core.options import check_count, check_problem, check_range, rng_from_seed
+from matchers.core.problem import Problem
+from matchers.core.result import finish, max_normalised
+from matchers.hypergraph.sparse_tensor import SparseTensor
+from matchers.hypergraph.tensor_build import MAX_ENTRIES, resolve_tensor
+from matchers.pose_refine import pose_likelihood
 
 INITS = ("uniform", "appearance", "random")
 NORMALISATIONS = ("sum", "none")
@@ -145,7 +145,7 @@ def maximin(
     is zero and the result rests on appearance alone.
 
     ``first_order``: an (n, m) array in [0, 1] used as b instead of the features' cosine
-    similarity (e.g. appearance times a localisation prior, :mod:`matchers.maximin_pose`);
+    similarity (e.g. appearance times a localisation prior, :mod:`matchers.maximin`);
     default None.
     """
     started = time.perf_counter()

@@ -21,17 +21,17 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from .appearance_similarity import appearance_similarity
-from .matching import Matching
-from .memory_budget import budgeted
-from .memory_models import mos_memory
-from .options import check_count, check_problem, check_range, rng_from_seed
-from .pairwise import NEIGHBOURS, resolve_affinity
-from .problem import Problem
-from .result import finish, max_normalised
-from .rrwhm import jump_walk
-from .sparse_tensor import SparseTensor
-from .tensor_build import MAX_ENTRIES, resolve_tensor
+from matchers.blocks.appearance_similarity import appearance_similarity
+from matchers.blocks.memory_models import mos_memory
+from matchers.blocks.pairwise import NEIGHBOURS, resolve_affinity
+from matchers.core.matching import Matching
+from matchers.core.memory_budget import budgeted
+from matchers.core.options import check_count, check_problem, check_range, rng_from_seed
+from matchers.core.problem import Problem
+from matchers.core.result import finish, max_normalised
+from matchers.hypergraph.sparse_tensor import SparseTensor
+from matchers.hypergraph.tensor_build import MAX_ENTRIES, resolve_tensor
+from matchers.rrwhm import jump_walk
 
 
 def multi_order_step(b: np.ndarray, affinity: np.ndarray, tensor: SparseTensor, weights):

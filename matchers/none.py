@@ -10,11 +10,11 @@ import time
 
 import numpy as np
 
-from .matching import Matching
-from .memory_budget import budgeted
-from .memory_models import unary_memory
-from .options import check_problem, rng_from_seed
-from .problem import Problem
+from matchers.blocks.memory_models import unary_memory
+from matchers.core.matching import Matching
+from matchers.core.memory_budget import budgeted
+from matchers.core.options import check_problem, rng_from_seed
+from matchers.core.problem import Problem
 
 
 @budgeted(unary_memory, "the number of objects")

@@ -9,15 +9,15 @@ from __future__ import annotations
 
 import time
 
-from .appearance_similarity import appearance_similarity
-from .matching import Matching
-from .memory_budget import budgeted
-from .memory_models import unary_memory
-from .options import check_problem, rng_from_seed
-from .pose_refine import pose_likelihood
-from .prior import PRIOR_FIELDS, check_prior_options, prior_likelihood, require_prior
-from .problem import Problem
-from .result import finish
+from matchers.blocks.appearance_similarity import appearance_similarity
+from matchers.blocks.memory_models import unary_memory
+from matchers.blocks.prior import PRIOR_FIELDS, check_prior_options, prior_likelihood, require_prior
+from matchers.core.matching import Matching
+from matchers.core.memory_budget import budgeted
+from matchers.core.options import check_problem, rng_from_seed
+from matchers.core.problem import Problem
+from matchers.core.result import finish
+from matchers.pose_refine import pose_likelihood
 
 
 @budgeted(unary_memory, "the number of objects")
@@ -31,7 +31,7 @@ def pose(
 ) -> Matching:
     """Match by the localisation prior: scores = the prior likelihood L_ij in [0, 1] of the
     ground-plane (x, y; z up) distance between the two views' world positions
-    (:func:`~matchers.prior.prior_likelihood`: Gaussian with ``spread`` x world_sigma per view
+    (:func:`~matchers.blocks.prior.prior_likelihood`: Gaussian with ``spread`` x world_sigma per view
     and axis, 0 beyond ``gate`` x world_sigma), used as is — an absolute scale, so tau reads as
     a likelihood (a distance). Hungarian maximises the summed likelihood. Needs
     ``problem.world1/world2/world_sigma`` (ValueError naming the missing one). Deterministic;
@@ -70,7 +70,7 @@ def pose_appearance(
     """Scores = L_ij * b_ij in [0, 1]: the prior likelihood (options ``spread``, ``gate`` as
     for :func:`matchers.pose.pose`; ground plane, z up; with ``refine`` the prior corrected
     as :func:`matchers.pose_refine.pose_refine` does) times the appearance similarity b
-    (cosine, :func:`~matchers.appearance_similarity.appearance_similarity`; 1 without
+    (cosine, :func:`~matchers.blocks.appearance_similarity.appearance_similarity`; 1 without
     features), then Hungarian. Absolute scale, not max-normalised. Needs
     ``problem.world1/world2/world_sigma``. Deterministic; ``seed`` unused.
 

@@ -24,15 +24,15 @@ import time
 
 import numpy as np
 
-from .discretise import discretise
-from .matching import Matching
-from .memory_budget import budgeted
-from .memory_models import pose_refine_memory
-from .options import check_count, check_problem, check_range, rng_from_seed
-from .prior import PRIOR_FIELDS, check_prior_options, prior_likelihood, require_prior
-from .problem import Problem
-from .result import finish
-from .rigid2d import consensus_translation, robust_rigid_2d
+from matchers.blocks.memory_models import pose_refine_memory
+from matchers.blocks.prior import PRIOR_FIELDS, check_prior_options, prior_likelihood, require_prior
+from matchers.blocks.rigid2d import consensus_translation, robust_rigid_2d
+from matchers.core.discretise import discretise
+from matchers.core.matching import Matching
+from matchers.core.memory_budget import budgeted
+from matchers.core.options import check_count, check_problem, check_range, rng_from_seed
+from matchers.core.problem import Problem
+from matchers.core.result import finish
 
 
 def refined_prior(
@@ -97,7 +97,7 @@ def pose_likelihood(
     problem: Problem, matcher: str, spread: float, gate: float, refine: bool = False
 ) -> tuple[np.ndarray, dict]:
     """(n, m) prior likelihood for ``matcher`` (checked options ``spread``, ``gate``): as
-    stated (:func:`~matchers.prior.prior_likelihood`) or, with ``refine``, after removing the
+    stated (:func:`~matchers.blocks.prior.prior_likelihood`) or, with ``refine``, after removing the
     relative rigid error with :func:`refined_prior`'s defaults. Info: ``gate_m`` and, refined,
     the refinement's info. ValueError naming world1/world_sigma if the prior is missing."""
     spread, gate = check_prior_options(spread, gate)

@@ -7,15 +7,15 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .matching import Matching
-from .memory_budget import budgeted
-from .memory_models import tensor_matcher
-from .options import check_count, check_problem, check_range, rng_from_seed
-from .problem import Problem
-from .result import finish, max_normalised
-from .sinkhorn import sinkhorn
-from .sparse_tensor import SparseTensor
-from .tensor_build import MAX_ENTRIES, resolve_tensor
+from matchers.blocks.memory_models import tensor_matcher
+from matchers.blocks.sinkhorn import sinkhorn
+from matchers.core.matching import Matching
+from matchers.core.memory_budget import budgeted
+from matchers.core.options import check_count, check_problem, check_range, rng_from_seed
+from matchers.core.problem import Problem
+from matchers.core.result import finish, max_normalised
+from matchers.hypergraph.sparse_tensor import SparseTensor
+from matchers.hypergraph.tensor_build import MAX_ENTRIES, resolve_tensor
 
 
 def reweighted_jump(x: np.ndarray, n: int, m: int, beta: float, sinkhorn_iter: int) -> np.ndarray:
@@ -103,11 +103,11 @@ def rrwhm(
     """RRWHM on the third-order tensor, then Hungarian.
 
     Tensor options (every hypergraph matcher): ``tensor`` "paper" | "duchenne" | a prebuilt
-    :class:`~matchers.sparse_tensor.SparseTensor`; ``triangles``, ``neighbours``, ``sigma``
+    :class:`~matchers.hypergraph.sparse_tensor.SparseTensor`; ``triangles``, ``neighbours``, ``sigma``
     override the recipe's sampled-triangle count, k-NN count and bandwidth;
     ``max_tensor_entries`` (10^6; None = no cap) bounds triangles x neighbours, keeping the
     best-ranked entries — it binds only above n*m = 1000 with the defaults
-    (:func:`~matchers.tensor_build.build_tensor`); ``seed`` drives the triangle sampling.
+    (:func:`~matchers.hypergraph.tensor_build.build_tensor`); ``seed`` drives the triangle sampling.
     Walk options (reference defaults): ``jump`` 0.8 (c = 0.2 on the walk), ``beta`` 30,
     ``max_iter`` 300, ``tol`` 1e-6 (squared L2 change), ``sinkhorn_iter`` 100 (our cap).
     Scores: the final distribution divided by its maximum; all zero for an empty tensor.

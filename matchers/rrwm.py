@@ -7,15 +7,15 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from .indexing import conflict_mask
-from .matching import Matching
-from .memory_budget import budgeted
-from .memory_models import pairwise_matcher
-from .options import check_count, check_problem, check_range, rng_from_seed
-from .pairwise import NEIGHBOURS, resolve_affinity
-from .problem import Problem
-from .result import finish, max_normalised
-from .sinkhorn import sinkhorn
+from matchers.blocks.memory_models import pairwise_matcher
+from matchers.blocks.pairwise import NEIGHBOURS, resolve_affinity
+from matchers.blocks.sinkhorn import sinkhorn
+from matchers.core.indexing import conflict_mask
+from matchers.core.matching import Matching
+from matchers.core.memory_budget import budgeted
+from matchers.core.options import check_count, check_problem, check_range, rng_from_seed
+from matchers.core.problem import Problem
+from matchers.core.result import finish, max_normalised
 
 
 def reweighted_walk(
@@ -101,7 +101,7 @@ def rrwm(
     zero_conflicts: bool = True,
     sinkhorn_iter: int = 100,
 ) -> Matching:
-    """RRWM on the pairwise affinity (:func:`~matchers.pairwise.resolve_affinity`: ``sigma2``
+    """RRWM on the pairwise affinity (:func:`~matchers.blocks.pairwise.resolve_affinity`: ``sigma2``
     0.5 or relative ``sigma_scale``, ``pairwise`` "positions" | "image", as for
     :func:`matchers.sm.sm`; dense up to ``affinity_neighbours`` (500) partners per candidate match,
     sparse beyond; or a precomputed dense or scipy-sparse ``affinity`` in the a = i*m + j

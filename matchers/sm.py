@@ -7,13 +7,13 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from .matching import Matching
-from .memory_budget import budgeted
-from .memory_models import pairwise_matcher
-from .options import check_count, check_problem, check_range, rng_from_seed
-from .pairwise import NEIGHBOURS, resolve_affinity
-from .problem import Problem
-from .result import finish, max_normalised
+from matchers.blocks.memory_models import pairwise_matcher
+from matchers.blocks.pairwise import NEIGHBOURS, resolve_affinity
+from matchers.core.matching import Matching
+from matchers.core.memory_budget import budgeted
+from matchers.core.options import check_count, check_problem, check_range, rng_from_seed
+from matchers.core.problem import Problem
+from matchers.core.result import finish, max_normalised
 
 
 def spectral_vector(
@@ -57,7 +57,7 @@ def sm(
     """Spectral Matching: principal eigenvector of the pairwise affinity M, then Hungarian.
 
     Options: ``affinity`` — a precomputed (nm, nm) matrix in the a = i*m + j convention
-    (default: :func:`~matchers.pairwise.pairwise_affinity` with ``sigma2``, 0.5, in squared
+    (default: :func:`~matchers.blocks.pairwise.pairwise_affinity` with ``sigma2``, 0.5, in squared
     position units, or ``sigma_scale``, the kernel width sigma as a multiple of the problem's
     median within-view distance; ``pairwise`` "positions" (default) or "image" — edge lengths
     between box centres, pixels1/pixels2); ``max_iter`` (200) and ``tol`` (1e-8) of the power

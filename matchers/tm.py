@@ -6,17 +6,17 @@ import time
 
 import numpy as np
 
-from .jit import njit
-from .matching import Matching
-from .memory_budget import budgeted
-from .memory_models import tensor_matcher
-from .numpy_sum import reproducible, row_sum_jit
-from .options import check_count, check_problem, rng_from_seed
-from .problem import Problem
-from .result import finish, max_normalised
-from .sparse_tensor import SparseTensor
-from .tensor_build import MAX_ENTRIES, resolve_tensor
-from .tensor_product import FUSE_AFTER
+from matchers.blocks.memory_models import tensor_matcher
+from matchers.core.jit import njit
+from matchers.core.matching import Matching
+from matchers.core.memory_budget import budgeted
+from matchers.core.numpy_sum import reproducible, row_sum_jit
+from matchers.core.options import check_count, check_problem, rng_from_seed
+from matchers.core.problem import Problem
+from matchers.core.result import finish, max_normalised
+from matchers.hypergraph.sparse_tensor import SparseTensor
+from matchers.hypergraph.tensor_build import MAX_ENTRIES, resolve_tensor
+from matchers.hypergraph.tensor_product import FUSE_AFTER
 
 NORMALISATIONS = ("doubly", "rows", "global")
 
@@ -91,7 +91,7 @@ _doubly_kernel_jit = njit(_doubly_kernel) if row_sum_jit is not None else None
 
 def doubly_positive(mat: np.ndarray, rounds: int) -> np.ndarray:
     """:func:`_doubly_positive`, compiled when numba is available and the matrix has 2 to
-    :data:`~matchers.numpy_sum.PAIRWISE_BLOCK` columns (numpy's summation order is reproduced
+    :data:`~matchers.core.numpy_sum.PAIRWISE_BLOCK` columns (numpy's summation order is reproduced
     only there); bit-identical either way. In place; returns ``mat``."""
     if _doubly_kernel_jit is None or not reproducible(mat):
         return _doubly_positive(mat, rounds)

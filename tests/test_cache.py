@@ -7,9 +7,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from eval import cache as cache_module
-from eval.cache import ResultCache
-from eval.tasks import MatcherSpec, PairOutcome, RunResult, RunSpec
+from eval.core import cache as cache_module
+from eval.core.cache import ResultCache
+from eval.core.tasks import MatcherSpec, PairOutcome, RunResult, RunSpec
 
 BASE = RunSpec(
     "ab" * 32, MatcherSpec.of("maximin", alpha=0.3), seed=0, noise_rate=None, code_version="c0de"
@@ -61,8 +61,8 @@ def test_code_version_changes_when_a_source_file_changes(tmp_path, monkeypatch):
 
 def test_real_code_version_covers_matchers_detection_and_tasks():
     names = [name for name, _ in cache_module._source_files()]
-    assert "matchers/discretise.py" in names
-    assert "eval/tasks.py" in names and "eval/thinning.py" in names
+    assert "matchers/core/discretise.py" in names
+    assert "eval/core/tasks.py" in names and "eval/core/thinning.py" in names
     assert any(n.startswith("cadsim/dataset/") for n in names)
 
 

@@ -10,13 +10,14 @@ import pandas as pd
 import pytest
 from test_runner import fake_matcher, make_datasets
 
-from eval import calibration, tasks
-from eval.cache import ResultCache
-from eval.commands.evaluate import evaluate, open_entry
-from eval.executor import SerialExecutor
-from eval.runner import Runner
-from eval.tasks import MatcherSpec, PairOutcome, RunResult, RunSpec
-from matchers.discretise import discretise
+from eval.core import tasks
+from eval.core.cache import ResultCache
+from eval.core.executor import SerialExecutor
+from eval.core.runner import Runner
+from eval.core.tasks import MatcherSpec, PairOutcome, RunResult, RunSpec
+from eval.protocol import calibration
+from eval.studies.evaluation import evaluate, open_entry
+from matchers.core.discretise import discretise
 
 
 def _outcome(index, sim_seed, scores, gt, assigned=None):

@@ -234,7 +234,7 @@ def test_a_full_disk_names_the_file_and_leaves_the_previous_result(tmp_path, mon
     import pandas as pd
 
     from cadsim.dataset import atomic_writer
-    from eval.result_files import write_csv, write_text
+    from eval.core.result_files import write_csv, write_text
 
     table = tmp_path / "table1.md"
     write_text(table, "the previous table\n")

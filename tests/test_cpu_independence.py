@@ -149,9 +149,10 @@ def test_a_small_reproduce_gives_the_same_tables_on_every_dispatch_level(tmp_pat
             assert simd["disabled"] == avx512_features()
             assert not set(simd["found"]) & set(avx512_features())
     # the plain variant runs in this process's environment (which may itself disable some)
-    assert record["machine"]["numpy_simd"]["disabled"] == os.environ.get(
-        "NPY_DISABLE_CPU_FEATURES", ""
-    ).split()
+    assert (
+        record["machine"]["numpy_simd"]["disabled"]
+        == os.environ.get("NPY_DISABLE_CPU_FEATURES", "").split()
+    )
 
 
 def _checksums(record: dict) -> list[tuple]:

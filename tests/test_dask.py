@@ -21,11 +21,11 @@ from cadsim.generation.executor import report_progress  # noqa: E402
 from cadsim.generation.executors import SCHEDULER_ENV, make_executor  # noqa: E402
 from cadsim.generation.local_executor import SerialExecutor  # noqa: E402
 from cadsim.generation.pipeline import generate_dataset  # noqa: E402
-from eval.cache import ResultCache  # noqa: E402
-from eval.commands.evaluate import open_entry  # noqa: E402
 from eval.commands.sweep_noise import sweep  # noqa: E402
-from eval.runner import Runner, requests_for  # noqa: E402
-from eval.tasks import MatcherSpec, RunTask, execute  # noqa: E402
+from eval.core.cache import ResultCache  # noqa: E402
+from eval.core.runner import Runner, requests_for  # noqa: E402
+from eval.core.tasks import MatcherSpec, RunTask, execute  # noqa: E402
+from eval.studies.evaluation import open_entry  # noqa: E402
 
 pytestmark = [pytest.mark.slow, pytest.mark.render]
 

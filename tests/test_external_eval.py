@@ -12,9 +12,6 @@ import pytest
 from scipy.stats import spearmanr
 from test_generate_fakes import FAKE_STAGES, FakeScenario
 
-from eval.agreement import agreement, pair_f1, paper_f1, spearman_rows, write_agreement
-from eval.cache import ResultCache
-from eval.commands.evaluate import open_entry
 from eval.commands.sweep_localisation import (
     COLUMNS,
     localisation_of,
@@ -22,13 +19,16 @@ from eval.commands.sweep_localisation import (
     sweep_localisation,
     write_sweep,
 )
-from eval.executor import SerialExecutor
-from eval.external import DMGM_PUBLISHED, best_pooled, write_table_external
-from eval.figures import write_fig_localisation
-from eval.metrics import summarise_pooled
-from eval.runner import Runner, requests_for
-from eval.tables import write_table1
-from eval.tasks import MatcherSpec, RunSpec
+from eval.core.cache import ResultCache
+from eval.core.executor import SerialExecutor
+from eval.core.runner import Runner, requests_for
+from eval.core.tasks import MatcherSpec, RunSpec
+from eval.protocol.metrics import summarise_pooled
+from eval.report.figures import write_fig_localisation
+from eval.report.tables import write_table1
+from eval.studies.agreement import agreement, pair_f1, paper_f1, spearman_rows, write_agreement
+from eval.studies.evaluation import open_entry
+from eval.studies.external import DMGM_PUBLISHED, best_pooled, write_table_external
 
 
 def _per_pair(rows: list[tuple]) -> pd.DataFrame:

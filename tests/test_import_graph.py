@@ -6,6 +6,8 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("cadsim", "eval", "matchers")
 
@@ -130,3 +132,46 @@ def test_sources_import_no_other_source():
             own = module.split(".")[2]
             others = {d for d in deps if d.count(".") >= 3 and d.split(".")[2] in kinds - {own}}
             assert not others, f"{module} imports another source: {sorted(others)}"
+
+
+def folder_graph(package: str) -> dict[str, set[str]]:
+    """Folder -> the folders its modules import, inside `package` (a module counts for the folder
+    it sits in, the package root being a folder of its own; ``__init__.py`` re-exports aside)."""
+    modules = _modules()
+    graph: dict[str, set[str]] = {}
+
+    def folder(name: str) -> str:
+        path = modules[name]
+        return ".".join(path.relative_to(ROOT).parent.parts)
+
+    for name, deps in import_graph().items():
+        if not name.startswith(package) or modules[name].name == "__init__.py":
+            continue
+        own = folder(name)
+        graph.setdefault(own, set())
+        for dep in deps:
+            if dep.startswith(package) and modules[dep].name != "__init__.py":
+                if folder(dep) != own:
+                    graph[own].add(folder(dep))
+    return graph
+
+
+@pytest.mark.parametrize("package", ["matchers", "eval"])
+def test_no_loop_between_the_folders_of_a_package(package):
+    cycle = find_cycle(folder_graph(package))
+    assert cycle is None, "folder loop: " + " -> ".join(cycle)
+
+
+def test_algorithms_import_blocks_never_the_reverse():
+    graph = folder_graph("matchers")
+    for sub in ("matchers.core", "matchers.hypergraph", "matchers.blocks"):
+        assert "matchers" not in graph.get(sub, set()), f"{sub} imports an algorithm"
+    assert "matchers.hypergraph" not in graph["matchers.core"]
+    assert "matchers.blocks" not in graph["matchers.hypergraph"]
+
+
+def test_the_algorithms_are_what_the_matchers_folder_shows():
+    top = sorted(p.name for p in (ROOT / "matchers").glob("*.py"))
+    below = [p for p in (ROOT / "matchers").glob("*/*.py") if p.name != "__init__.py"]
+    assert len(top) <= 24 and len(below) >= 8, (top, len(below))
+    assert len(list((ROOT / "eval").glob("*.py"))) <= 8

@@ -1,4 +1,4 @@
-"""The compiled kernels (matchers.jit) agree with the numpy code they replace, and the matchers give
+"""The compiled kernels (matchers.core.jit) agree with the numpy code they replace, and the matchers give
 the same matchings with and without them.
 
 Kernels that only add and multiply follow numpy's summation order and are compared bit for bit.
@@ -12,8 +12,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from matchers import Problem, get, sinkhorn, sparse_tensor, tensor_build, tensor_product, tm
-from matchers.tensor_build import build_tensor
+from matchers import Problem, get, tm
+from matchers.blocks import sinkhorn
+from matchers.hypergraph import sparse_tensor, tensor_build, tensor_product
+from matchers.hypergraph.tensor_build import build_tensor
 
 RTOL = 1e-12  # compiled (C library exp) vs numpy (possibly AVX-512 exp): a few ulp at most
 
@@ -161,7 +163,7 @@ def test_a_numba_that_fails_to_import_is_reported_once_and_numpy_takes_over(monk
     import builtins
     import sys
 
-    from matchers import jit
+    from matchers.core import jit
 
     real_import = builtins.__import__
 
@@ -175,7 +177,7 @@ def test_a_numba_that_fails_to_import_is_reported_once_and_numpy_takes_over(monk
     monkeypatch.delitem(sys.modules, "numba", raising=False)
     jit._numba.cache_clear()
     try:
-        with caplog.at_level("WARNING", logger="matchers.jit"):
+        with caplog.at_level("WARNING", logger="matchers.core.jit"):
             assert jit.njit(lambda x: x) is None and jit.njit(lambda x: x) is None
         warnings = [r for r in caplog.records if "failed to import" in r.getMessage()]
         assert len(warnings) == 1 and "Numba needs NumPy 1.x" in warnings[0].getMessage()

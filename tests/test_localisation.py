@@ -22,7 +22,7 @@ from cadsim.sensing.localisation import (
     PoseError,
     perturbed_world,
 )
-from matchers.registry import get
+from matchers.core.registry import get
 
 REPO = Path(__file__).resolve().parents[1]
 

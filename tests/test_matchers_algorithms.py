@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from matchers import Problem, get
-from matchers.sparse_tensor import SparseTensor
+from matchers.hypergraph.sparse_tensor import SparseTensor
 
 ALL = ["appearance", "bcagm", "hgm", "maximin", "mos", "rrwhm", "rrwm", "sm", "tm"]
 HYPER = ["bcagm", "hgm", "maximin", "mos", "rrwhm", "tm"]

@@ -5,12 +5,12 @@ import numpy as np
 import pytest
 
 from matchers import Problem
-from matchers.appearance_similarity import appearance_similarity
-from matchers.discretise import discretise
-from matchers.indexing import conflict_mask, from_column_major, match_index, to_column_major
-from matchers.pairwise import pairwise_affinity
-from matchers.result import max_normalised
-from matchers.sinkhorn import sinkhorn
+from matchers.blocks.appearance_similarity import appearance_similarity
+from matchers.blocks.pairwise import pairwise_affinity
+from matchers.blocks.sinkhorn import sinkhorn
+from matchers.core.discretise import discretise
+from matchers.core.indexing import conflict_mask, from_column_major, match_index, to_column_major
+from matchers.core.result import max_normalised
 
 
 def test_appearance_similarity_is_clipped_cosine():

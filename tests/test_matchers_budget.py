@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from matchers import Problem, ProblemTooLarge, get
-from matchers.appearance_similarity import appearance_similarity
-from matchers.memory_budget import BUDGET_ENV, budget_mb
+from matchers.blocks.appearance_similarity import appearance_similarity
+from matchers.core.memory_budget import BUDGET_ENV, budget_mb
 
 
 def scene(n: int, seed: int = 0) -> Problem:
@@ -108,7 +108,7 @@ def _traced_peak(fn, problem) -> int:
 
 
 def test_every_registered_matcher_carries_a_memory_estimate():
-    from matchers.registry import available
+    from matchers.core.registry import available
 
     missing = [
         name for name in available() if not callable(getattr(get(name), "memory_bytes", None))
@@ -117,7 +117,7 @@ def test_every_registered_matcher_carries_a_memory_estimate():
 
 
 def _all_matchers():
-    from matchers.registry import available
+    from matchers.core.registry import available
 
     return available()
 
@@ -185,7 +185,7 @@ def test_a_1024_mb_budget_holds_at_300_v_300(name, monkeypatch):
 
 
 def test_a_registered_matcher_is_held_to_its_estimate(monkeypatch):
-    from matchers import registry
+    from matchers.core import registry
 
     monkeypatch.setattr(registry, "_registered", dict(registry._registered))
     monkeypatch.setattr(registry, "_registered_spaces", dict(registry._registered_spaces))

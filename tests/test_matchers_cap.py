@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from matchers import Problem, SparseTensor, build_tensor, get, tensor_build
-from matchers.pairwise import pairwise_affinity, resolve_affinity, sparse_pairwise_affinity
-from matchers.tensor_build import MAX_ENTRIES
-from matchers.tensor_product import FUSE_AFTER
+from matchers import Problem, SparseTensor, build_tensor, get
+from matchers.blocks.pairwise import pairwise_affinity, resolve_affinity, sparse_pairwise_affinity
+from matchers.hypergraph import tensor_build
+from matchers.hypergraph.tensor_build import MAX_ENTRIES
+from matchers.hypergraph.tensor_product import FUSE_AFTER
 
 
 def _problem(n, m, dim=3, seed=0, noise=0.05, features=True):
@@ -188,7 +189,7 @@ def test_pairwise_matchers_go_sparse_above_500_partners():
 
 
 def test_fused_product_is_bit_identical_to_bincount(monkeypatch):
-    monkeypatch.setattr("matchers.sparse_tensor.COMPILED", False)  # the numpy paths
+    monkeypatch.setattr("matchers.hypergraph.sparse_tensor.COMPILED", False)  # the numpy paths
     problem, _ = _problem(12, 13, seed=11)
     tensor = build_tensor(problem, "paper", 0)
     again = build_tensor(problem, "paper", 0)

@@ -5,7 +5,7 @@ import pytest
 
 from matchers import Problem, get
 from matchers.consistency import consistency_weights, consistent_set, greedy_cliques
-from matchers.indexing import conflict_mask, match_index
+from matchers.core.indexing import conflict_mask, match_index
 
 
 def planted(seed, inliers=8, outliers1=6, outliers2=5, noise=0.02):
@@ -53,7 +53,7 @@ def test_consistency_ignores_features_and_the_prior():
 
 def test_relative_and_absolute_tolerance_agree():
     problem, _ = planted(2)
-    from matchers.scale import median_spacing
+    from matchers.core.scale import median_spacing
 
     spacing = median_spacing(problem.points1, problem.points2)
     rel = get("consistency")(problem, tolerance_scale=0.07)

@@ -6,9 +6,9 @@ import pytest
 
 from matchers import Problem, SparseTensor, get
 from matchers.bcagm import bcagm_solve, best_assignment
+from matchers.blocks.sinkhorn import sinkhorn
 from matchers.hgm import nearest_substochastic_kl
 from matchers.maximin import appearance_jump, maximin_iterate, worst_case_tensor
-from matchers.sinkhorn import sinkhorn
 from matchers.tm import normalise_l2
 
 # 3 vs 3 objects, matches a = i*3 + j. Right matching (0,0),(1,1),(2,2) = matches 0, 4, 8;

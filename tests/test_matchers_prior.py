@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from matchers import Problem, get, requires
+from matchers.blocks.prior import prior_likelihood
+from matchers.blocks.rigid2d import procrustes_2d, robust_rigid_2d, rotation
 from matchers.maximin import maximin
-from matchers.prior import prior_likelihood
-from matchers.rigid2d import procrustes_2d, robust_rigid_2d, rotation
 
 PRIOR = ["pose", "pose_refine", "pose_appearance", "maximin_pose"]
 
@@ -237,7 +237,7 @@ def test_maximin_first_order_hook_is_neutral_and_maximin_pose_uses_the_prior():
     rng = np.random.default_rng(7)
     f1, f2 = rng.random((len(c1), 5)), rng.random((len(c2), 5))  # uninformative appearance
     problem = Problem(c1, c2, f1, f2, world1=w1, world2=w2 + [1.0, 1.0, 0.0], world_sigma=1.0)
-    from matchers.appearance_similarity import appearance_similarity
+    from matchers.blocks.appearance_similarity import appearance_similarity
 
     same = maximin(problem, first_order=appearance_similarity(problem))
     np.testing.assert_array_equal(same.scores, maximin(problem).scores)

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 import matchers
-from matchers import Matching, Problem, available, get, register, registry
+from matchers import Matching, Problem, available, get, register
+from matchers.core import registry
 
 
 def test_available_lists_the_builtins_sorted():

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from matchers import Problem, get
-from matchers.pairwise import kernel_sigma2, pairwise_affinity
-from matchers.scale import median_spacing
+from matchers.blocks.pairwise import kernel_sigma2, pairwise_affinity
+from matchers.core.scale import median_spacing
 
 PAIRWISE = ["sm", "rrwm", "mos"]
 

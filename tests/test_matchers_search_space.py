@@ -6,8 +6,9 @@ import inspect
 import numpy as np
 import pytest
 
-from matchers import Problem, available, get, register, registry, requires, search_space
-from matchers.search_spaces import MAX_CONFIGS, check_search_space
+from matchers import Problem, available, get, register, requires, search_space
+from matchers.core import registry
+from matchers.core.search_spaces import MAX_CONFIGS, check_search_space
 
 # Options that hold a length or a kernel width: every one a matcher has must be tunable, and a
 # grid may only set it in a form relative to the problem (never an absolute length).

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from matchers import Problem, SparseTensor, build_tensor
-from matchers.triangles import (
+from matchers.hypergraph.triangles import (
     all_triangles,
     angle_cosines,
     ordered_descriptors,

@@ -1,10 +1,11 @@
-"""Reusing a problem's tensor search across hypergraph matchers (matchers.tensor_sharing) changes
+"""Reusing a problem's tensor search across hypergraph matchers (matchers.hypergraph.tensor_sharing) changes
 no result and no reported time, and only applies inside the block."""
 
 import numpy as np
 import pytest
 
-from matchers import Problem, build_tensor, get, shared_tensors, tensor_sharing
+from matchers import Problem, build_tensor, get, shared_tensors
+from matchers.hypergraph import tensor_sharing
 
 HYPERGRAPH = ("tm", "hgm", "bcagm", "rrwhm", "mos", "maximin")
 
@@ -28,7 +29,7 @@ def _builds(monkeypatch) -> list:
 
         return original(problem, rng, options, counted_build)
 
-    monkeypatch.setattr("matchers.tensor_build.build_or_reuse", counted)
+    monkeypatch.setattr("matchers.hypergraph.tensor_build.build_or_reuse", counted)
     return calls
 
 

@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from eval.metrics import (
+from eval.protocol.metrics import (
     RankedAssignments,
     average_precision,
     candidate_thresholds,

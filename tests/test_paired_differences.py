@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from eval.paired_differences import episode_bootstrap, paired_differences
+from eval.protocol.paired_differences import episode_bootstrap, paired_differences
 
 
 def _per_pair(true_diff: float, episodes: int, per_episode: int, seed: int = 0) -> pd.DataFrame:

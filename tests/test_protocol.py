@@ -8,14 +8,14 @@ import pandas as pd
 import pytest
 from frame_pair_fakes import make_dataset
 
-from eval import tasks
-from eval.cache import ResultCache
-from eval.commands.evaluate import evaluate, open_entry
-from eval.executor import SerialExecutor
-from eval.protocol import paper_spec, variant_path
-from eval.runner import Runner
-from eval.tables import write_tables
-from eval.tasks import MatcherSpec
+from eval.core import tasks
+from eval.core.cache import ResultCache
+from eval.core.executor import SerialExecutor
+from eval.core.runner import Runner
+from eval.core.tasks import MatcherSpec
+from eval.protocol.variants import paper_spec, variant_path
+from eval.report.tables import write_tables
+from eval.studies.evaluation import evaluate, open_entry
 
 
 @pytest.fixture

@@ -10,14 +10,14 @@ import time
 import numpy as np
 import pytest
 
-from eval import tasks
-from eval.cache import ResultCache
-from eval.executor import LocalProcessExecutor, SerialExecutor
-from eval.runner import RunFailed, Runner, requests_for
-from eval.tasks import MatcherSpec
-from matchers.discretise import discretise
-from matchers.matching import Matching
-from matchers.problem import Problem
+from eval.core import tasks
+from eval.core.cache import ResultCache
+from eval.core.executor import LocalProcessExecutor, SerialExecutor
+from eval.core.runner import RunFailed, Runner, requests_for
+from eval.core.tasks import MatcherSpec
+from matchers.core.discretise import discretise
+from matchers.core.matching import Matching
+from matchers.core.problem import Problem
 
 
 class FakePair:
@@ -225,9 +225,9 @@ def test_a_dead_worker_fails_its_tasks_and_the_pool_recovers():
 
 
 def test_a_seed_free_matcher_runs_once_for_every_seed(fake_world, tmp_path, monkeypatch):
-    import matchers.registry
+    import matchers.core.registry
 
-    monkeypatch.setattr(matchers.registry, "deterministic", lambda name: name == "fixed")
+    monkeypatch.setattr(matchers.core.registry, "deterministic", lambda name: name == "fixed")
     runner = _runner(tmp_path)
     data = [("data/cad", "sum-data/cad-100")]
     seeds = [0, 1, 2, 3]
@@ -244,7 +244,7 @@ def test_a_seed_free_matcher_runs_once_for_every_seed(fake_world, tmp_path, monk
 
 
 def test_runs_of_a_seed_share_a_task_split_only_to_keep_every_worker_busy():
-    from eval.runner import _group
+    from eval.core.runner import _group
 
     data = [("data/cad", "sum")]
     rates = [0.0, 0.001, 0.01, 0.1, 0.3]
@@ -277,7 +277,7 @@ def test_runs_of_a_seed_share_a_task_split_only_to_keep_every_worker_busy():
 
 
 def test_a_task_reports_its_runs_pair_by_pair_and_the_bar_counts_each_run_once(fake_world):
-    from eval.runner import _group, _TaskProgress
+    from eval.core.runner import _group, _TaskProgress
 
     reqs = requests_for(
         [("data/cad", "sum-data/cad-100")], [MatcherSpec("a"), MatcherSpec("b")], [0], [0.0, 0.1]

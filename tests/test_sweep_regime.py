@@ -8,14 +8,16 @@ import pandas as pd
 import pytest
 from frame_pair_fakes import make_dataset
 
-from eval import calibration, regime_cards, tasks
-from eval.cache import ResultCache
-from eval.commands.evaluate import open_entry
 from eval.commands.sweep_regime import SweepResult, parse_keep, sweep_regime, write_sweep
-from eval.crossovers import crossings, find_crossovers
-from eval.executor import SerialExecutor
-from eval.runner import Runner
-from eval.tasks import MatcherSpec
+from eval.core import tasks
+from eval.core.cache import ResultCache
+from eval.core.executor import SerialExecutor
+from eval.core.runner import Runner
+from eval.core.tasks import MatcherSpec
+from eval.protocol import calibration
+from eval.protocol.crossovers import crossings, find_crossovers
+from eval.studies import regime_cards
+from eval.studies.evaluation import open_entry
 
 
 @pytest.fixture

@@ -8,7 +8,7 @@ import pytest
 
 from cadsim.dataset.detections import ViewDetections
 from cadsim.dataset.reader import FramePair
-from eval.thinning import PairIdentity, kept_rows, noncovisible_share, thin_pair
+from eval.core.thinning import PairIdentity, kept_rows, noncovisible_share, thin_pair
 
 LEVELS = (1.0, 0.75, 0.5, 0.25, 0.0)
 

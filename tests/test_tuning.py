@@ -10,15 +10,16 @@ import pandas as pd
 import pytest
 from frame_pair_fakes import make_dataset
 
-from eval import calibration, tasks, tuning
-from eval.cache import ResultCache
-from eval.commands.evaluate import chosen_specs, evaluate, open_entry
-from eval.executor import SerialExecutor
-from eval.runner import Runner
-from eval.tasks import MatcherSpec
-from matchers.discretise import discretise
-from matchers.matching import Matching
-from matchers.problem import Problem
+from eval.core import tasks
+from eval.core.cache import ResultCache
+from eval.core.executor import SerialExecutor
+from eval.core.runner import Runner
+from eval.core.tasks import MatcherSpec
+from eval.protocol import calibration, tuning
+from eval.studies.evaluation import chosen_specs, evaluate, open_entry
+from matchers.core.discretise import discretise
+from matchers.core.matching import Matching
+from matchers.core.problem import Problem
 
 
 def noisy_matcher(problem: Problem, seed: int = 0, threshold=None, blur: float = 1.0) -> Matching:

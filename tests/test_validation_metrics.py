@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from eval.metrics import metrics_at_thresholds
+from eval.protocol.metrics import metrics_at_thresholds
 from eval.validation.coid_synthetic import FramePair, calibrate_threshold, ranked
 from eval.validation.synthetic import accuracy
 

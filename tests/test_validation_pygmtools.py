@@ -7,8 +7,8 @@ import pygmtools as pygm
 import pytest
 
 from matchers import Problem, get
-from matchers.indexing import to_column_major
-from matchers.pairwise import pairwise_affinity
+from matchers.blocks.pairwise import pairwise_affinity
+from matchers.core.indexing import to_column_major
 
 pygm.set_backend("numpy")
 

@@ -217,7 +217,7 @@ class FramePair:
         and features of both views, the box centres in pixels (``pixels1``/``pixels2``, for
         matchers that compare objects in the image), and the localisation prior (world positions
         + stated sigma, :meth:`prior`) when the record has one."""
-        from matchers.problem import Problem
+        from matchers.core.problem import Problem
 
         prior = self.prior()
         world1, world2, sigma = (None, None, None) if prior is None else prior

@@ -28,7 +28,7 @@ REGIME_KEYS = (
 
 def cosine_similarity(f1: np.ndarray, f2: np.ndarray) -> np.ndarray:
     """(n, m) cosine similarity of the rows of ``f1`` (n, d) and ``f2`` (m, d), clipped to [0, 1];
-    a zero row has similarity 0 with everything (as ``matchers.appearance_similarity``)."""
+    a zero row has similarity 0 with everything (as ``matchers.blocks.appearance_similarity``)."""
     a = np.asarray(f1, float)
     b = np.asarray(f2, float)
     if a.size == 0 or b.size == 0:

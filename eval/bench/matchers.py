@@ -17,7 +17,7 @@ from eval.bench import (
 
 
 def tensor_section(args: argparse.Namespace) -> list[Target]:
-    from matchers.tensor_build import build_tensor
+    from matchers.hypergraph.tensor_build import build_tensor
 
     print(_row(["n = m", "recipe", "entries", "MB stored", "build s", "peak RSS MB"]))
     print("|---|---|---|---|---|---|")
@@ -45,7 +45,7 @@ def tensor_section(args: argparse.Namespace) -> list[Target]:
 def matchers_section(args: argparse.Namespace) -> list[Target]:
     from eval.validation.matcher_options import HYPERGRAPH_MATCHERS
     from matchers import available, get
-    from matchers.tensor_build import build_tensor
+    from matchers.hypergraph.tensor_build import build_tensor
 
     names = args.matchers or available()
     print(_row(["n = m", "tensor build s", *[f"{name} s" for name in names]]))
@@ -73,8 +73,8 @@ def targets_section(args: argparse.Namespace) -> list[Target]:
 
     from eval.bench.scaling import run_point
     from matchers import get
-    from matchers.indexing import to_column_major
-    from matchers.pairwise import pairwise_affinity
+    from matchers.blocks.pairwise import pairwise_affinity
+    from matchers.core.indexing import to_column_major
 
     pygm.set_backend("numpy")
     targets = []

@@ -32,8 +32,8 @@ def _empty(item: int) -> int:
 
 
 def _timed_sweep(executor, requests, cache_dir: Path):
-    from eval.cache import ResultCache
-    from eval.runner import Runner
+    from eval.core.cache import ResultCache
+    from eval.core.runner import Runner
 
     runner = Runner(ResultCache(cache_dir), executor, progress=False)
     t0 = time.perf_counter()
@@ -103,8 +103,8 @@ def measure_scaleout(
     from cadsim.dataset import Dataset
     from cadsim.generation.local_executor import LocalProcessExecutor, SerialExecutor
     from cadsim.generation.pipeline import generate_dataset
-    from eval.commands.evaluate import parse_matchers
-    from eval.runner import requests_for
+    from eval.core.runner import requests_for
+    from eval.studies.evaluation import parse_matchers
 
     with tempfile.TemporaryDirectory(prefix="cadsim-scaleout-") as tmp:
         tmp = Path(tmp)

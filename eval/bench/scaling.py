@@ -49,8 +49,8 @@ def _call(name: str):
     import pygmtools as pygm
 
     from eval.bench import PYGM_RRWM_NATIVE
-    from matchers.indexing import to_column_major
-    from matchers.pairwise import pairwise_affinity
+    from matchers.blocks.pairwise import pairwise_affinity
+    from matchers.core.indexing import to_column_major
 
     pygm.set_backend("numpy")
 
@@ -179,7 +179,7 @@ def _score(kind: str, pairs: np.ndarray, truth: np.ndarray, n1: int, n2: int) ->
         from eval.validation.synthetic import accuracy
 
         return accuracy(pairs, truth)
-    from eval.metrics import pair_metrics
+    from eval.protocol.metrics import pair_metrics
 
     return float(pair_metrics(pairs, truth, n1, n2).f1)
 
@@ -292,7 +292,7 @@ def main(argv: list[str] | None = None) -> int:
         names = [m for m in args.matchers if m != PYGM]
         per_pair(names, args.pairs, 3)
     elif args.cap_accuracy:
-        from matchers.tensor_build import MAX_ENTRIES
+        from matchers.hypergraph.tensor_build import MAX_ENTRIES
 
         caps = [None if c == "none" else int(c) for c in args.caps or [MAX_ENTRIES, "none"]]
         cap_accuracy(

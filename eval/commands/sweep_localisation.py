@@ -7,7 +7,7 @@ nothing is re-rendered or re-detected; for one seed the error scales with s) and
 that run sees the same prior. τ is calibrated per sigma on the validation dataset re-drawn at
 the same sigma (a deployed system knows its stated uncertainty); the matchers' parameters are
 those ``DIR/thresholds.csv`` records (tuned when ``cadsim evaluate --tune`` ran); a matcher it
-lacks is tuned here on the validation dataset with the records' own prior (:mod:`eval.tuning`,
+lacks is tuned here on the validation dataset with the records' own prior (:mod:`eval.protocol.tuning`,
 seed 0; ``--no-tune``: its defaults). Writes ``localisation_sweep.csv`` (dataset, position_sigma_m, yaw_sigma_deg, matcher,
 f1_mean, f1_std: mean and sample std over runs of the per-run mean per-pair F1) and
 ``fig_localisation.png/.pdf``.
@@ -24,11 +24,15 @@ from pathlib import Path
 
 import pandas as pd
 
-from eval import tuning
-from eval.cache import ResultCache
-from eval.commands.evaluate import (
+from eval.commands.evaluate import add_runner_arguments
+from eval.core.cache import ResultCache
+from eval.core.executor import make_executor
+from eval.core.result_files import write_csv
+from eval.core.runner import Runner, requests_for
+from eval.core.tasks import MatcherSpec, RunResult
+from eval.protocol import tuning
+from eval.studies.evaluation import (
     DatasetEntry,
-    add_runner_arguments,
     as_named,
     calibrate_named,
     chosen_specs,
@@ -37,10 +41,6 @@ from eval.commands.evaluate import (
     score_runs,
     val_dirs,
 )
-from eval.executor import make_executor
-from eval.result_files import write_csv
-from eval.runner import Runner, requests_for
-from eval.tasks import MatcherSpec, RunResult
 
 DEFAULT_SIGMAS = (0.0, 0.5, 1.2, 2.5, 5.0)
 YAW_PER_METRE = 0.2 / 1.2
@@ -197,7 +197,7 @@ def run(args: argparse.Namespace) -> int:
         named = sweep_specs(args.out, entry, matchers, runner, args.tune)
         rows = sweep_localisation(entry, named, range(args.runs), sigmas, runner, args.pairs)
     write_sweep(args.out, rows)
-    from eval.figures import write_fig_localisation
+    from eval.report.figures import write_fig_localisation
 
     for path in write_fig_localisation(args.out):
         print(path)

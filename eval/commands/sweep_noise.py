@@ -18,11 +18,16 @@ import pandas as pd
 
 from cadsim.cli import int_in
 from cadsim.limits import MAX_NOISE_RATE, MAX_PAIRS
-from eval.cache import ResultCache
-from eval.commands.evaluate import (
+from eval.commands.evaluate import add_runner_arguments
+from eval.core.cache import ResultCache
+from eval.core.executor import make_executor
+from eval.core.result_files import write_csv
+from eval.core.runner import Runner
+from eval.core.tasks import MatcherSpec
+from eval.protocol.metrics import METRICS
+from eval.studies.evaluation import (
     DatasetEntry,
     Named,
-    add_runner_arguments,
     calibrate_entry,
     chosen_specs,
     open_entry,
@@ -31,11 +36,6 @@ from eval.commands.evaluate import (
     score_runs,
     val_dirs,
 )
-from eval.executor import make_executor
-from eval.metrics import METRICS
-from eval.result_files import write_csv
-from eval.runner import Runner
-from eval.tasks import MatcherSpec
 
 # Fig. 4's default x axis: σ = rate · d² (metres) — at 20 m depth, 0.12 m … 40 m. On CAD, 3e-4 has
 # no visible effect and ≥ 0.03 is severe (docs/evaluation.md).
@@ -133,7 +133,7 @@ def run(args: argparse.Namespace) -> int:
     with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(ResultCache(args.cache), executor)
         sweep(entry, matchers, range(args.runs), rates, runner, args.out, args.pairs)
-    from eval.figures import write_fig4
+    from eval.report.figures import write_fig4
 
     for path in write_fig4(args.out):
         print(path)

@@ -2,18 +2,18 @@
 against the share of non-covisible objects, from the dataset's natural share down to 0.
 
 At each keep level every non-covisible detection of every frame pair (validation and test alike)
-stays with that probability (:mod:`eval.thinning`: seeded per frame pair, nested levels), τ is
+stays with that probability (:mod:`eval.core.thinning`: seeded per frame pair, nested levels), τ is
 recalibrated on the thinned validation set, and the matchers run on the thinned test set. The
 matchers run with the parameters ``DIR/thresholds.csv`` records for this dataset (tuned when the
 evaluation was; else their defaults). Level 1 is the untouched dataset and shares its cached runs.
 
-Each run is its own thinning draw (the run's seed is the draw index, :mod:`eval.thinning`), so
+Each run is its own thinning draw (the run's seed is the draw index, :mod:`eval.core.thinning`), so
 ``--runs`` sets how many independent draws each level averages; ``f1_ci_low``/``f1_ci_high`` is the
 95 % interval of the level's mean F1 with episodes and runs resampled together
-(:mod:`eval.episode_draw_bootstrap`), and every crossover carries such an interval too.
+(:mod:`eval.protocol.episode_draw_bootstrap`), and every crossover carries such an interval too.
 
 Writes (rows of other datasets already there are kept, this dataset's replaced):
-``regime_sweep.csv`` (:data:`SWEEP_COLUMNS`), ``crossovers.csv`` (:mod:`eval.crossovers`) and
+``regime_sweep.csv`` (:data:`SWEEP_COLUMNS`), ``crossovers.csv`` (:mod:`eval.protocol.crossovers`) and
 ``fig_regime.png/.pdf``.
 """
 
@@ -26,12 +26,17 @@ from typing import NamedTuple
 
 import pandas as pd
 
-from eval import episode_draw_bootstrap as boot
-from eval.cache import ResultCache
-from eval.commands.evaluate import (
+from eval.commands.evaluate import add_runner_arguments
+from eval.core.cache import ResultCache
+from eval.core.executor import make_executor
+from eval.core.keyed_csv import upsert_csv
+from eval.core.runner import Runner
+from eval.core.thinning import check_keep, noncovisible_share
+from eval.protocol import episode_draw_bootstrap as boot
+from eval.protocol.crossovers import find_crossovers
+from eval.studies.evaluation import (
     DatasetEntry,
     Named,
-    add_runner_arguments,
     calibrate_entry,
     chosen_specs,
     open_entry,
@@ -40,11 +45,6 @@ from eval.commands.evaluate import (
     score_runs,
     val_dirs,
 )
-from eval.crossovers import find_crossovers
-from eval.executor import make_executor
-from eval.keyed_csv import upsert_csv
-from eval.runner import Runner
-from eval.thinning import check_keep, noncovisible_share
 
 DEFAULT_KEEP = (1.0, 0.75, 0.5, 0.25, 0.0)
 SWEEP_COLUMNS = (
@@ -177,7 +177,7 @@ def write_sweep(out_dir: str | Path, result: SweepResult) -> list[Path]:
     """Merge the sweep's rows into ``regime_sweep.csv`` and ``crossovers.csv`` (its datasets'
     rows replaced, the others kept), then redraw the figure from the whole table; returns the
     written paths."""
-    from eval.figures import write_fig_regime
+    from eval.report.figures import write_fig_regime
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)

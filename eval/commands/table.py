@@ -8,11 +8,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from eval.agreement import write_agreement
-from eval.external import SUBDIR, write_table_external
-from eval.figures import render_all
-from eval.protocol import VARIANTS, variant_path
-from eval.tables import PAPER_CSV, write_tables
+from eval.protocol.variants import VARIANTS, variant_path
+from eval.report.figures import render_all
+from eval.report.tables import PAPER_CSV, write_tables
+from eval.studies.agreement import write_agreement
+from eval.studies.external import SUBDIR, write_table_external
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -26,9 +26,9 @@ import numpy as np
 import pandas as pd
 from scipy.spatial.transform import Rotation
 
-from eval.calibration import calibrate_ranked
-from eval.executor import map_in_order
-from eval.metrics import (
+from eval.core.executor import map_in_order
+from eval.protocol.calibration import calibrate_ranked
+from eval.protocol.metrics import (
     METRICS,
     RankedAssignments,
     average_precision,
@@ -146,7 +146,7 @@ def ranked(results: list[dict], frames: dict[int, FramePair]) -> RankedAssignmen
 
 def calibrate_threshold(validation: RankedAssignments) -> tuple[float, float]:
     """Tau maximising the mean per-pair F1 over the validation frame pairs: (tau, that F1), by the
-    suite's one rule (:func:`eval.calibration.calibrate_ranked`)."""
+    suite's one rule (:func:`eval.protocol.calibration.calibrate_ranked`)."""
     tau, f1, _, _ = calibrate_ranked(validation)
     return tau, f1
 

@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from eval.executor import map_in_order
+from eval.core.executor import map_in_order
 from eval.validation import published
 from eval.validation.house import BASELINES, house_pairs, load_house_landmarks
 from eval.validation.matcher_options import HYPERGRAPH_MATCHERS
@@ -229,7 +229,7 @@ def _run_job(job: _Job) -> list[dict]:
     """Solve one trial with every matcher. As in the authors' scripts, the hypergraph matchers
     all get the same tensor, built once per trial (its build time is reported separately)."""
     from matchers import Problem, get
-    from matchers.tensor_build import build_tensor
+    from matchers.hypergraph.tensor_build import build_tensor
 
     trial = make_trial(job.setting, job.trial, job.seed, job.extra)
     problem = Problem(trial.points1, trial.points2)

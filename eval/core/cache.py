@@ -1,0 +1,183 @@
+"""On-disk result cache: one ``.npz`` per run, keyed by :meth:`eval.core.tasks.RunSpec.key`.
+
+``ROOT/ab/abcdef….npz`` holds one :class:`eval.core.tasks.RunResult`: its spec and per-pair metadata
+as JSON, and the ragged per-pair arrays (ground truth, Hungarian assignment, soft score matrix)
+concatenated with offsets. Written to a temporary file in the same directory and renamed, so a
+reader never sees half a file and an interrupted sweep leaves only complete entries. No pickle.
+
+The code version in every key is a SHA-256 over the source of everything that shapes a run's
+result: the ``matchers`` and ``cadsim`` packages (matchers, dataset reading, depth noise,
+detection), ``eval/core/tasks.py`` and ``eval/core/thinning.py`` — any edit there invalidates the cache.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+import zipfile
+import zlib
+from dataclasses import asdict
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+
+from eval.core.tasks import MatcherSpec, PairOutcome, RunResult, RunSpec
+
+_FORMAT = 1
+
+# Sources that cannot change a run's result (how tasks are dispatched, the CLI, drawing, benches):
+# left out of the code version so editing them does not invalidate the cache. Everything else
+# under matchers/ and cadsim/ counts (erring towards re-computation).
+_NOT_RESULT_SHAPING = (
+    "cadsim/generation/executor.py",
+    "cadsim/generation/executors.py",
+    "cadsim/generation/local_executor.py",
+    "cadsim/generation/dask_executor.py",
+    "cadsim/__main__.py",
+    "cadsim/cli.py",
+    "cadsim/commands/",
+    "cadsim/pair_drawing.py",
+)
+
+
+def _source_files() -> list[tuple[str, Path]]:
+    """(name relative to the source root, path) of every result-shaping source file."""
+    import cadsim
+    import matchers
+
+    files = []
+    for package in (matchers, cadsim):
+        root = Path(list(package.__path__)[0])
+        for p in sorted(root.rglob("*.py")):
+            name = p.relative_to(root.parent).as_posix()
+            if not name.startswith(_NOT_RESULT_SHAPING):
+                files.append((name, p))
+    for name in ("tasks.py", "thinning.py"):
+        files.append((f"eval/core/{name}", Path(__file__).with_name(name)))
+    return files
+
+
+@cache
+def code_version() -> str:
+    """Hex SHA-256 (first 16 digits) over the names and contents of the result-shaping sources."""
+    h = hashlib.sha256()
+    for name, path in _source_files():
+        h.update(name.encode() + b"\0")
+        h.update(hashlib.sha256(path.read_bytes()).digest())
+    return h.hexdigest()[:16]
+
+
+def _ragged(arrays: list[np.ndarray], name: str, dtype) -> dict[str, np.ndarray]:
+    flat = np.concatenate([a.reshape(-1) for a in arrays]) if arrays else np.zeros(0, dtype)
+    counts = np.array([a.size for a in arrays], dtype=np.int64)
+    return {name: flat.astype(dtype), f"{name}_offsets": np.concatenate([[0], np.cumsum(counts)])}
+
+
+def _unragged(data, name: str) -> list[np.ndarray]:
+    flat, offsets = data[name], data[f"{name}_offsets"]
+    return [flat[a:b] for a, b in zip(offsets[:-1], offsets[1:], strict=True)]
+
+
+def _spec_from_dict(d: dict) -> RunSpec:
+    m = d["matcher"]
+    options = tuple((k, v) for k, v in m["options"])
+    return RunSpec(
+        dataset_checksum=d["dataset_checksum"],
+        matcher=MatcherSpec(m["name"], options),
+        seed=int(d["seed"]),
+        noise_rate=None if d["noise_rate"] is None else float(d["noise_rate"]),
+        code_version=d["code_version"],
+        limit=None if d.get("limit") is None else int(d["limit"]),
+        keep=None if d.get("keep") is None else float(d["keep"]),
+        localisation=None
+        if d.get("localisation") is None
+        else tuple(float(v) for v in d["localisation"]),
+    )
+
+
+class ResultCache:
+    """Runs stored under `root`, one file per :class:`RunSpec` key."""
+
+    def __init__(self, root: str | Path) -> None:
+        self.root = Path(root)
+
+    def path(self, spec: RunSpec) -> Path:
+        key = spec.key()
+        return self.root / key[:2] / f"{key}.npz"
+
+    def __contains__(self, spec: RunSpec) -> bool:
+        """Whether a complete entry exists. A truncated one (a disk filled up, a copy cut short:
+        no zip directory at its end) counts as absent, so the runner recomputes and replaces it."""
+        path = self.path(spec)
+        return path.is_file() and zipfile.is_zipfile(path)
+
+    def store(self, result: RunResult) -> Path:
+        """Write `result` atomically (temporary file + rename); returns its path."""
+        path = self.path(result.spec)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        outcomes = result.outcomes
+        meta = {
+            "format": _FORMAT,
+            "spec": asdict(result.spec),
+            "dataset_dir": result.dataset_dir,
+            "wall_s": result.wall_s,
+            "pairs": [
+                {
+                    k: getattr(o, k)
+                    for k in ("index", "name", "episode", "sim_seed", "checksum", "n1", "n2")
+                }
+                | {"time_s": o.time_s, "iterations": o.iterations}
+                for o in outcomes
+            ],
+        }
+        arrays = {
+            "meta": np.array(json.dumps(meta)),
+            **_ragged([o.gt_pairs for o in outcomes], "gt_pairs", np.int64),
+            **_ragged([o.assigned for o in outcomes], "assigned", np.int64),
+            **_ragged([o.scores for o in outcomes], "scores", np.float64),
+        }
+        fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=path.parent)
+        try:
+            with os.fdopen(fd, "wb") as f:
+                np.savez_compressed(f, **arrays)
+            os.replace(tmp, path)
+        except BaseException:
+            Path(tmp).unlink(missing_ok=True)
+            raise
+        return path
+
+    def load(self, spec: RunSpec) -> RunResult:
+        """The cached result of `spec`; ``KeyError`` if absent, ``ValueError`` if unreadable."""
+        path = self.path(spec)
+        if not path.is_file():
+            raise KeyError(f"{path}: no cached result for {spec}")
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                meta = json.loads(str(data["meta"]))
+                gts = _unragged(data, "gt_pairs")
+                assigned = _unragged(data, "assigned")
+                scores = _unragged(data, "scores")
+        except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
+            raise ValueError(
+                f"{path}: unreadable cache entry ({exc}); delete it to recompute"
+            ) from exc
+        if meta.get("format") != _FORMAT or _spec_from_dict(meta["spec"]) != spec:
+            raise ValueError(f"{path}: cache entry does not belong to {spec}; delete it")
+        outcomes = [
+            PairOutcome(
+                **{
+                    k: p[k]
+                    for k in ("index", "name", "episode", "sim_seed", "checksum", "n1", "n2")
+                },
+                gt_pairs=g.reshape(-1, 2),
+                assigned=a.reshape(-1, 2),
+                scores=s.reshape(p["n1"], p["n2"]),
+                time_s=float(p["time_s"]),
+                iterations=int(p["iterations"]),
+            )
+            for p, g, a, s in zip(meta["pairs"], gts, assigned, scores, strict=True)
+        ]
+        return RunResult(spec, meta["dataset_dir"], outcomes, float(meta["wall_s"]))

@@ -1,0 +1,326 @@
+"""Experiment runner: computes the runs that are not cached yet, in parallel, and stores each as
+it completes, so a re-run computes only what changed and an interrupted sweep resumes. A run of
+the first N frame pairs is read from the cached run of the whole dataset when there is one.
+
+Missing runs are grouped into :class:`eval.core.tasks.RunTask` s: all matchers and noise rates of one
+(dataset, seed, pairs, keep level, localisation draw) share a task — the reading of every record,
+its re-detection plan and the hypergraph matchers' k-NN search (``matchers.shared_tensors``) —
+split into interleaved halves while there are fewer than two tasks per worker. A matcher that
+ignores its seed (``matchers.deterministic``) is run with seed 0 only where nothing else uses the
+seed (no noise re-draw, no localisation re-draw):
+its runs for other seeds are that run, read once and relabelled — same bits, a quarter of Table
+I's cost. Tasks go to an :class:`eval.core.executor.Executor`; results come back to this process, which writes the cache — workers need no access to it (only to the
+datasets), whichever executor runs them (local processes or a Dask cluster, docs/scale-out.md).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import threading
+import traceback
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+
+from tqdm import tqdm
+
+from cadsim.user_errors import is_user_error, one_line
+from eval.core.cache import ResultCache, code_version
+from eval.core.executor import Executor
+from eval.core.tasks import MatcherSpec, RunResult, RunSpec, RunTask, execute
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class RunRequest:
+    """A run asked for: dataset (directory + checksum), matcher, seed, noise rate (None: the
+    dataset's stored detections)."""
+
+    dataset_dir: str
+    dataset_checksum: str
+    matcher: MatcherSpec
+    seed: int
+    noise_rate: float | None = None
+    limit: int | None = None
+    keep: float | None = None
+    localisation: tuple[float, float] | None = None
+
+    def spec(self, version: str) -> RunSpec:
+        return RunSpec(
+            self.dataset_checksum,
+            self.matcher,
+            self.seed,
+            self.noise_rate,
+            version,
+            self.limit,
+            self.keep,
+            self.localisation,
+        )
+
+
+@dataclass
+class RunStats:
+    """What the last :meth:`Runner.run` did: runs found in the cache, computed, failed."""
+
+    cached: int = 0
+    computed: int = 0
+    failed: int = 0
+
+
+class RunFailed(RuntimeError):
+    """Some tasks raised; the other runs completed and are cached. ``errors``: what they raised;
+    ``user_error``: all of it is bad input (a corrupt dataset, a bad option), so the CLI reports
+    one line rather than a traceback (``cadsim.user_errors``)."""
+
+    def __init__(self, message: str, errors: Sequence[BaseException] = ()) -> None:
+        super().__init__(message)
+        self.errors = list(errors)
+        self.user_error = bool(self.errors) and all(is_user_error(e) for e in self.errors)
+
+
+def requests_for(
+    datasets: Iterable[tuple[str, str]],
+    matchers: Iterable[MatcherSpec],
+    seeds: Iterable[int],
+    noise_rates: Iterable[float | None] = (None,),
+    limit: int | None = None,
+    keep: float | None = None,
+    localisation: tuple[float, float] | None = None,
+) -> list[RunRequest]:
+    """Every combination of (dataset dir, checksum) × matcher × seed × noise rate (first `limit`
+    frame pairs of each dataset; None: all; non-covisible detections thinned to level `keep`,
+    where 1 and None both mean no thinning and share the untouched runs; the localisation prior
+    re-drawn at (position sigma m, yaw sigma deg), None: each record's own)."""
+    matchers, seeds, noise_rates = list(matchers), list(seeds), list(noise_rates)
+    keep = None if keep is None or float(keep) == 1.0 else float(keep)
+    if localisation is not None:
+        localisation = (float(localisation[0]), float(localisation[1]))
+    return [
+        RunRequest(d, c, m, s, r, limit, keep, localisation)
+        for d, c in datasets
+        for r in noise_rates
+        for s in seeds
+        for m in matchers
+    ]
+
+
+def _seed_free(req: RunRequest) -> RunRequest:
+    """`req` with seed 0 when its matcher ignores the seed and nothing else in the run uses it
+    (no noise re-detection, no localisation re-draw, no thinning: the run's seed is its draw)."""
+    if req.seed == 0 or req.noise_rate is not None or req.localisation is not None:
+        return req
+    if req.keep is not None:
+        return req
+    from matchers.core.registry import deterministic
+
+    try:
+        free = deterministic(req.matcher.name)
+    except ValueError:  # unknown matcher: let the task report it
+        return req
+    return dataclasses.replace(req, seed=0) if free else req
+
+
+def _group(missing: Sequence[RunRequest], version: str, workers: int = 1) -> list[RunTask]:
+    """Tasks for the missing runs: one per (dataset, seed, pairs, keep, localisation), holding its
+    matchers × its noise rates (rates with the same missing matchers together, so that every run
+    of a task was asked for). Its runs share the reading of every frame pair, its re-detection
+    plan and the hypergraph matchers' k-NN search. While there are fewer than two tasks per
+    worker (one worker: one task each), the task with the most runs is split in two, by rates
+    when it has several, else by matchers — interleaved halves, so that they cost about the
+    same."""
+    groups: dict[tuple, dict[float | None, list[MatcherSpec]]] = {}
+    for req in missing:
+        key = (
+            req.dataset_dir,
+            req.dataset_checksum,
+            req.seed,
+            req.limit,
+            req.keep,
+            req.localisation,
+        )
+        groups.setdefault(key, {}).setdefault(req.noise_rate, []).append(req.matcher)
+    blocks: list[tuple[tuple, tuple[MatcherSpec, ...], tuple[float | None, ...]]] = []
+    for key, by_rate in groups.items():
+        same: dict[tuple[MatcherSpec, ...], list[float | None]] = {}
+        for rate, matchers in by_rate.items():
+            same.setdefault(tuple(dict.fromkeys(matchers)), []).append(rate)
+        blocks += [(key, matchers, tuple(rates)) for matchers, rates in same.items()]
+    target = 2 * workers if workers > 1 else 1
+    while blocks and len(blocks) < target:
+        widest = max(range(len(blocks)), key=lambda b: len(blocks[b][1]) * len(blocks[b][2]))
+        key, matchers, rates = blocks[widest]
+        if len(rates) > 1:
+            halves = [(key, matchers, rates[0::2]), (key, matchers, rates[1::2])]
+        elif len(matchers) > 1:
+            halves = [(key, matchers[0::2], rates), (key, matchers[1::2], rates)]
+        else:
+            break
+        blocks[widest : widest + 1] = halves
+    return [
+        RunTask(k[0], k[1], k[2], rates, matchers, version, k[3], k[4], k[5])
+        for k, matchers, rates in blocks
+    ]
+
+
+class _TaskProgress:
+    """A tqdm bar counting runs, moved as tasks report frame pairs done (``("runs", token, runs)``
+    messages of :func:`eval.core.tasks.execute`, polled from the executor twice a second on a
+    background thread) and set right as each task finishes."""
+
+    POLL_S = 0.5
+
+    def __init__(self, tasks: Sequence[RunTask], desc: str, executor: Executor, show: bool):
+        self.executor = executor
+        self.bar = tqdm(
+            total=sum(t.runs for t in tasks),
+            desc=desc,
+            unit="run",
+            disable=not show,
+            bar_format="{l_bar}{bar}| {n:.0f}/{total} [{elapsed}<{remaining}]",
+        )
+        self.reported = {t.token: 0.0 for t in tasks}  # runs reported by each unfinished task
+        self.runs = {t.token: t.runs for t in tasks}
+        self.finished_runs = 0  # runs of the finished tasks
+        self.done = 0.0  # runs counted so far (the bar's position, also when it is hidden)
+        self.lock = threading.Lock()
+        self.stop = threading.Event()
+        self.poller = threading.Thread(target=self._poll_loop, name="cadsim-progress", daemon=True)
+
+    def __enter__(self) -> _TaskProgress:
+        self.poller.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop.set()
+        self.poller.join()
+        self.bar.close()
+
+    def _poll_loop(self) -> None:
+        while not self.stop.wait(self.POLL_S):
+            self.poll()
+
+    def poll(self) -> None:
+        """Move the bar by the runs that running tasks reported since the last poll."""
+        with self.lock:
+            for message in self.executor.progress():
+                if isinstance(message, tuple) and len(message) == 3 and message[0] == "runs":
+                    _, token, runs = message
+                    if token in self.reported:  # a late message of a finished task: counted
+                        self.reported[token] += runs
+                        self._show()
+
+    def finished(self, task: RunTask) -> None:
+        """Count the rest of `task`'s runs (all of them when it reported none)."""
+        with self.lock:
+            self.reported.pop(task.token, None)
+            self.finished_runs += task.runs
+            self._show()
+
+    def _show(self) -> None:
+        # finished tasks count whole (so the bar ends exactly at its total), running ones as
+        # far as they reported, each at most all of its runs
+        target = self.finished_runs + sum(
+            min(runs, self.runs[token]) for token, runs in self.reported.items()
+        )
+        self.bar.update(target - self.done)
+        self.bar.n = self.done = target  # exact, not a running sum of float steps
+
+
+class Runner:
+    """Cache-aware execution of runs through an executor. `task_fn` computes one task (a
+    picklable module-level function; default :func:`eval.core.tasks.execute`)."""
+
+    def __init__(
+        self,
+        cache: ResultCache,
+        executor: Executor,
+        version: str | None = None,
+        progress: bool = True,
+        task_fn: Callable[[RunTask], list[RunResult]] = execute,
+    ) -> None:
+        self.cache = cache
+        self.executor = executor
+        self.task_fn = task_fn
+        self.version = code_version() if version is None else version
+        self.progress = progress
+        self.stats = RunStats()  # of the last run() call
+        self.totals = RunStats()  # of every call so far
+
+    def run(self, requests: Sequence[RunRequest], desc: str = "runs") -> list[RunResult]:
+        """Results of `requests`, in order; computes the missing ones. Raises :class:`RunFailed`
+        after every other task has finished if some task raised."""
+        try:
+            return self._run(requests, desc)
+        finally:
+            for name in ("cached", "computed", "failed"):
+                setattr(self.totals, name, getattr(self.totals, name) + getattr(self.stats, name))
+
+    def _source(self, spec: RunSpec) -> RunSpec | None:
+        """The cached run `spec` can be read from: itself, or — for a run of the first N frame
+        pairs — the cached run of the whole dataset (frame pairs are computed independently and in
+        dataset order, so the first N outcomes are the same); None when neither is cached."""
+        if spec in self.cache:
+            return spec
+        if spec.limit is not None:
+            full = dataclasses.replace(spec, limit=None)
+            if full in self.cache:
+                return full
+        return None
+
+    def _load(self, spec: RunSpec) -> RunResult:
+        source = self._source(spec)
+        result = self.cache.load(spec if source is None else source)
+        if source is not None and source != spec:
+            outcomes = result.outcomes[: spec.limit]
+            share = len(outcomes) / max(len(result.outcomes), 1)
+            result = RunResult(spec, result.dataset_dir, outcomes, result.wall_s * share)
+        return result
+
+    def _run(self, requests: Sequence[RunRequest], desc: str) -> list[RunResult]:
+        wanted = [req.spec(self.version) for req in requests]
+        requests = [_seed_free(req) for req in requests]
+        specs = [req.spec(self.version) for req in requests]
+        missing = list(
+            {s: r for s, r in zip(specs, requests, strict=True) if self._source(s) is None}.values()
+        )
+        self.stats = RunStats(cached=len(set(specs)) - len(missing))
+        if missing:
+            tasks = _group(missing, self.version, self.executor.workers)
+            log.info(
+                "%s: %d cached, %d to compute in %d tasks",
+                desc,
+                self.stats.cached,
+                len(missing),
+                len(tasks),
+            )
+            failures, errors = [], []
+            with _TaskProgress(tasks, desc, self.executor, self.progress) as bar:
+                for done in self.executor.map_unordered(self.task_fn, tasks):
+                    task = tasks[done.index]
+                    if done.error is not None:
+                        self.stats.failed += task.runs
+                        detail = "".join(traceback.format_exception(done.error)).rstrip()
+                        failures.append(f"{task}: {done.error!r}")
+                        errors.append(done.error)
+                        if is_user_error(done.error):  # bad input: its message says it all
+                            log.error("task failed: %s: %s", task, one_line(done.error))
+                            log.debug("%s", detail)
+                        else:
+                            log.error("task failed: %s\n%s", task, detail)
+                    else:
+                        for result in done.value:
+                            self.cache.store(result)
+                        self.stats.computed += len(done.value)
+                    bar.finished(task)
+            if failures:
+                raise RunFailed(
+                    f"{len(failures)} of {len(tasks)} tasks failed (the rest are cached; re-run "
+                    f"to retry only the failed ones); the first: {one_line(errors[0])}",
+                    errors,
+                )
+        loaded = {spec: self._load(spec) for spec in dict.fromkeys(specs)}  # each file once
+        return [
+            loaded[spec] if spec == want else dataclasses.replace(loaded[spec], spec=want)
+            for spec, want in zip(specs, wanted, strict=True)
+        ]

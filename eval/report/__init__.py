@@ -1,0 +1,1 @@
+"""Reporting: Table I and the other tables, figures, the run record."""

@@ -1,0 +1,78 @@
+"""Regime cards: where each dataset sits — objects per view, covisible objects, the share of
+non-covisible objects, the covisible share of the smaller view, how well appearance alone
+separates true from false candidate pairs, and how far covisible objects' positions disagree.
+
+The numbers come from ``cadsim.dataset.regime.dataset_regime`` (the one implementation, also behind
+``cadsim info --json``); this module writes them as ``regime.csv`` (one row per dataset, key
+column ``dataset``) and as the Markdown table the README shows beside Table I.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+import pandas as pd
+
+from eval.core.keyed_csv import upsert_csv
+
+COLUMNS = (
+    "dataset",
+    "objects_per_view",
+    "covisible",
+    "noncovisible_share",
+    "covisible_share_of_smaller",
+    "appearance_auc",
+    "position_error_median_m",
+)
+TITLES = {
+    "objects_per_view": "objects / view",
+    "covisible": "covisible / pair",
+    "noncovisible_share": "non-covisible share",
+    "covisible_share_of_smaller": "covisible / smaller view",
+    "appearance_auc": "appearance AUC",
+    "position_error_median_m": "position error (m, median)",
+}
+
+
+def regime_of(path: str | Path) -> dict:
+    """The regime fields of the dataset at `path` (``dataset_regime``)."""
+    from cadsim.dataset import Dataset, regime
+
+    return regime.dataset_regime(Dataset(path))
+
+
+def write_regime(out_dir: str | Path, datasets: Mapping[str, str | Path]) -> Path:
+    """Rows for `datasets` ({table label: test dataset directory}) into ``out_dir/regime.csv``
+    (other datasets' rows kept); returns its path."""
+    rows = []
+    for label, path in datasets.items():
+        regime = regime_of(path)
+        rows.append({"dataset": label} | {c: regime.get(c) for c in COLUMNS[1:]})
+    path = Path(out_dir) / "regime.csv"
+    upsert_csv(path, pd.DataFrame(rows, columns=list(COLUMNS)).round(4))
+    return path
+
+
+def regime_markdown(path: str | Path) -> str:
+    """``regime.csv`` as a Markdown table (shares in percent; empty cells as –)."""
+    from eval.report.tables import dataset_order
+
+    table = pd.read_csv(path, keep_default_na=False, na_values=[""])
+    table = table.sort_values("dataset", key=lambda s: s.map(dataset_order))
+    header = ["Dataset", *(TITLES[c] for c in COLUMNS[1:])]
+    lines = ["| " + " | ".join(header) + " |", "|:---|" + "---:|" * (len(header) - 1)]
+    for _, r in table.iterrows():
+        cells = [str(r["dataset"])]
+        for c in COLUMNS[1:]:
+            v = r.get(c)
+            if pd.isna(v):
+                cells.append("–")
+            elif c in ("noncovisible_share", "covisible_share_of_smaller"):
+                cells.append(f"{100 * v:.0f} %")
+            elif c == "appearance_auc":
+                cells.append(f"{v:.2f}")
+            else:
+                cells.append(f"{v:.1f}")
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,168 @@
+"""Name -> matcher registry: the built-ins, :func:`register`, and the ``cadsim.matchers``
+entry-point group (third-party packages), loaded lazily on the first :func:`get`/:func:`available`.
+
+A matcher is any callable ``matcher(problem, seed=0, threshold=None, **options) -> Matching``.
+A matcher that needs optional Problem fields (the localisation prior) names them in a
+``requires`` attribute, :func:`requires`; one whose result does not depend on its seed says so
+with ``deterministic = True``, :func:`deterministic`. Each name also has a tuning grid, :func:`search_space`: given to :func:`register`, carried by
+the callable as a ``search_space`` attribute (entry points), or, for the built-ins, from
+:mod:`matchers.core.search_spaces`.
+"""
+
+from __future__ import annotations
+
+import importlib
+import logging
+from collections.abc import Callable
+from functools import cache
+from importlib.metadata import EntryPoint, entry_points
+
+from matchers.core.matching import Matching
+from matchers.core.memory_budget import budgeted
+from matchers.core.search_spaces import BUILTIN_SEARCH_SPACES, check_search_space
+
+log = logging.getLogger(__name__)
+
+ENTRY_POINT_GROUP = "cadsim.matchers"
+
+Matcher = Callable[..., Matching]
+
+_BUILTIN: dict[str, str] = {
+    "appearance": "matchers.appearance:appearance",
+    "bcagm": "matchers.bcagm:bcagm",
+    "hgm": "matchers.hgm:hgm",
+    "maximin": "matchers.maximin:maximin",
+    "mos": "matchers.mos:mos",
+    "none": "matchers.none:none",
+    "pose": "matchers.pose:pose",
+    "pose_appearance": "matchers.pose:pose_appearance",
+    "pose_refine": "matchers.pose_refine:pose_refine",
+    "consistency": "matchers.consistency:consistency",
+    "maximin_pose": "matchers.maximin:maximin_pose",
+    "rrwhm": "matchers.rrwhm:rrwhm",
+    "rrwm": "matchers.rrwm:rrwm",
+    "sm": "matchers.sm:sm",
+    "tm": "matchers.tm:tm",
+}
+_registered: dict[str, Matcher] = {}
+_registered_spaces: dict[str, list[dict]] = {}
+
+
+def register(
+    name: str,
+    fn: Matcher,
+    *,
+    search_space: list[dict] | None = None,
+    replace: bool = False,
+    memory: Callable[..., float] | None = None,
+) -> None:
+    """Make ``fn`` available as ``get(name)``. Re-using a taken name (built-in, registered or
+    entry point) raises ValueError unless ``replace=True``.
+
+    ``memory``: ``memory(problem, **options)`` -> bytes of working memory the call needs; the
+    matcher is then refused over the per-process budget before it runs
+    (:func:`matchers.core.memory_budget.budgeted`) and carries it as ``memory_bytes``. Default:
+    ``fn.memory_bytes`` if the callable carries one (every built-in does). The test suite holds
+    every registered matcher's estimate to its measured peak (docs/extending-matchers.md).
+
+    ``search_space``: the matcher's tuning grid, a list of at most 12 option dicts (see
+    :func:`search_space`); default: ``fn.search_space`` if the callable carries one, else
+    ``[{}]`` (no scale parameters: one configuration, the defaults).
+
+    >>> register("my_pose", get("pose"), search_space=[{"gate": 3.0}, {"gate": 5.0}], replace=True)
+    >>> search_space("my_pose")
+    [{'gate': 3.0}, {'gate': 5.0}]
+    """
+    if not isinstance(name, str) or not name:
+        raise ValueError(f"name: expected a non-empty string, got {name!r}")
+    if not callable(fn):
+        raise TypeError(f"fn: expected a callable matcher, got {type(fn).__name__}")
+    taken = name in _registered or name in _BUILTIN or name in _entry_points()
+    if taken and not replace:
+        raise ValueError(f"name: matcher {name!r} already exists; pass replace=True to override")
+    if search_space is None:
+        space = check_search_space(getattr(fn, "search_space", None) or [{}], name)
+    else:
+        space = check_search_space(search_space, name, "search_space")
+    if memory is not None:
+        fn = budgeted(memory, "the view size or the matcher's options")(fn)
+    _registered[name] = fn
+    _registered_spaces[name] = space
+
+
+def get(name: str) -> Matcher:
+    """The matcher called ``name``: registered first, then built-in, then entry point."""
+    if name in _registered:
+        return _registered[name]
+    if name in _BUILTIN:
+        return _load(_BUILTIN[name])
+    points = _entry_points()
+    if name in points:
+        fn = points[name].load()
+        if not callable(fn):
+            raise TypeError(f"entry point {name!r} ({points[name].value}) is not callable")
+        _registered[name] = fn
+        return fn
+    raise ValueError(f"unknown matcher {name!r}; available: {', '.join(available())}")
+
+
+def search_space(name: str) -> list[dict]:
+    """The tuning grid of matcher ``name``: a list of 1 to 12 option dicts, each a complete
+    configuration to pass as keyword options (``{}`` = the defaults). Kernel widths in a grid
+    are relative to each problem's own scale (e.g. ``sigma_scale``), so one grid serves every
+    dataset. A matcher without scale parameters has ``[{}]``. Returns a fresh copy.
+
+    >>> search_space("appearance")
+    [{}]
+    """
+    if name in _registered and name in _registered_spaces:  # register()ed
+        space = _registered_spaces[name]
+    elif name in _BUILTIN and name not in _registered:
+        space = BUILTIN_SEARCH_SPACES.get(name, [{}])
+    else:
+        fn = get(name)  # entry point (or ValueError naming the unknown matcher)
+        space = check_search_space(getattr(fn, "search_space", None) or [{}], name)
+    return [dict(config) for config in space]
+
+
+def requires(name: str) -> frozenset[str]:
+    """Names of the optional :class:`~matchers.core.problem.Problem` fields matcher ``name`` cannot
+    run without (e.g. ``{"world1", "world2", "world_sigma"}`` for the pose matchers; empty for
+    most): the callable's ``requires`` attribute, if it has one. Lets a harness skip a
+    matcher on data that lacks what it needs instead of catching its ValueError.
+
+    >>> sorted(requires("pose"))
+    ['world1', 'world2', 'world_sigma']
+    """
+    return frozenset(getattr(get(name), "requires", ()))
+
+
+def deterministic(name: str) -> bool:
+    """Whether matcher ``name`` ignores its ``seed`` (same problem, same result for every seed):
+    the callable's ``deterministic`` attribute, False when it has none. A harness may then run
+    it once instead of once per seed.
+
+    >>> deterministic("sm"), deterministic("maximin")
+    (True, False)
+    """
+    return bool(getattr(get(name), "deterministic", False))
+
+
+def available() -> list[str]:
+    """Sorted names of every matcher get() can return."""
+    return sorted(set(_BUILTIN) | set(_registered) | set(_entry_points()))
+
+
+def _load(target: str) -> Matcher:
+    module, _, attr = target.partition(":")
+    return getattr(importlib.import_module(module), attr)
+
+
+@cache
+def _entry_points() -> dict[str, EntryPoint]:
+    """Entry points of the ``cadsim.matchers`` group, scanned once per process
+    (``_entry_points.cache_clear()`` rescans)."""
+    found = {ep.name: ep for ep in entry_points(group=ENTRY_POINT_GROUP)}
+    if found:
+        log.debug("matcher entry points: %s", sorted(found))
+    return found

@@ -1,0 +1,1 @@
+"""The third-order tensor: triangle sampling, the tensor build, the sparse tensor and its products, sharing one search between matchers."""
