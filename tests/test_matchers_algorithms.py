@@ -205,3 +205,19 @@ def test_matching_reports_time_iterations_and_info():
     m = get("maximin")(problem)
     assert m.time_s > 0 and m.iterations >= 1 and m.info["converged"] is True
     assert m.info["tensor_entries"] > 0 and m.info["tensor"]["recipe"] == "paper"
+
+
+def test_tm_stops_once_its_iterate_has_converged_with_the_same_matching():
+    from matchers.tm import CHECK_EVERY
+
+    rng = np.random.default_rng(3)
+    pts = rng.uniform(0, 20, (12, 3))
+    problem = Problem(pts, pts[::-1] + rng.normal(0, 0.01, (12, 3)))
+    fixed = get("tm")(problem, seed=0, tol=0.0)  # the reference's fixed count
+    early = get("tm")(problem, seed=0)
+    assert fixed.iterations == 100 and not fixed.info["converged"]
+    assert early.iterations < 100 and early.iterations % CHECK_EVERY == 0
+    assert early.info["converged"]
+    np.testing.assert_array_equal(early.pairs, fixed.pairs)
+    with pytest.raises(ValueError, match="tol"):
+        get("tm")(problem, tol=-1.0)
