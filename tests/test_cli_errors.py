@@ -269,3 +269,34 @@ def test_a_full_disk_during_generate_is_one_line_naming_the_file(tmp_path, monke
             FakeScenario(), out, pairs=1, workers=1, stages=FAKE_STAGES, progress=False
         )
     assert str(out) in str(err.value) and "No space left" in str(err.value)
+
+
+@pytest.mark.parametrize(
+    "command", ["evaluate", "sweep-noise", "sweep-regime", "sweep-localisation"]
+)
+def test_commands_that_write_results_need_an_explicit_out(
+    dataset, tmp_path, capsys, monkeypatch, command
+):
+    # Run from a folder holding a results/ of its own: nothing in it may change.
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "results").mkdir()
+    (tmp_path / "results" / "table1.md").write_text("committed\n")
+    with pytest.raises(SystemExit) as exit_info:
+        main([command, str(dataset), "--matchers", "sm", "--runs", "1"])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert "--out" in err[-1] and "required" in err[-1]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ds", "results"]  # no cache/ either
+    assert (tmp_path / "results" / "table1.md").read_text() == "committed\n"
+
+
+def test_the_result_cache_defaults_to_the_users_cache_not_the_current_folder(monkeypatch, tmp_path):
+    import argparse
+
+    from eval.commands.evaluate import add_runner_arguments
+
+    monkeypatch.setenv("CADSIM_CACHE_DIR", str(tmp_path / "mine"))
+    parser = argparse.ArgumentParser()
+    add_runner_arguments(parser)
+    args = parser.parse_args(["--out", "x"])
+    assert args.cache == str(tmp_path / "mine" / "runs")

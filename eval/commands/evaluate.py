@@ -23,7 +23,8 @@ from eval.core.executor import add_scheduler_argument, make_executor
 from eval.core.runner import Runner
 from eval.protocol.variants import PROTOCOLS
 from eval.report.tables import PAPER_CSV, write_tables
-from eval.studies.evaluation import DEFAULT_CACHE, evaluate, open_entry, parse_matchers, val_dirs
+from eval.studies.evaluation import evaluate, open_entry, parse_matchers, val_dirs
+from matchers.core.jit import cache_root
 
 
 def add_runner_arguments(parser: argparse.ArgumentParser) -> None:
@@ -35,9 +36,16 @@ def add_runner_arguments(parser: argparse.ArgumentParser) -> None:
         default=4,
         help=f"runs with seeds 0..RUNS-1, RUNS in 1..{MAX_RUNS} (default 4)",
     )
-    parser.add_argument("--out", default="results", help="output directory (default: results)")
     parser.add_argument(
-        "--cache", default=DEFAULT_CACHE, help=f"result cache (default: {DEFAULT_CACHE})"
+        "--out",
+        required=True,
+        help="output directory (required: no command writes results where you did not say; "
+        "the committed results/ are make reproduce's)",
+    )
+    parser.add_argument(
+        "--cache",
+        default=str(cache_root() / "runs"),
+        help="result cache (default: $CADSIM_CACHE_DIR/runs, else ~/.cache/cadsim/runs)",
     )
     parser.add_argument(
         "--workers",

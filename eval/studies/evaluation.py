@@ -40,7 +40,7 @@ log = logging.getLogger(__name__)
 
 PAPER_ORDER = ("sm", "rrwm", "hgm", "tm", "bcagm", "rrwhm", "mos", "maximin", "appearance", "none")
 QUALITATIVE_MATCHERS = ("rrwhm", "mos", "maximin")
-DEFAULT_CACHE = "cache/runs"
+DEFAULT_CACHE = "cache/runs"  # make reproduce's, inside the repository; commands use user_cache()
 # Scenario name -> table name where the first-word rule (below) does not give the right one.
 DATASET_LABELS = {"cad-dense": "CAD-dense"}
 

@@ -33,13 +33,19 @@ from pathlib import Path
 log = logging.getLogger(__name__)
 
 
-def cache_dir() -> Path:
-    """Where compiled kernels are cached (see the module docstring)."""
+def cache_root() -> Path:
+    """The user's cadsim cache: ``$CADSIM_CACHE_DIR``, else ``$XDG_CACHE_HOME/cadsim``, else
+    ``~/.cache/cadsim`` — never the current folder."""
     root = os.environ.get("CADSIM_CACHE_DIR")
     if not root:
         base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
         root = str(Path(base) / "cadsim")
-    return Path(root) / "numba"
+    return Path(root)
+
+
+def cache_dir() -> Path:
+    """Where compiled kernels are cached (see the module docstring)."""
+    return cache_root() / "numba"
 
 
 @cache
