@@ -72,8 +72,37 @@ def _load(name: str):
     return importlib.import_module(module)
 
 
+DESCRIPTION = """\
+cadsim: simulate observers of one scene, detect the objects each sees, and score the
+matchers that decide which object in one view is which in the other."""
+EXAMPLES = """examples:
+  cadsim generate scenarios/cad-intersection.toml --pairs 3 --out data/cad
+  cadsim info data/cad
+  cadsim evaluate data/cad --val data/cad-val --matchers sm,maximin --runs 1 --out my-run
+  cadsim show data/cad --pair 0 --out pair0.png
+
+`cadsim COMMAND --help` describes each command; docs/README.md indexes the documentation."""
+
+
+def version() -> str:
+    """The installed cadsim's version (the project's, from its metadata)."""
+    from importlib.metadata import PackageNotFoundError
+    from importlib.metadata import version as package_version
+
+    try:
+        return package_version("cadsim")
+    except PackageNotFoundError:  # run from a source tree that was never installed
+        return "unknown (not installed)"
+
+
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="cadsim", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog="cadsim",
+        description=DESCRIPTION,
+        epilog=EXAMPLES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("--version", action="version", version=f"cadsim {version()}")
     parser.add_argument("-v", "--verbose", action="store_true", help="debug logging")
     parser.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")

@@ -96,7 +96,11 @@ def _regime_text(regime: dict) -> str:
         f"non-covisible share {num('noncovisible_share', '.2f')}, covisible share of the smaller "
         f"view {num('covisible_share_of_smaller', '.2f')}, appearance AUC "
         f"{num('appearance_auc', '.3f')}, position error median "
-        f"{num('position_error_median_m', '.2f')} m"
+        + (
+            "– (needs a localisation prior and the true poses)"
+            if regime.get("position_error_median_m") is None
+            else f"{num('position_error_median_m', '.2f')} m"
+        )
     )
 
 
@@ -110,8 +114,9 @@ def _text(s: dict) -> str:
         else f"min {d['min']:.1f}  median {d['median']:.1f}  max {d['max']:.1f}"
     )
     lines = [
-        f"{s['dataset']}: scenario {s['scenario']}, {s['n_pairs']} pairs, seed {s['seed']}, "
-        f"checksum {s['checksum'][:16]}"
+        f"{s['dataset']}: scenario {s['scenario']}, {s['n_pairs']} pairs, "
+        + ("imported (no seed), " if s["seed"] is None else f"seed {s['seed']}, ")
+        + f"checksum {s['checksum'][:16]}"
         + (" (every record verified against it)" if s.get("verified") else ""),
         *(
             [f"  imported from           {src['repository']} @ {src['commit']} ({src['licence']})"]

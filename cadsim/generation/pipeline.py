@@ -633,7 +633,7 @@ def _generate(
         render_seconds=sum(r.render_seconds for r in results),
         episode_results=sorted(results, key=lambda r: r.episode),
     )
-    log.info(
+    log.debug(  # the caller reports the result (the CLI prints it once)
         "%s: %d pairs (%d new) from %d episode(s) in %.1f s; checksum %s",
         out, res.pairs, res.new_records, res.episodes, res.seconds, res.checksum[:12],
     )  # fmt: skip

@@ -96,9 +96,10 @@ def open_entry(test_dir: str | Path, val_dir: str | Path | None) -> DatasetEntry
 
 
 def parse_matchers(text: str) -> list[MatcherSpec]:
-    """``all`` or a comma-separated list. ``all``: every registered matcher that needs nothing
-    beyond what every dataset gives (``matchers.requires`` empty; the localisation-prior matchers
-    must be named), paper order first."""
+    """``all`` or a comma-separated list of names, case-insensitive (``SM,Maximin`` as the tables
+    print them). ``all``: every registered matcher that needs nothing beyond what every dataset
+    gives (``matchers.requires`` empty; the localisation-prior matchers must be named), paper
+    order first. An unknown name is refused with the closest known ones."""
     from matchers.core.registry import available, requires
 
     known = list(available())
@@ -106,11 +107,17 @@ def parse_matchers(text: str) -> list[MatcherSpec]:
         plain = [n for n in known if not requires(n)]
         names = [n for n in PAPER_ORDER if n in plain] + [n for n in plain if n not in PAPER_ORDER]
     else:
-        names = [n.strip() for n in text.split(",") if n.strip()]
+        by_lower = {n.lower(): n for n in known}
+        given = [n.strip() for n in text.split(",") if n.strip()]
+        names = [n if n in known else by_lower.get(n.lower(), n) for n in given]
         unknown = [n for n in names if n not in known]
         if unknown or not names:
+            import difflib
+
+            close = difflib.get_close_matches(unknown[0].lower(), known, n=3) if unknown else []
+            hint = f" (did you mean {', '.join(close)}?)" if close else ""
             raise ValueError(
-                f"--matchers: unknown {unknown or text!r}; available: {', '.join(known)}"
+                f"--matchers: unknown {unknown or text!r}{hint}; available: {', '.join(known)}"
             )
     return [MatcherSpec(n) for n in dict.fromkeys(names)]
 

@@ -1,0 +1,47 @@
+"""The command line a newcomer meets: a version, a top-level help with a purpose and examples,
+matcher names as the tables print them, one summary line per generation, plain wording for
+imported data."""
+
+from __future__ import annotations
+
+import pytest
+
+from cadsim.cli import main
+from eval.studies.evaluation import parse_matchers
+
+
+def test_version_and_help(capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--version"])
+    assert exit_info.value.code == 0
+    assert capsys.readouterr().out.startswith("cadsim ")
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    text = capsys.readouterr().out
+    assert "score the\nmatchers" in text and "examples:" in text and "cadsim generate" in text
+    assert "imported only when run" not in text  # no developer sentence
+
+
+def test_matcher_names_are_case_insensitive_and_misspellings_get_a_suggestion():
+    assert [m.name for m in parse_matchers("SM, Maximin,rrwm")] == ["sm", "maximin", "rrwm"]
+    with pytest.raises(ValueError, match="did you mean maximin"):
+        parse_matchers("maximn")
+
+
+def test_generate_reports_once(tmp_path, capsys):
+    from pathlib import Path
+
+    scenario = Path(__file__).resolve().parents[1] / "scenarios" / "mrc-arena.toml"
+    assert main(["generate", str(scenario), "--pairs", "1", "--no-progress", "--workers", "1",
+                 "--out", str(tmp_path / "d")]) == 0  # fmt: skip
+    captured = capsys.readouterr()
+    assert (captured.out + captured.err).count("checksum") == 1
+
+
+def test_info_on_imported_data_says_so(capsys):
+    from pathlib import Path
+
+    data = Path(__file__).resolve().parents[1] / "eval" / "data" / "dmgm-cad" / "test-069-071"
+    assert main(["info", str(data)]) == 0
+    out = capsys.readouterr().out
+    assert "imported (no seed)" in out and "seed None" not in out and "- m" not in out
