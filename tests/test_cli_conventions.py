@@ -45,3 +45,13 @@ def test_info_on_imported_data_says_so(capsys):
     assert main(["info", str(data)]) == 0
     out = capsys.readouterr().out
     assert "imported (no seed)" in out and "seed None" not in out and "- m" not in out
+
+
+def test_every_matcher_has_its_own_colour_and_marker():
+    from eval.report.palette import BUILTIN, styles
+    from matchers import available
+
+    found = styles([*available(), "my_matcher", "another"])
+    assert set(available()) <= set(BUILTIN)
+    assert len({s.color for s in found.values()}) == len(found)  # no two share a colour
+    assert len({s.marker for s in BUILTIN.values()}) == len(BUILTIN)

@@ -25,6 +25,7 @@ import pandas as pd
 
 from eval.core.result_files import save_figure
 from eval.protocol.crossovers import PAIRS
+from eval.report.palette import styles
 from eval.report.tables import PAPER_DATASETS, dataset_order, matcher_order, method_name
 
 log = logging.getLogger(__name__)
@@ -40,11 +41,13 @@ def _figure(width: float, height: float, ncols: int = 1, nrows: int = 1):
     return fig, axes
 
 
-def _colors(matchers: list[str]) -> dict[str, tuple]:
-    from matplotlib import colormaps
+def _colors(matchers: list[str]) -> dict[str, str]:
+    """Each matcher's colour (:mod:`eval.report.palette`: the same in every figure)."""
+    return {m: s.color for m, s in styles(matchers).items()}
 
-    cmap = colormaps["tab10"]
-    return {m: cmap(i % 10) for i, m in enumerate(matchers)}
+
+def _marker(matcher: str) -> str:
+    return styles([matcher])[matcher].marker
 
 
 def _save(fig, base: Path, suffixes=(".png", ".pdf")) -> list[Path]:
@@ -81,7 +84,12 @@ def write_fig4(out_dir: str | Path) -> list[Path]:
                 s = std.loc[(dataset, matcher)][metric]
                 x = m.index.to_numpy(float)
                 ax.plot(
-                    x, 100 * m, marker="o", ms=3, color=colors[matcher], label=method_name(matcher)
+                    x,
+                    100 * m,
+                    marker=_marker(matcher),
+                    ms=4,
+                    color=colors[matcher],
+                    label=method_name(matcher),
                 )
                 ax.fill_between(
                     x, 100 * (m - s), 100 * (m + s), color=colors[matcher], alpha=0.15, lw=0
@@ -131,8 +139,8 @@ def write_fig_regime(out_dir: str | Path) -> list[Path]:
                 ax.plot(
                     100 * c["share"],
                     100 * c[column],
-                    marker="o",
-                    ms=3,
+                    marker=_marker(matcher),
+                    ms=4,
                     color=colors[matcher],
                     label=method_name(matcher),
                     **style,
@@ -152,7 +160,7 @@ def write_fig_regime(out_dir: str | Path) -> list[Path]:
                     )
             ax.set_xlabel("non-covisible share of all objects (%)")
             ax.set_ylabel(f"{title} (%)")
-            ax.set_title(f"{dataset}: {title.lower()} against the share of distractors")
+            ax.set_title(f"{dataset}: {title} vs distractor share")
             ax.set_ylim(-2, 102)
             ax.grid(alpha=0.3)
     handles, labels = axes[0, 0].get_legend_handles_labels()
@@ -181,7 +189,14 @@ def write_fig_localisation(out_dir: str | Path) -> list[Path]:
             if c.empty:
                 continue
             x, m, s = c["position_sigma_m"], 100 * c["f1_mean"], 100 * c["f1_std"]
-            ax.plot(x, m, marker="o", ms=3, color=colors[matcher], label=method_name(matcher))
+            ax.plot(
+                x,
+                m,
+                marker=_marker(matcher),
+                ms=4,
+                color=colors[matcher],
+                label=method_name(matcher),
+            )
             ax.fill_between(x, m - s, m + s, color=colors[matcher], alpha=0.15, lw=0)
         ax.axvline(1.2, color="grey", ls=":", lw=1)
         ax.text(1.2, 1, " GPS σ of the DMGM data", color="grey", fontsize=7, va="bottom")

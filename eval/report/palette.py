@@ -1,0 +1,50 @@
+"""One colour and one marker per matcher, the same in every figure.
+
+Colours come from two colour-blind-safe palettes (Okabe & Ito's eight, then Paul Tol's "muted"
+nine) and each matcher also has its own marker, so no two built-in matchers look alike even in
+grey. A matcher without an entry (a user's own) gets the first colour and marker no built-in
+uses, in the order the figure meets it.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+OKABE_ITO = ("#E69F00", "#56B4E9", "#009E73", "#F0E442", "#0072B2", "#D55E00", "#CC79A7", "#000000")
+TOL_MUTED = ("#CC6677", "#332288", "#DDCC77", "#117733", "#88CCEE", "#882255", "#44AA99",
+             "#999933", "#AA4499")  # fmt: skip
+MARKERS = ("o", "s", "^", "v", "D", "P", "X", "*", "<", ">", "h", "p", "d", "H", "8")
+
+
+class Style(NamedTuple):
+    color: str
+    marker: str
+
+
+# The paper's methods first, maximin in black (the method the paper proposes), then the rest.
+BUILTIN: dict[str, Style] = {
+    name: Style(color, marker)
+    for name, color, marker in zip(
+        ("maximin", "sm", "rrwm", "tm", "hgm", "bcagm", "rrwhm", "mos", "appearance",
+         "consistency", "pose", "pose_refine", "pose_appearance", "maximin_pose", "none"),
+        (OKABE_ITO[7], OKABE_ITO[0], OKABE_ITO[1], OKABE_ITO[2], OKABE_ITO[3], OKABE_ITO[4],
+         OKABE_ITO[5], OKABE_ITO[6], TOL_MUTED[0], TOL_MUTED[1], TOL_MUTED[2], TOL_MUTED[3],
+         TOL_MUTED[4], TOL_MUTED[5], "#BBBBBB"),
+        MARKERS,
+        strict=True,
+    )
+}  # fmt: skip
+
+
+def styles(matchers: list[str]) -> dict[str, Style]:
+    """The style of each of `matchers`: built-ins their own, others the unused ones in order."""
+    used = {s.color for s in BUILTIN.values()}
+    spare_colors = [c for c in (*TOL_MUTED, *OKABE_ITO) if c not in used] or list(TOL_MUTED)
+    out, k = {}, 0
+    for name in matchers:
+        if name in BUILTIN:
+            out[name] = BUILTIN[name]
+        else:
+            out[name] = Style(spare_colors[k % len(spare_colors)], MARKERS[k % len(MARKERS)])
+            k += 1
+    return out
