@@ -55,3 +55,22 @@ def test_every_matcher_has_its_own_colour_and_marker():
     assert set(available()) <= set(BUILTIN)
     assert len({s.color for s in found.values()}) == len(found)  # no two share a colour
     assert len({s.marker for s in BUILTIN.values()}) == len(BUILTIN)
+
+
+def test_a_users_scenario_keeps_its_name_and_gets_no_paper_columns():
+    import pandas as pd
+
+    from eval.report.tables import to_markdown
+    from eval.studies.evaluation import dataset_label
+
+    assert dataset_label("my-busy-3lane") == "my-busy-3lane"
+    assert (dataset_label("cad-intersection"), dataset_label("mrc-arena")) == ("CAD", "MRC")
+    assert dataset_label("dmgm-cad") == "DMGM"
+    from pathlib import Path
+
+    table = pd.read_csv(Path(__file__).resolve().parents[1] / "results" / "table1.csv")
+    cad = table[table["dataset"] == "CAD"]
+    assert "Accuracy (paper)" in to_markdown(cad)
+    mine = cad.assign(dataset="my-busy-3lane", runs=1)
+    text = to_markdown(mine)
+    assert "(paper)" not in text and "× 1 run;" in text and "**my-busy-3lane**" in text

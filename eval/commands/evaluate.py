@@ -77,6 +77,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--paper-table", default=str(PAPER_CSV), help="the paper's Table I (CSV) shown beside ours"
     )
+    parser.add_argument(
+        "--label",
+        nargs="+",
+        metavar="NAME",
+        help="a title per dataset, same order (default: from its scenario's name)",
+    )
     add_runner_arguments(parser)
 
 
@@ -84,7 +90,12 @@ def run(args: argparse.Namespace) -> int:
     paper = args.protocol == "paper"
     no_val = (args.no_calibration or paper) and not args.tune
     vals = [None] * len(args.datasets) if no_val else val_dirs(args.datasets, args.val)
-    entries = [open_entry(d, v) for d, v in zip(args.datasets, vals, strict=True)]
+    labels = args.label or [None] * len(args.datasets)
+    if len(labels) != len(args.datasets):
+        raise ValueError(f"--label: {len(labels)} names for {len(args.datasets)} datasets")
+    entries = [
+        open_entry(d, v, name) for d, v, name in zip(args.datasets, vals, labels, strict=True)
+    ]
     matchers = parse_matchers(args.matchers)
     with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(ResultCache(args.cache), executor)

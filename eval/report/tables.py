@@ -196,12 +196,16 @@ def to_markdown(table: pd.DataFrame) -> str:
     show_params = _show_params(table)
     for dataset, rows in table.groupby("dataset", sort=False):
         cells = [_cells(r, show_params) for _, r in rows.iterrows()]
-        header = list(cells[0])
-        runs, frames = int(rows["runs"].max()), int(rows["frames"].max())
         paper = PAPER_COLUMN.get(str(dataset), dataset)
+        has_paper = paper in PAPER_DATASETS  # the paper's columns only beside its own datasets
+        header = [h for h in cells[0] if has_paper or "(paper)" not in h]
+        runs, frames = int(rows["runs"].max()), int(rows["frames"].max())
+        caption = (
+            f"**{dataset}** — {frames} test frame pairs × {runs} run{'s' * (runs != 1)}; "
+            "percent, mean ± std over runs"
+        )
         lines = [
-            f"**{dataset}** — {frames} test frame pairs × {runs} runs; percent, mean ± std over "
-            f"runs; paper ({paper}): mean ± its printed spread",
+            caption + (f"; paper ({paper}): mean ± its printed spread" if has_paper else ""),
             "",
             "| " + " | ".join(header) + " |",
             "|" + "|".join(":---" if h == "Method" else "---:" for h in header) + "|",

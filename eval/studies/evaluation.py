@@ -42,7 +42,7 @@ PAPER_ORDER = ("sm", "rrwm", "hgm", "tm", "bcagm", "rrwhm", "mos", "maximin", "a
 QUALITATIVE_MATCHERS = ("rrwhm", "mos", "maximin")
 DEFAULT_CACHE = "cache/runs"  # make reproduce's, inside the repository; commands use user_cache()
 # Scenario name -> table name where the first-word rule (below) does not give the right one.
-DATASET_LABELS = {"cad-dense": "CAD-dense"}
+DATASET_LABELS = {"cad-dense": "CAD-dense", "dmgm-cad": "DMGM"}
 
 # A table row (the requested matcher's label) -> the spec that runs for it on one dataset (tuned
 # parameters and protocol options make the two differ).
@@ -63,14 +63,24 @@ class DatasetEntry:
     val_pairs: int = 0
 
 
+PAPER_FAMILIES = ("cad", "mrc")  # scenario-name prefixes titled like the paper's datasets
+
+
 def dataset_label(scenario_name: str) -> str:
-    """Table name of a scenario: :data:`DATASET_LABELS`, else the part before the first '-',
-    upper case (cad-intersection -> CAD, mrc-arena -> MRC, cad-dense -> CAD-dense)."""
-    return DATASET_LABELS.get(scenario_name) or scenario_name.split("-", 1)[0].upper()
+    """Table name of a scenario: :data:`DATASET_LABELS`; a scenario of the paper's families by
+    its family in upper case (cad-intersection -> CAD, mrc-arena -> MRC, cad-dense ->
+    CAD-dense); any other by its own name (my-busy-3lane stays my-busy-3lane)."""
+    if scenario_name in DATASET_LABELS:
+        return DATASET_LABELS[scenario_name]
+    family = scenario_name.split("-", 1)[0]
+    return family.upper() if family.lower() in PAPER_FAMILIES else scenario_name
 
 
-def open_entry(test_dir: str | Path, val_dir: str | Path | None) -> DatasetEntry:
-    """Open the test (and validation) dataset and describe them. Each is verified against its
+def open_entry(
+    test_dir: str | Path, val_dir: str | Path | None, label: str | None = None
+) -> DatasetEntry:
+    """Open the test (and validation) dataset and describe them, titled `label` (default:
+    :func:`dataset_label` of its scenario). Each is verified against its
     manifest's checksums (once per process for unchanged files): the result cache is keyed by
     the manifest's checksum, so a record modified after generation would otherwise go unseen."""
     test = tasks.open_dataset(str(test_dir))
@@ -84,7 +94,7 @@ def open_entry(test_dir: str | Path, val_dir: str | Path | None) -> DatasetEntry
             f"{test_dir}'s {test.scenario_name!r}"
         )
     return DatasetEntry(
-        label=dataset_label(test.scenario_name),
+        label=label or dataset_label(test.scenario_name),
         scenario=test.scenario_name,
         test_dir=str(test_dir),
         test_checksum=test.checksum,
