@@ -74,3 +74,38 @@ def test_a_users_scenario_keeps_its_name_and_gets_no_paper_columns():
     mine = cad.assign(dataset="my-busy-3lane", runs=1)
     text = to_markdown(mine)
     assert "(paper)" not in text and "× 1 run;" in text and "**my-busy-3lane**" in text
+
+
+def _parsers() -> dict:
+    import argparse
+
+    from cadsim import cli
+
+    parser = cli.build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    for name in cli.COMMANDS:
+        cli._load(name).add_arguments(sub.choices[name])
+    return sub.choices
+
+
+def test_the_same_flag_means_the_same_on_every_subcommand():
+    for name, parser in _parsers().items():
+        strings = {o for a in parser._actions for o in a.option_strings}
+        primary = {a.option_strings[0] for a in parser._actions if a.option_strings}
+        assert "--jobs" not in primary, name  # workers are --workers everywhere
+        assert "--quiet" not in strings, name  # --no-progress is the one spelling
+        if "--matchers" in strings or "--runs" in strings and name != "synthetic":
+            assert "--workers" in strings, name
+        if name in ("evaluate", "sweep-noise", "sweep-regime", "sweep-localisation"):
+            assert {"--out", "--cache", "--workers", "--no-progress", "--val"} <= strings, name
+            out = next(a for a in parser._actions if "--out" in a.option_strings)
+            assert out.required, name  # never a default that overwrites results/
+
+
+def test_synthetic_takes_matchers_comma_separated_too():
+    from eval.validation import synthetic
+
+    parser = _parsers()["synthetic"]
+    args = parser.parse_args(["--matchers", "TM,rrwhm", "bcagm", "--workers", "1"])
+    assert args.jobs == 1
+    assert synthetic.matcher_names(args.matchers) == ["tm", "rrwhm", "bcagm"]

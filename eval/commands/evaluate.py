@@ -53,6 +53,9 @@ def add_runner_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help=f"processes, 1..{MAX_WORKERS} (default: one per core)",
     )
+    parser.add_argument(
+        "--no-progress", action="store_true", help="no progress bar (none when not a terminal)"
+    )
     add_scheduler_argument(parser)
 
 
@@ -98,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
     ]
     matchers = parse_matchers(args.matchers)
     with make_executor(args.workers, args.scheduler) as executor:
-        runner = Runner(ResultCache(args.cache), executor)
+        runner = Runner(ResultCache(args.cache), executor, progress=not args.no_progress)
         evaluate(
             entries,
             matchers,

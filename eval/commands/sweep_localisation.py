@@ -193,7 +193,7 @@ def run(args: argparse.Namespace) -> int:
     matchers = parse_matchers(args.matchers)
     sigmas = parse_sigmas(args.sigmas)
     with make_executor(args.workers, args.scheduler) as executor:
-        runner = Runner(ResultCache(args.cache), executor)
+        runner = Runner(ResultCache(args.cache), executor, progress=not args.no_progress)
         named = sweep_specs(args.out, entry, matchers, runner, args.tune)
         rows = sweep_localisation(entry, named, range(args.runs), sigmas, runner, args.pairs)
     write_sweep(args.out, rows)

@@ -131,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
     entry = open_entry(args.dataset, val)
     matchers = parse_matchers(args.matchers)
     with make_executor(args.workers, args.scheduler) as executor:
-        runner = Runner(ResultCache(args.cache), executor)
+        runner = Runner(ResultCache(args.cache), executor, progress=not args.no_progress)
         sweep(entry, matchers, range(args.runs), rates, runner, args.out, args.pairs)
     from eval.report.figures import write_fig4
 

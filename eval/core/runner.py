@@ -176,7 +176,7 @@ class _TaskProgress:
             total=sum(t.runs for t in tasks),
             desc=desc,
             unit="run",
-            disable=not show,
+            disable=None if show else True,  # None: only on a terminal
             bar_format="{l_bar}{bar}| {n:.0f}/{total} [{elapsed}<{remaining}]",
         )
         self.reported = {t.token: 0.0 for t in tasks}  # runs reported by each unfinished task

@@ -372,6 +372,11 @@ def _parse_compare(items: Iterable[str]) -> dict[str, str]:
     return rows
 
 
+def matcher_names(items: list[str]) -> list[str]:
+    """``--matchers`` items, comma- or space-separated alike, case-insensitive."""
+    return [n.strip().lower() for item in items for n in item.split(",") if n.strip()]
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--protocol",
@@ -379,7 +384,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default="deformation",
         help="which benchmark ('all' = deformation, outliers, house)",
     )
-    parser.add_argument("--matchers", nargs="+", default=None, help="matcher names")
+    parser.add_argument(
+        "--matchers",
+        nargs="+",
+        default=None,
+        help="matcher names, comma- or space-separated, case-insensitive",
+    )
     parser.add_argument("--trials", type=int, default=100, help="trials per synthetic setting")
     parser.add_argument("--seed", type=int, default=0, help="base seed (problems and matchers)")
     parser.add_argument(
@@ -404,7 +414,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--house-pairs", type=int, default=None, help="House: frame pairs per baseline (all)"
     )
-    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="worker processes")
+    parser.add_argument(
+        "--workers",
+        "--jobs",
+        dest="jobs",
+        type=int,
+        default=os.cpu_count() or 1,
+        help="worker processes (--jobs: the same)",
+    )
     parser.add_argument(
         "--out",
         type=Path,
@@ -428,6 +445,8 @@ def run(args: argparse.Namespace) -> int:
         return coid_synthetic.run(args)
     if args.matchers is None:
         args.matchers = list(DEFAULT_MATCHERS)
+    else:
+        args.matchers = matcher_names(args.matchers)
     rows = _parse_compare(args.compare)
     names = list(PROTOCOLS) if args.protocol == "all" else [args.protocol]
     tables, texts = [], []
