@@ -120,7 +120,7 @@ def parse_matchers(text: str) -> list[MatcherSpec]:
         by_lower = {n.lower(): n for n in known}
         given = [n.strip() for n in text.split(",") if n.strip()]
         names = [n if n in known else by_lower.get(n.lower(), n) for n in given]
-        unknown = [n for n in names if n not in known]
+        unknown = [n for n in names if n not in known and not _importable(n)]
         if unknown or not names:
             import difflib
 
@@ -130,6 +130,19 @@ def parse_matchers(text: str) -> list[MatcherSpec]:
                 f"--matchers: unknown {unknown or text!r}{hint}; available: {', '.join(known)}"
             )
     return [MatcherSpec(n) for n in dict.fromkeys(names)]
+
+
+def _importable(name: str) -> bool:
+    """Whether ``name`` is a ``package.module:function`` matcher that imports."""
+    if ":" not in name:
+        return False
+    from matchers.core.registry import get
+
+    try:
+        get(name)
+    except ValueError:
+        return False
+    return True
 
 
 def as_named(matchers: Sequence[MatcherSpec] | Mapping[str, MatcherSpec]) -> Named:

@@ -91,7 +91,9 @@ def register(
 
 
 def get(name: str) -> Matcher:
-    """The matcher called ``name``: registered first, then built-in, then entry point."""
+    """The matcher called ``name``: registered first, then built-in, then entry point, then a
+    ``package.module:function`` import path (what a command line can name without registering
+    anything; worker processes import it themselves)."""
     if name in _registered:
         return _registered[name]
     if name in _BUILTIN:
@@ -101,6 +103,16 @@ def get(name: str) -> Matcher:
         fn = points[name].load()
         if not callable(fn):
             raise TypeError(f"entry point {name!r} ({points[name].value}) is not callable")
+        _registered[name] = fn
+        return fn
+    if ":" in name:  # "package.module:function" — importable in every worker process
+        module, _, attribute = name.partition(":")
+        try:
+            fn = getattr(importlib.import_module(module), attribute)
+        except (ImportError, AttributeError) as exc:
+            raise ValueError(f"matcher {name!r}: cannot import it ({exc})") from None
+        if not callable(fn):
+            raise ValueError(f"matcher {name!r} is not callable")
         _registered[name] = fn
         return fn
     raise ValueError(f"unknown matcher {name!r}; available: {', '.join(available())}")

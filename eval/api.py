@@ -1,0 +1,69 @@
+"""The evaluation from Python: benchmark matchers on datasets and get Table I as a DataFrame.
+
+    >>> from eval.api import evaluate_matchers
+    >>> table = evaluate_matchers(["data/cad"], ["sm", "maximin"], val_dirs=["data/cad-val"],
+    ...                           out="my-run")                        # doctest: +SKIP
+    >>> table[["dataset", "matcher", "f1_mean", "f1_std"]]            # doctest: +SKIP
+
+The same machinery as ``cadsim evaluate`` (cached runs, τ calibrated on validation, the same
+metrics and files), so a row here equals the row the command writes. docs/api.md walks through
+the rest of the Python API: datasets, problems, matchers, metrics.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import pandas as pd
+
+from eval.core.cache import ResultCache
+from eval.core.executor import make_executor
+from eval.core.runner import Runner
+from eval.report.tables import build_table, write_tables
+from eval.studies.evaluation import evaluate, open_entry, parse_matchers
+
+
+def evaluate_matchers(
+    test_dirs: Sequence[str | Path],
+    matchers: Sequence[str],
+    *,
+    out: str | Path,
+    val_dirs: Sequence[str | Path | None] | None = None,
+    runs: int = 1,
+    tune: bool = False,
+    cache: str | Path | None = None,
+    workers: int = 1,
+    progress: bool = False,
+) -> pd.DataFrame:
+    """Run `matchers` on each test dataset and return Table I (one row per dataset and matcher,
+    the columns of ``table1.csv``: rates in percent, mean and std over `runs` seeds).
+
+    matchers: registered names (case-insensitive), or ``package.module:function`` import paths.
+    A matcher you ``matchers.register()``-ed in this process is seen only with ``workers=1``
+    (the default: everything runs here); other processes import built-ins, entry points and
+    import paths themselves. val_dirs: one validation dataset per test dataset (None: no τ, the
+    full assignment). out: the folder the result files go to (created). cache: the run cache
+    (default ``$CADSIM_CACHE_DIR/runs``, else ``~/.cache/cadsim/runs``).
+    """
+    from matchers.core.jit import cache_root
+
+    vals = list(val_dirs) if val_dirs is not None else [None] * len(test_dirs)
+    if len(vals) != len(test_dirs):
+        raise ValueError(f"val_dirs: {len(vals)} for {len(test_dirs)} test datasets")
+    entries = [open_entry(t, v) for t, v in zip(test_dirs, vals, strict=True)]
+    specs = parse_matchers(",".join(matchers))
+    cache_dir = Path(cache) if cache is not None else cache_root() / "runs"
+    with make_executor(workers) as executor:
+        runner = Runner(ResultCache(cache_dir), executor, progress=progress)
+        evaluate(
+            entries,
+            specs,
+            range(runs),
+            runner,
+            out,
+            calibrate=all(v is not None for v in vals),
+            tune=tune,
+        )
+    write_tables(out)  # table1.md / .csv / .tex, as the command writes them
+    return build_table(out)
