@@ -60,12 +60,12 @@ bench: venv
 	$(PY) -m eval.bench
 
 lint: venv
-	$(PY) -m ruff check cadsim matchers eval tests
-	$(PY) -m ruff format --check cadsim matchers eval tests
+	$(PY) -m ruff check cadsim matchers eval tests examples
+	$(PY) -m ruff format --check cadsim matchers eval tests examples
 
 format: venv
-	$(PY) -m ruff format cadsim matchers eval tests
-	$(PY) -m ruff check --fix cadsim matchers eval tests
+	$(PY) -m ruff format cadsim matchers eval tests examples
+	$(PY) -m ruff check --fix cadsim matchers eval tests examples
 
 reproduce: venv
 	$(PY) -m eval.reproduce
