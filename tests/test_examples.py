@@ -31,3 +31,6 @@ def test_a_matcher_named_by_import_path_is_evaluated():
 
     assert [m.name for m in parse_matchers("matchers.rrwm:rrwm")] == ["matchers.rrwm:rrwm"]
     assert get("matchers.rrwm:rrwm") is get("rrwm")
+    from matchers import available
+
+    assert "matchers.rrwm:rrwm" not in available()  # an import path is not registered

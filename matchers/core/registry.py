@@ -113,8 +113,7 @@ def get(name: str) -> Matcher:
             raise ValueError(f"matcher {name!r}: cannot import it ({exc})") from None
         if not callable(fn):
             raise ValueError(f"matcher {name!r} is not callable")
-        _registered[name] = fn
-        return fn
+        return fn  # not added to available(): an import path names itself
     raise ValueError(f"unknown matcher {name!r}; available: {', '.join(available())}")
 
 
