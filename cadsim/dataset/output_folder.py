@@ -16,7 +16,7 @@ import re
 from pathlib import Path
 
 from cadsim.dataset import layout
-from cadsim.dataset.manifest import FORMAT_NAME, DatasetError, read_manifest
+from cadsim.dataset.manifest import FORMAT_NAME
 
 _TEMP = re.compile(re.escape(layout.TEMP_PREFIX) + r".+-\d+-[0-9a-f]{8}$")
 _OWN = {layout.MANIFEST, layout.PAIRS_DIR, layout.EPISODES_DIR, layout.WORK_DIR, layout.LOCK_FILE}
@@ -53,28 +53,24 @@ def check_output_folder(out: str | Path, option: str = "--out") -> Path:
             "give a new or empty folder"
         )
     links = [e.name for e in entries if e.is_symlink()]
-    for sub in (layout.PAIRS_DIR, layout.EPISODES_DIR):
-        if (path / sub).is_dir() and not (path / sub).is_symlink():
-            links += [f"{sub}/{e.name}" for e in (path / sub).iterdir() if e.is_symlink()]
+    strays = []
+    for sub, own in ((layout.PAIRS_DIR, _is_record), (layout.EPISODES_DIR, _is_episode)):
+        folder = path / sub
+        if folder.is_symlink() or not folder.exists():
+            continue
+        if not folder.is_dir():
+            strays.append(sub)
+            continue
+        for e in folder.iterdir():
+            if e.is_symlink():
+                links.append(f"{sub}/{e.name}")
+            elif not own(e) and not _TEMP.match(e.name):
+                strays.append(f"{sub}/{e.name}")
     if links:
         raise OutputFolderError(
             f"{path}: holds symbolic links ({_listing(links)}), which a dataset never does; "
             "they are not followed — give a new or empty folder"
         )
-    strays = []
-    for sub, pattern in ((layout.PAIRS_DIR, None), (layout.EPISODES_DIR, _EPISODE)):
-        folder = path / sub
-        if folder.exists() and not folder.is_dir():
-            strays.append(sub)
-        elif folder.is_dir():
-            for e in folder.iterdir():
-                own = (
-                    layout.parse_record_name(e.name) is not None and e.is_dir()
-                    if pattern is None
-                    else bool(pattern.match(e.name))
-                )
-                if not own and not _TEMP.match(e.name):
-                    strays.append(f"{sub}/{e.name}")
     if strays:
         raise OutputFolderError(
             f"{path}: not a cadsim dataset (it holds {_listing(strays)}); give a new or empty folder"
@@ -86,14 +82,17 @@ def check_output_folder(out: str | Path, option: str = "--out") -> Path:
     return path
 
 
+def _is_record(entry: Path) -> bool:
+    return layout.parse_record_name(entry.name) is not None and entry.is_dir()
+
+
+def _is_episode(entry: Path) -> bool:
+    return bool(_EPISODE.match(entry.name))
+
+
 def _is_cadsim_manifest(path: Path) -> bool:
     """Whether ``path``'s manifest is one cadsim wrote, of this format version or another (the
-    resume check then decides, naming the version)."""
-    try:
-        read_manifest(path)
-        return True
-    except DatasetError:
-        pass
+    resume check then reads it in full and names what differs)."""
     try:
         manifest = json.loads((path / layout.MANIFEST).read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError):

@@ -109,21 +109,13 @@ def level_intervals(per_pair: pd.DataFrame, metric: str = "f1") -> pd.DataFrame:
     episodes and runs resampled together (the same resamples at every level); columns
     ``matcher``, ``keep``, ``{metric}_ci_low``, ``{metric}_ci_high``."""
     rows = []
-    n_episodes, n_draws = per_pair["episode"].nunique(), per_pair["seed"].nunique()
-    weights = boot.resampling_weights(n_episodes, n_draws)
+    axes, weights = boot.axes_of(per_pair), boot.weights_for(per_pair)
     for matcher, group in per_pair.groupby("matcher", sort=False):
-        values = boot.table(group, metric)
-        counts = boot.table(group.assign(_one=1.0), "_one").sums
-        if values.sums.shape[1:] != (n_episodes, n_draws):  # a matcher missing some pairs/runs
-            weights_here = boot.resampling_weights(*values.sums.shape[1:])
-        else:
-            weights_here = weights
-        low, high = boot.interval(
-            boot.pooled(values.sums, weights_here) / boot.pooled(counts, weights_here)
-        )
+        levels, _, resampled = boot.means(group, metric, weights, axes)
+        low, high = boot.interval(resampled)
         rows += [
             {"matcher": matcher, "keep": k, f"{metric}_ci_low": lo, f"{metric}_ci_high": hi}
-            for k, lo, hi in zip(values.levels, low, high, strict=True)
+            for k, lo, hi in zip(levels, low, high, strict=True)
         ]
     return pd.DataFrame(rows)
 

@@ -94,15 +94,6 @@ def _apart_on_both_sides(
     return bool((below & positive).any() and (above & negative).any())
 
 
-def _curves(per_pair: pd.DataFrame, matcher: str, column: str, weights: boot.Weights):
-    """(point, resampled) mean of `column` per level for `matcher`: (K,) and (R, K)."""
-    rows = per_pair[per_pair["matcher"] == matcher]
-    values = boot.table(rows, column).sums
-    counts = boot.table(rows.assign(_one=1.0), "_one").sums
-    point = values.sum(axis=(1, 2)) / counts.sum(axis=(1, 2))
-    return point, boot.pooled(values, weights) / boot.pooled(counts, weights)
-
-
 def find_crossovers(per_pair: pd.DataFrame, seed: int = boot.SEED) -> pd.DataFrame:
     """Rows of ``crossovers.csv`` from the regime sweep's per-(level, matcher, pair, run) metrics
     (``dataset``, ``keep``, ``matcher``, ``pair``, ``episode``, ``seed``, ``n1``, ``n2``,
@@ -114,18 +105,19 @@ def find_crossovers(per_pair: pd.DataFrame, seed: int = boot.SEED) -> pd.DataFra
             _all=(objects["n1"] + objects["n2"]).astype(float),
             _non=(objects["n1"] + objects["n2"] - 2 * objects["n_gt"]).astype(float),
         )
-        all_table = boot.table(objects, "_all")
-        weights = boot.resampling_weights(len(all_table.episodes), len(all_table.draws), seed=seed)
-        non = boot.table(objects, "_non").sums
+        axes, weights = boot.axes_of(group), boot.weights_for(group, seed)
+        all_table = boot.table(objects, "_all", axes=axes)
+        non = boot.table(objects, "_non", axes=axes).sums
         share = non.sum(axis=(1, 2)) / all_table.sums.sum(axis=(1, 2))  # keep ascending
         with np.errstate(invalid="ignore"):
             share_r = boot.pooled(non, weights) / boot.pooled(all_table.sums, weights)
         for a, b in PAIRS:
             if not {a, b} <= set(group["matcher"]):
                 continue
+            rows_a, rows_b = group[group["matcher"] == a], group[group["matcher"] == b]
             for metric, _ in METRICS:
-                point_a, res_a = _curves(group, a, metric, weights)
-                point_b, res_b = _curves(group, b, metric, weights)
+                _, point_a, res_a = boot.means(rows_a, metric, weights, axes)
+                _, point_b, res_b = boot.means(rows_b, metric, weights, axes)
                 found = crossings(share, point_a - point_b)
                 base = {"dataset": dataset, "matcher_a": a, "matcher_b": b, "metric": metric}
                 if not found:

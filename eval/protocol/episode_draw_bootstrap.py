@@ -67,16 +67,41 @@ def table(
     level: str = "keep",
     episode: str = "episode",
     draw: str = "seed",
+    axes: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> Table:
     """Sums of column `value` of `frame` (one row per level, frame pair and run) per (level,
-    episode, draw); missing combinations count 0."""
+    episode, draw); missing combinations count 0. `axes`: the (episodes, draws) to lay the sums
+    out on (default: those of `frame`), so tables of several matchers share one layout."""
     grouped = frame.groupby([level, episode, draw], sort=True)[value].sum()
     levels = np.sort(frame[level].unique())
-    episodes = np.sort(frame[episode].unique())
-    draws = np.sort(frame[draw].unique())
+    episodes, draws = axes or (np.sort(frame[episode].unique()), np.sort(frame[draw].unique()))
     index = pd.MultiIndex.from_product([levels, episodes, draws])
     sums = grouped.reindex(index, fill_value=0.0).to_numpy(dtype=float)
     return Table(sums.reshape(len(levels), len(episodes), len(draws)), levels, episodes, draws)
+
+
+def axes_of(frame: pd.DataFrame, episode: str = "episode", draw: str = "seed") -> tuple:
+    """The sorted episodes and draws of `frame` (a shared layout for :func:`table`)."""
+    return np.sort(frame[episode].unique()), np.sort(frame[draw].unique())
+
+
+def weights_for(frame: pd.DataFrame, seed: int = SEED) -> Weights:
+    """Resampling weights over the episodes and draws of `frame`."""
+    episodes, draws = axes_of(frame)
+    return resampling_weights(len(episodes), len(draws), seed=seed)
+
+
+def means(
+    frame: pd.DataFrame, value: str, weights: Weights, axes: tuple
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(levels, point mean per level (K,), resampled means (R, K)) of column `value` over the
+    rows of `frame` (frame pairs × draws), laid out on `axes`."""
+    values = table(frame, value, axes=axes)
+    counts = table(frame.assign(_one=1.0), "_one", axes=axes).sums
+    point = values.sums.sum(axis=(1, 2)) / counts.sum(axis=(1, 2))
+    with np.errstate(invalid="ignore"):
+        resampled = pooled(values.sums, weights) / pooled(counts, weights)
+    return values.levels, point, resampled
 
 
 def interval(values: np.ndarray, level: float = LEVEL) -> tuple[float, float]:

@@ -25,7 +25,6 @@ the matcher's own check names it.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 
 import numpy as np
@@ -33,7 +32,7 @@ import numpy as np
 from matchers.blocks.pairwise import NEIGHBOURS
 from matchers.blocks.prior import check_prior_options, prior_likelihood
 from matchers.core.problem import Problem
-from matchers.hypergraph.tensor_build import MAX_ENTRIES
+from matchers.hypergraph.tensor_build import MAX_ENTRIES, planned_entries
 
 Estimate = Callable[..., float]
 
@@ -81,10 +80,8 @@ def tensor_sizes(problem: Problem, options: dict) -> tuple[float, float, bool] |
     cap = None if raw_cap is None else _count(raw_cap, MAX_ENTRIES)
     if triangles is None or k is None or (raw_cap is not None and cap is None):
         return None
-    entries = float(min(triangles, math.comb(sampled, 3))) * min(k, 6 * math.comb(full, 3))
-    if cap is not None and entries > cap:
-        return float(cap), float(math.comb(full, 3)), True
-    return entries, float(6 * math.comb(full, 3)), False
+    entries, searched, capped = planned_entries(sampled, full, triangles, k, cap)
+    return float(entries), float(searched), capped
 
 
 def _tensor_bytes(problem: Problem, options: dict, matcher: str) -> float:

@@ -300,17 +300,24 @@ _BYTES_PER_ENTRY = 160
 _BYTES_PER_TRIPLE = 96
 
 
+def planned_entries(
+    sampled: int, full: int, triangles: int, k: int, max_entries: int | None
+) -> tuple[int, int, bool]:
+    """(entries, triangles searched, capped) of a build that samples `triangles` triangles among
+    `sampled` objects and searches k candidates among the triangles of `full` objects: the
+    uncapped search reads every ordered triple, the capped one the unordered base."""
+    ordered = 6 * math.comb(full, 3)
+    entries = min(triangles, math.comb(sampled, 3)) * min(k, ordered)
+    if max_entries is not None and entries > max_entries:
+        return max_entries, math.comb(full, 3), True
+    return entries, ordered, False
+
+
 def _check_tensor_memory(
     n: int, m: int, sampled: int, full: int, triangles: int, k: int, max_entries: int | None
 ) -> None:
     """Refuse (``ProblemTooLarge``) a tensor whose build would exceed the memory budget."""
-    sampled_triangles = min(triangles, math.comb(sampled, 3))
-    ordered = 6 * math.comb(full, 3)
-    entries = sampled_triangles * min(k, ordered)
-    if max_entries is not None and entries > max_entries:
-        entries, triples = max_entries, math.comb(full, 3)  # the capped search: unordered base
-    else:
-        triples = ordered
+    entries, triples, _ = planned_entries(sampled, full, triangles, k, max_entries)
     check_memory(
         f"third-order tensor ({n} x {m} objects: {entries:,} entries, {triples:,} triangles "
         "searched)",
