@@ -16,13 +16,14 @@ Two recipes (``tensor=`` on every hypergraph matcher):
     (the BCAGM benchmark's ``createTensor.m``: nNN = nT = n1*n2).
 
 For both: distinct triangles are sampled (without replacement) in the view with fewer objects
-(view 1 on a tie) — all C(n, 3) when there are no more than the requested count — and matched against every ordered triple of
-distinct objects of the other view (so each vertex correspondence is tried), with scipy's
-cKDTree (exact search, both cores) on descriptors rounded to 1e-9. k is capped at the number of
-valid ordered triples. Candidates tied with the k-th distance are chosen by the tree's internal
-order: the result is invariant to similarity transforms of either view, but relabelling the
-objects can swap which of several equal-valued tied candidates are kept. Triangles
-with coincident vertices are skipped. Because the sampled triangles are distinct and the other
+(view 1 on a tie) — all C(n, 3) when there are no more than the requested count — and matched
+against every ordered triple of distinct objects of the other view (so each vertex correspondence is tried), on descriptors
+rounded to 1e-9, by the exact brute-force search of :mod:`matchers.hypergraph.candidate_search`:
+each triangle's k nearest, ties broken by candidate index, in index order — so the tensor, entry
+order included, depends on the descriptors alone, never on a tree's traversal or the CPU; k is
+capped at the number of valid ordered triples. The result is invariant to similarity transforms
+of either view; relabelling the objects can change which of several exactly tied candidates are
+kept (the lower index wins). Triangles with coincident vertices are skipped. Because the sampled triangles are distinct and the other
 view's ordered triples are distinct, no match triple can come up twice, so the builder skips the
 de-duplication sort of :meth:`SparseTensor.from_entries` (a test checks that claim).
 
@@ -36,9 +37,9 @@ should hold about 1.25x the cap, and one dual-tree search returns every pair wit
 (:func:`_radius_pool`); where the sample cannot vouch for the radius (heavy ties, or dense
 neighbourhoods it cannot see the end of), each query is instead asked for about twice its share
 of neighbours and only those whose last neighbour is still inside the running global cut are
-asked again for more (4x, up to k). Ties at the cut are kept in the order the search returned
-them (deterministic for given descriptors). With the defaults the cap binds exactly when
-n*m > 1000, so every problem up to 1000 candidate matches gets the paper's tensor unchanged.
+asked again for more (4x, up to k). Ties at the cut are broken by (query, candidate index), and
+the kept entries ordered by (triangle, query, candidate index), so the tree's order never
+shows. With the defaults the cap binds exactly when n*m > 1000, so every problem up to 1000 candidate matches gets the paper's tensor unchanged.
 The "duchenne" bandwidth is then the mean over the kept entries.
 """
 
@@ -55,6 +56,7 @@ from scipy.spatial import cKDTree
 from matchers.core.jit import njit
 from matchers.core.memory_budget import check_memory
 from matchers.core.problem import Problem
+from matchers.hypergraph.candidate_search import nearest
 from matchers.hypergraph.sparse_tensor import SparseTensor
 from matchers.hypergraph.tensor_sharing import build_or_reuse
 from matchers.hypergraph.triangles import (
@@ -232,9 +234,7 @@ def _candidates(
         # the L1 metric, where swapping two vertices often leaves the distance unchanged) fill
         # the last places — does not change under those transforms.
         desc_s, desc_f = np.round(desc_s, _DECIMALS), np.round(desc_f, _DECIMALS)
-        tree = cKDTree(desc_f, balanced_tree=False, compact_nodes=False)
-        dist, idx = tree.query(desc_s, k=k, p=spec.minkowski_p, workers=-1)
-        dist, idx = dist.reshape(len(tri_s), k), idx.reshape(len(tri_s), k)
+        dist, idx = nearest(desc_s, desc_f, k, spec.minkowski_p)
         if _match_indices_jit is not None:
             matches = _match_indices_jit(tri_s, tri_f, idx, m, swap)
         else:
@@ -376,7 +376,7 @@ def capped_neighbours(
     neighbours; one whose farthest neighbour is still within both the running cut (the cap-th
     smallest distance of the pool) and its group's k-th smallest is asked again for 4x as many.
     A query not asked again holds every neighbour that could still be kept, so the result is
-    the uncapped lists' ``cap`` smallest distances (ties: earliest in the pool first). The pool
+    the uncapped lists' ``cap`` smallest distances (ties: lowest (query, index) first). The pool
     comes from one radius search instead when a sample vouches for the radius
     (:func:`_radius_pool`); it then holds every pair within the radius, which is beyond the cut.
     Returns (query, distance, neighbour index) of the kept pairs, grouped by group.
@@ -393,9 +393,11 @@ def capped_neighbours(
         )
     if pool_dist.size > cap:
         inside = pool_dist < cut
-        inside[np.flatnonzero(pool_dist == cut)[: cap - int(inside.sum())]] = True
+        tied = np.flatnonzero(pool_dist == cut)
+        tied = tied[np.lexsort((pool_idx[tied], pool_query[tied]))]  # canonical: (query, index)
+        inside[tied[: cap - int(inside.sum())]] = True
         pool_query, pool_dist, pool_idx = pool_query[inside], pool_dist[inside], pool_idx[inside]
-    order = np.argsort(groups[pool_query], kind="stable")
+    order = np.lexsort((pool_idx, pool_query, groups[pool_query]))  # search order never shows
     return pool_query[order], pool_dist[order], pool_idx[order]
 
 
@@ -430,7 +432,7 @@ def _radius_pool(tree, queries, groups, k, per_query, cap, p, first):
     )
     pool_query, pool_idx, pool_dist = found["i"], found["j"], found["v"]
     for label, limit in ((pool_query, per_query), (groups[pool_query], k)):
-        keep, _ = _group_best(label, pool_dist, limit, int(label.max(initial=0)) + 1)
+        keep, _ = _group_best(label, pool_dist, pool_query, pool_idx, limit)
         if keep is not None:
             pool_query, pool_dist, pool_idx = pool_query[keep], pool_dist[keep], pool_idx[keep]
     if pool_dist.size < cap:
@@ -450,7 +452,9 @@ def _grown_pool(tree, queries, groups, k, per_query, cap, p, first):
     asked = np.full(count, first)
     farthest = dist.reshape(count, first)[:, -1].copy()
     while True:
-        keep, group_kth = _group_best(groups[pool_query], pool_dist, k, int(groups.max()) + 1)
+        keep, group_kth = _group_best(
+            groups[pool_query], pool_dist, pool_query, pool_idx, k, int(groups.max()) + 1
+        )
         if keep is not None:
             pool_query, pool_dist, pool_idx = pool_query[keep], pool_dist[keep], pool_idx[keep]
         cut = np.partition(pool_dist, cap - 1)[cap - 1] if pool_dist.size > cap else np.inf
@@ -471,15 +475,23 @@ def _grown_pool(tree, queries, groups, k, per_query, cap, p, first):
     return pool_query, pool_dist, pool_idx, cut
 
 
-def _group_best(group: np.ndarray, dist: np.ndarray, k: int, groups: int):
-    """(mask of the pool entries among their group's k smallest distances — ties: earlier
-    first — or None when that is all of them, each group's k-th smallest distance or inf if it
-    has fewer than k)."""
+def _group_best(
+    group: np.ndarray,
+    dist: np.ndarray,
+    query: np.ndarray,
+    idx: np.ndarray,
+    k: int,
+    groups: int | None = None,
+):
+    """(mask of the pool entries among their group's k smallest distances — ties: lowest
+    (query, index) first — or None when that is all of them, each group's k-th smallest
+    distance or inf if it has fewer than k)."""
+    groups = int(group.max(initial=0)) + 1 if groups is None else groups
     size = np.bincount(group, minlength=groups)
     kth = np.full(groups, np.inf)
-    if size.max() <= k:
+    if size.max(initial=0) <= k:
         return None, kth
-    ranked = np.lexsort((dist, group))
+    ranked = np.lexsort((idx, query, dist, group))
     rank = np.empty(len(dist), dtype=np.int64)
     rank[ranked] = np.arange(len(dist)) - np.repeat(np.cumsum(size) - size, size)
     full = rank == k - 1
