@@ -50,6 +50,50 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
+# name -> examples shown under `cadsim NAME --help` (kept here: the modules load only when run)
+COMMAND_EXAMPLES: dict[str, tuple[str, ...]] = {
+    "generate": (
+        "cadsim generate scenarios/cad-intersection.toml --pairs 3 --out data/mini",
+        "cadsim generate scenarios/cad-intersection.toml --pairs 50 --seed 7 --workers 2 --out data/cad",
+    ),
+    "info": ("cadsim info data/cad", "cadsim info data/cad --json > cad-info.json"),
+    "show": (
+        "cadsim show data/cad --pair 0 --out pair0.png",
+        "cadsim show eval/data/dmgm-cad/val-070 --pair 5 --no-labels --out dmgm5.png",
+    ),
+    "schema": ("cadsim schema", "cadsim schema --out scenario.schema.json"),
+    "import": (
+        "cadsim import dmgm path/to/DMGM/data/cad/test --out data/dmgm --sequences 069,071",
+    ),
+    "evaluate": (
+        "cadsim evaluate data/cad --val data/cad-val --matchers sm,maximin --runs 1 --out my-run",
+        "cadsim evaluate data/cad data/mrc --val data/cad-val data/mrc-val --tune --out my-tuned",
+        "cadsim evaluate data/cad --no-calibration --matchers my_pkg.matcher:match --out mine",
+    ),
+    "sweep-noise": (
+        "cadsim sweep-noise data/cad --rates 0,0.002,0.005 --matchers sm,maximin --out noise",
+    ),
+    "sweep-regime": ("cadsim sweep-regime data/cad-dense --keep 1,0.5,0 --out regime",),
+    "sweep-localisation": (
+        "cadsim sweep-localisation data/cad --sigmas 0,1.2,2.5,5 --matchers pose,maximin_pose "
+        "--out localisation",
+    ),
+    "table": ("cadsim table results", "cadsim table my-run --paper-table eval/data/paper-table1.csv"),
+    "synthetic": (
+        "cadsim synthetic --protocol deformation --matchers tm,rrwhm,maximin",
+        "cadsim synthetic --protocol house --house-n1 20 --workers 2 --out house",
+    ),
+}
+
+
+def command_epilog(name: str) -> str | None:
+    """The "examples:" block under ``cadsim NAME --help`` (None for a command without any)."""
+    if name not in COMMAND_EXAMPLES:
+        return None
+    lines = "\n".join(f"  {line}" for line in COMMAND_EXAMPLES[name])
+    return f"examples:\n{lines}"
+
+
 def int_in(low: int, high: int):
     """An argparse ``type``: an integer in [low, high]; anything else is a usage error naming the
     option (``argument --workers: expected an integer in 1..1024, got 0``)."""
@@ -107,7 +151,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help=DEBUG_HELP)
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, (_, help_text) in COMMANDS.items():
-        p = sub.add_parser(name, help=help_text)
+        p = sub.add_parser(
+            name,
+            help=help_text,
+            description=help_text[0].upper() + help_text[1:] + ".",
+            epilog=command_epilog(name),
+            formatter_class=argparse.RawDescriptionHelpFormatter,
+        )
         p.set_defaults(_command=name)
         # Also after the command; SUPPRESS keeps a `--debug` given before it.
         p.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=DEBUG_HELP)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import difflib
 from collections.abc import Mapping
 from dataclasses import fields
 from numbers import Real
@@ -18,8 +19,11 @@ def config_from_table(cls: type[T], table: Mapping, where: str, section: str) ->
     known = {f.name for f in fields(cls)}
     unknown = sorted(set(table) - known)
     if unknown:
+        close = difflib.get_close_matches(unknown[0], sorted(known), n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else ""
         raise ValueError(
-            f"{where}: unknown key(s) {', '.join(unknown)}; expected some of {', '.join(sorted(known))}"
+            f"{where}: unknown key(s) {', '.join(unknown)}{hint}; expected some of "
+            f"{', '.join(sorted(known))}"
         )
     try:
         return cls(**dict(table))

@@ -4,6 +4,12 @@ Used by ``cadsim show`` (ground-truth correspondences) and by the evaluation's q
 figure (paper Fig. 3 style: green correct, red wrong, yellow missed). Pixel coordinates: (u, v),
 u right, v down, as the detection boxes (u0, v0, u1, v1).
 
+Generated records also get a bird's-eye panel (:func:`draw_birdseye`): the true world positions
+of every object, both observers with their view frusta, and the same match lines drawn between
+the matched objects' true positions — the picture that shows why a matcher failed (two
+look-alike cars side by side, an object only one observer sees). World frame: x east, y north,
+metres, seen from above.
+
 Records without images (imported data) are drawn from above instead (:func:`topdown_figure`):
 each view's detections in its own camera frame's ground plane (x right, z forward, metres), lines
 between corresponding detections, and, when the record has a localisation prior, both views'
@@ -178,9 +184,90 @@ def topdown_figure(
     return fig
 
 
+OBSERVER_COLORS = ("#2563eb", "#f97316")  # view 1, view 2 (markers and frusta)
+
+
+def detection_world_positions(pair) -> tuple[np.ndarray, np.ndarray]:
+    """Per view, (k, 2) true world (x, y) of each detection: its object's bounding-box centre,
+    or — for a detection with no object in the record — its camera-frame position through the
+    true camera pose."""
+    centres = {o.id: o.center[:2] for o in pair.objects}
+    out = []
+    for view, to_world in zip((pair.view1, pair.view2), pair.camera_to_world, strict=True):
+        xyz = np.asarray(view.positions, float).reshape(-1, 3)
+        fallback = xyz @ to_world[:3, :3].T + to_world[:3, 3]
+        out.append(
+            np.array(
+                [centres.get(oid, fallback[k, :2]) for k, oid in enumerate(view.object_ids)],
+                dtype=float,
+            ).reshape(-1, 2)
+        )
+    return out[0], out[1]
+
+
+def draw_birdseye(
+    ax,
+    pair,
+    lines: Sequence[tuple[np.ndarray, str, str]] = (),
+    frustum_m: float | None = None,
+) -> None:
+    """Draw generated ``pair`` from above on matplotlib ``ax`` (world x east, y north, metres):
+    every target object (grey), view 1's detections (blue circles) and view 2's (orange
+    squares) at their true positions, each observer's camera and view frustum (its horizontal
+    field of view out to ``frustum_m``, default the farthest detection + 5 m), and per entry
+    (pairs (k, 2), colour, linestyle) of ``lines`` a line between the matched detections — or,
+    where both are one object (a correct or a missed match), a disc ("-") or ring (other
+    styles) around it."""
+    from matplotlib.patches import Wedge
+
+    cams = pair.cameras
+    if cams is None:
+        raise ValueError(
+            f"{pair.name}: no cameras in the record (imported data): no bird's-eye view"
+        )
+    w1, w2 = detection_world_positions(pair)
+    targets = np.array([o.center[:2] for o in pair.objects if o.target], float).reshape(-1, 2)
+    depth = max(
+        [float(np.max(v.positions[:, 2])) for v in (pair.view1, pair.view2) if len(v.positions)],
+        default=30.0,
+    )
+    reach = frustum_m if frustum_m is not None else depth + 5.0
+    for cam, color, name in zip(cams, OBSERVER_COLORS, ("observer 1", "observer 2"), strict=True):
+        centre = np.degrees(cam.yaw)
+        ax.add_patch(
+            Wedge(cam.position[:2], reach, centre - cam.hfov_deg / 2, centre + cam.hfov_deg / 2,
+                  facecolor=color, alpha=0.08, edgecolor=color, linewidth=0.8)
+        )  # fmt: skip
+        ax.scatter(*cam.position[:2], marker="^", s=60, color=color, zorder=4, label=name)
+    ax.scatter(*targets.T, s=6, color="#9ca3af", zorder=2, label="objects")
+    for pairs, color, style in lines:
+        pairs = np.asarray(pairs, int).reshape(-1, 2)
+        a, b = w1[pairs[:, 0]], w2[pairs[:, 1]]
+        same = np.hypot(*(a - b).T) < 0.5  # one object seen twice: a line of no length
+        for (x0, y0), (x1, y1) in zip(a[~same], b[~same], strict=True):
+            ax.plot([x0, x1], [y0, y1], color=color, linestyle=style, linewidth=1.4, zorder=3)
+        ax.scatter(*a[same].T, s=90, marker="o", zorder=3, linewidths=1.6,
+                   facecolor="none" if style != "-" else color, edgecolor=color,
+                   linestyle=style)  # fmt: skip
+    ax.scatter(*w1.T, s=30, facecolor="none", edgecolor=OBSERVER_COLORS[0], marker="o", zorder=5,
+               label="seen by 1")  # fmt: skip
+    ax.scatter(*w2.T, s=44, facecolor="none", edgecolor=OBSERVER_COLORS[1], marker="s", zorder=5,
+               label="seen by 2")  # fmt: skip
+    shown = np.vstack([w1, w2, [c.position[:2] for c in cams]])
+    low, high = shown.min(axis=0) - 8.0, shown.max(axis=0) + 8.0
+    ax.set_xlim(low[0], high[0])
+    ax.set_ylim(low[1], high[1])
+    ax.set_aspect("equal", adjustable="box")
+    ax.set_xlabel("x (m, east)", fontsize=7)
+    ax.set_ylabel("y (m, north)", fontsize=7)
+    ax.tick_params(labelsize=6)
+    ax.legend(fontsize=6, loc="upper right", framealpha=0.8, ncol=2)
+
+
 def draw_pair_from_record(pair, labels: bool = True):
-    """Figure of a dataset ``FramePair``: its boxes and its ground-truth pairs (from above, with
-    the localisation prior, when the record has no images)."""
+    """Figure of a dataset ``FramePair``: its boxes and its ground-truth pairs, with a bird's-eye
+    panel below (:func:`draw_birdseye`); from above only, with the localisation prior, when the
+    record has no images."""
     if not pair.has_images:
         prior = pair.prior()
         return topdown_figure(
@@ -197,7 +284,15 @@ def draw_pair_from_record(pair, labels: bool = True):
         f"{pair.name} (pair {pair.index}, t = {pair.time:.1f} s): {len(pair.view1)} | "
         f"{len(pair.view2)} detections, {len(pair.gt_pairs)} covisible"
     )
-    return pair_figure(
+    from matplotlib.figure import Figure
+
+    canvas, _ = side_by_side(pair.color1, pair.color2)
+    dpi, below = 100, 5.0  # inches of bird's-eye panel
+    width, images = canvas.shape[1] / dpi, canvas.shape[0] / dpi
+    height = images + below + 0.35
+    fig = Figure(figsize=(width, height), dpi=dpi)
+    draw_pair(
+        fig.add_axes((0, (below + 0.05) / height, 1, images / height)),
         pair.color1,
         pair.color2,
         pair.view1.boxes,
@@ -205,5 +300,11 @@ def draw_pair_from_record(pair, labels: bool = True):
         pair.gt_pairs,
         labels1=pair.view1.classes if labels else None,
         labels2=pair.view2.classes if labels else None,
-        title=title,
     )
+    draw_birdseye(
+        fig.add_axes((0.08, 0.45 / height, 0.84, (below - 0.5) / height)),
+        pair,
+        [(pair.gt_pairs, CORRECT, "-")],
+    )
+    fig.suptitle(title + " — ground truth; below: true positions from above", fontsize=9, y=0.995)
+    return fig

@@ -15,6 +15,7 @@ checked against the fields of ``cadsim.sensing.depth_noise.NoiseConfig``,
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import importlib
 import logging
 import math
@@ -57,6 +58,17 @@ class ScenarioError(ValueError):
         return (type(self), (self.path, self.key, self.problem, self.expected))
 
 
+def unknown_key_problem(key: str, known) -> str:
+    """The problem text for an unknown dotted ``key``, with "(did you mean 'x'?)" when one of
+    ``known`` is close to its last part."""
+    close = difflib.get_close_matches(key.rsplit(".", 1)[-1], [str(k) for k in known], n=1)
+    return f"unknown key (did you mean {close[0]!r}?)" if close else "unknown key"
+
+
+def _one_of(known) -> str:
+    return "one of " + ", ".join(sorted(str(k) for k in known))
+
+
 @dataclass(frozen=True)
 class ScenarioContext:
     """Where a table is being validated: the scenario file and the folder relative paths resolve
@@ -70,6 +82,10 @@ class ScenarioContext:
 
     def error(self, key: str, problem: str, expected: str = "") -> ScenarioError:
         return ScenarioError(self.path, key, problem, expected)
+
+    def unknown_key(self, key: str, known) -> ScenarioError:
+        """The error for an unknown dotted ``key``, suggesting the closest of ``known``."""
+        return ScenarioError(self.path, key, unknown_key_problem(key, known), _one_of(known))
 
     def resolve(self, value: str) -> Path:
         """A path from the file as an absolute path: ``~`` and environment variables expanded
@@ -401,9 +417,7 @@ def load_scenario(path: str | Path) -> Scenario:
 
     for key in raw:
         if key not in TOP_LEVEL and key not in TABLES:
-            raise ctx.error(
-                key, "unknown key", "one of " + ", ".join(sorted([*TOP_LEVEL, *TABLES]))
-            )
+            raise ctx.unknown_key(key, [*TOP_LEVEL, *TABLES])
     top = validate_table({k: raw[k] for k in TOP_LEVEL if k in raw}, Table(TOP_LEVEL), ctx, "")
     for key in TABLES:
         if key in raw and not isinstance(raw[key], dict):
@@ -488,9 +502,7 @@ def validate_table(raw: Mapping, schema: Table, ctx: ScenarioContext, prefix: st
     out: dict = {}
     for key in raw:
         if key not in schema.fields:
-            raise ctx.error(
-                _join(prefix, key), "unknown key", "one of " + ", ".join(sorted(schema.fields))
-            )
+            raise ctx.unknown_key(_join(prefix, key), schema.fields)
     for key, spec in schema.fields.items():
         dotted = _join(prefix, key)
         if isinstance(spec, Table):
@@ -584,7 +596,7 @@ def validate_dataclass_table(raw: Mapping, cls: type, ctx: ScenarioContext, pref
     for key, value in raw.items():
         dotted = _join(prefix, key)
         if key not in fields:
-            raise ctx.error(dotted, "unknown key", "one of " + ", ".join(sorted(fields)))
+            raise ctx.unknown_key(dotted, fields)
         hint = hints.get(key, Any)
         if not _matches(value, hint):
             raise ctx.error(
@@ -595,7 +607,7 @@ def validate_dataclass_table(raw: Mapping, cls: type, ctx: ScenarioContext, pref
     except (TypeError, ValueError) as exc:
         named = [k for k in raw if k in str(exc)]
         key = _join(prefix, named[0]) if len(named) == 1 else prefix
-        raise ctx.error(key, f"rejected ({exc})", f"values {cls.__name__} accepts") from None
+        raise ctx.error(key, f"invalid value: {exc}") from None  # the rule, not the class name
 
 
 def _fields_of_dataclass(cls: type) -> dict[str, Field]:

@@ -37,7 +37,7 @@ def evaluate_matchers(
     progress: bool = False,
 ) -> pd.DataFrame:
     """Run `matchers` on each test dataset and return Table I (one row per dataset and matcher,
-    the columns of ``table1.csv``: rates in percent, mean and std over `runs` seeds).
+    the columns of ``table1.csv``: rates as fractions in [0, 1], mean and std over `runs` seeds).
 
     matchers: registered names (case-insensitive), or ``package.module:function`` import paths.
     A matcher you ``matchers.register()``-ed in this process is seen only with ``workers=1``

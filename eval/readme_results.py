@@ -38,11 +38,13 @@ def _n(count: int, noun: str) -> str:
 
 
 def _pct(value: float, digits: int = 1) -> str:
-    return "–" if pd.isna(value) else f"{value:.{digits}f}"
+    """A fraction (as every results CSV holds them) printed in percent."""
+    return "–" if pd.isna(value) else f"{100 * value:.{digits}f}"
 
 
 def _interval(row) -> str:
-    return f"{row['diff']:+.1f} [{row['ci_low']:+.1f}, {row['ci_high']:+.1f}]"
+    """A paired difference (fractions) in percentage points: +d [lo, hi]."""
+    return f"{100 * row['diff']:+.1f} [{100 * row['ci_low']:+.1f}, {100 * row['ci_high']:+.1f}]"
 
 
 def _header(record: dict) -> str:
@@ -161,7 +163,7 @@ def _baselines(table: pd.DataFrame) -> list[str]:
     for _, r in rows.sort_values("dataset", key=lambda s: s.map(dataset_order)).iterrows():
         others = table[(table["dataset"] == r["dataset"]) & table["matcher"].isin(PAPER_NAMES)]
         beaten = int((others["accuracy_mean"] < r["accuracy_mean"]).sum())
-        below = int((others["balanced_accuracy_mean"] < 50).sum())
+        below = int((others["balanced_accuracy_mean"] < 0.5).sum())
         parts.append(
             f"{r['dataset']}: accuracy {_pct(r['accuracy_mean'])} (above {beaten} of "
             f"{len(others)} methods), balanced accuracy {_pct(r['balanced_accuracy_mean'])}, "
@@ -179,7 +181,7 @@ def _tuning(tuned: pd.DataFrame, untuned: pd.DataFrame | None) -> list[str]:
         return []
     merged = tuned.merge(untuned, on=["dataset", "matcher"], suffixes=("", "_untuned"))
     merged["gain"] = merged["f1_mean"] - merged["f1_mean_untuned"]
-    top = merged[merged["gain"].abs() >= 1.0].sort_values("gain", ascending=False).head(4)
+    top = merged[merged["gain"].abs() >= 0.01].sort_values("gain", ascending=False).head(4)
     if top.empty:
         return ["**Tuning** on validation changed no F1 by a point or more."]
     parts = [

@@ -208,7 +208,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--workers", type=int, default=None, help="processes (default: one per core)")
     add_scheduler_argument(p)
-    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
     return p
 
 
@@ -231,7 +231,7 @@ def _generate(
         pairs=pairs,
         seed=seed,
         workers=args.workers,
-        progress=not args.quiet,
+        progress=not args.no_progress,
         scheduler=args.scheduler,
     )
     log.info(
@@ -269,7 +269,7 @@ def main(argv: list[str] | None = None) -> int:
 
     started = time.perf_counter()
     timer = StageTimer()
-    progress = not args.quiet
+    progress = not args.no_progress
     paths = (
         [Path(s) for s in args.scenarios]
         if args.scenarios

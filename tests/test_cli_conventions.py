@@ -88,8 +88,44 @@ def _parsers() -> dict:
     return sub.choices
 
 
-def test_the_same_flag_means_the_same_on_every_subcommand():
+def _every_parser() -> dict:
+    """Every subcommand's parser, nested ones (``import dmgm``) included, by "cmd sub" name."""
+    import argparse
+
+    found = {}
+
+    def walk(name, parser):
+        found[name] = parser
+        for action in parser._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                for sub_name, sub in action.choices.items():
+                    walk(f"{name} {sub_name}", sub)
+
     for name, parser in _parsers().items():
+        walk(name, parser)
+    return found
+
+
+def test_every_help_has_a_purpose_and_examples_that_parse():
+    import shlex
+
+    parsers = _every_parser()
+    for name, parser in parsers.items():
+        if name == "import":  # a group: its formats carry the examples
+            continue
+        assert parser.description and parser.description.strip(), name
+        assert parser.epilog and parser.epilog.startswith("examples:"), name
+        for line in parser.epilog.splitlines()[1:]:
+            argv = shlex.split(line.split(" > ")[0].strip())  # a shell redirection is no argument
+            assert argv[0] == "cadsim", line
+            words = argv[1:]
+            depth = len(name.split())
+            assert " ".join(words[:depth]) == name, line
+            parser.parse_args(words[depth:])  # SystemExit (usage error) fails the test
+
+
+def test_the_same_flag_means_the_same_on_every_subcommand():
+    for name, parser in _every_parser().items():
         strings = {o for a in parser._actions for o in a.option_strings}
         primary = {a.option_strings[0] for a in parser._actions if a.option_strings}
         assert "--jobs" not in primary, name  # workers are --workers everywhere

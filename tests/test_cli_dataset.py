@@ -101,3 +101,27 @@ def test_generate_reports_bad_input(tmp_path, capsys):
     assert main(["generate", str(bad), "--out", str(tmp_path / "o"), "--no-progress"]) == 2
     err = capsys.readouterr().err
     assert "bad.toml" in err and "pairz" in err and "unknown key" in err
+
+
+def test_birdseye_draws_observers_objects_and_match_lines_at_true_positions(dataset):
+    from matplotlib.figure import Figure
+
+    from cadsim.pair_drawing import detection_world_positions, draw_birdseye
+
+    pair = Dataset(dataset)[1]
+    w1, w2 = detection_world_positions(pair)
+    centres = {o.id: o.center[:2] for o in pair.objects}
+    for view, world in ((pair.view1, w1), (pair.view2, w2)):
+        assert np.allclose(world, [centres[i] for i in view.object_ids])
+    gt = pair.gt_pairs
+    assert np.allclose(w1[gt[:, 0]], w2[gt[:, 1]])  # a true match: one object, one position
+    wrong = np.array([[gt[0, 0], gt[1, 1]]])  # two different objects: a visible line
+    ax = Figure().subplots()
+    draw_birdseye(ax, pair, [(gt, CORRECT, "-"), (wrong, WRONG, "-")])
+    drawn = [line for line in ax.get_lines() if line.get_color() == WRONG]
+    assert len(drawn) == 1 and np.allclose(
+        np.column_stack(drawn[0].get_data()), [w1[gt[0, 0]], w2[gt[1, 1]]]
+    )
+    assert len(ax.patches) == 2  # both observers' view frusta
+    labels = {t.get_text() for t in ax.get_legend().get_texts()}
+    assert {"observer 1", "observer 2", "seen by 1", "seen by 2"} <= labels

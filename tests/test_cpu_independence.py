@@ -129,7 +129,7 @@ def test_a_small_reproduce_gives_the_same_tables_on_every_dispatch_level(tmp_pat
     args += ["--rates", "0,0.01", "--keep", "1,0.5", "--regime-runs", "2", "--runs", "1"]
     args += ["--spread-runs", "1", "--sweep-runs", "1", "--localisation-sigmas", "0,2"]
     args += ["--localisation-runs", "1", "--external-runs", "1", "--external-tune-pairs", "3"]
-    args += ["--workers", "1", "--quiet", "--out", "{out}/out", "--data", "{out}/data"]
+    args += ["--workers", "1", "--no-progress", "--out", "{out}/out", "--data", "{out}/data"]
     args += ["--cache", "{out}/cache"]
     done = _run_all(args, tmp_path)
     plain = _tables(tmp_path / "plain" / "out")

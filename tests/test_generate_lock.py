@@ -95,5 +95,13 @@ def test_lock_file_records_the_holder(tmp_path):
         assert info["pid"] == os.getpid() and info["host"] == socket.gethostname()
         with pytest.raises(DatasetBusy, match=f"pid {os.getpid()}"), exclusive_writer(tmp_path):
             pass
+        assert (tmp_path / layout.LOCK_FILE).is_file()  # the refused writer removed nothing
+    assert not (tmp_path / layout.LOCK_FILE).exists()  # the holder cleans up after itself
     with exclusive_writer(tmp_path):  # released on leaving the block
         pass
+
+
+def test_a_finished_dataset_holds_no_lock_file(tmp_path):
+    out = tmp_path / "done"
+    assert _generate(SCENARIO, out, pairs=3).pairs == 3
+    assert not (out / layout.LOCK_FILE).exists()

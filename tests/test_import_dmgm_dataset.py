@@ -135,7 +135,7 @@ def test_import_cli_errors_are_one_line(tmp_path):
         assert len(lines) == 1 and lines[0].startswith("cadsim import: error:"), (name, lines)
         assert expected in lines[0], (name, lines)
     assert not (tmp_path / "o1" / "manifest.json").exists()  # nothing half-written is a dataset
-    done = _cli("import", "dmgm", str(src), "--out", str(tmp_path / "ok"), "--quiet")
+    done = _cli("import", "dmgm", str(src), "--out", str(tmp_path / "ok"), "--no-progress")
     assert done.returncode == 0 and "3 pairs (069: 2, 071: 1)" in done.stdout
 
 

@@ -38,7 +38,7 @@ def test_interval_covers_a_known_difference_and_excludes_zero():
     assert set(table["metric"]) == {"f1", "recall", "balanced_accuracy"}
     row = table[table["metric"] == "f1"].iloc[0]
     assert (row["matcher_a"], row["matcher_b"]) == ("maximin", "mos")
-    assert row["ci_low"] < 5.0 < row["ci_high"] and row["ci_low"] > 0  # percentage points
+    assert row["ci_low"] < 0.05 < row["ci_high"] and row["ci_low"] > 0  # fractions
     assert row["pairs"] == 200 and row["episodes"] == 40
 
 

@@ -56,16 +56,16 @@ def test_agreement_is_written_from_the_tables(tmp_path):
     (results / "run_record.json").write_text(json.dumps({"tuning": {"CAD": {}}}))
     pd.DataFrame(
         [
-            _table_row("CAD", "maximin", 40.0, 30.0, 60.0),
-            _table_row("CAD", "mos", 45.0, 65.0, 62.0),
-            _table_row("CAD", "sm", 10.0, 70.0, 45.0),
-            _table_row("CAD", "none", 0.0, 71.0, 50.0),
+            _table_row("CAD", "maximin", 0.40, 0.30, 0.60),  # fractions, as every CSV
+            _table_row("CAD", "mos", 0.45, 0.65, 0.62),
+            _table_row("CAD", "sm", 0.10, 0.70, 0.45),
+            _table_row("CAD", "none", 0.0, 0.71, 0.50),
         ]
     ).to_csv(results / "table1.csv", index=False)
     pd.DataFrame(
         [
             {"dataset": "CAD", "matcher_a": "maximin", "matcher_b": "mos", "metric": m}
-            | {"diff": -5.0, "ci_low": -9.5, "ci_high": 1.25, "pairs": 50, "episodes": 5}
+            | {"diff": -0.05, "ci_low": -0.095, "ci_high": 0.0125, "pairs": 50, "episodes": 5}
             for m in ("f1", "balanced_accuracy", "recall")
         ]
     ).to_csv(results / "paired_differences.csv", index=False)

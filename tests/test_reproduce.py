@@ -58,7 +58,7 @@ def test_tiny_reproduce_writes_every_output_and_reruns_from_cache(tmp_path, caps
     argv = ["--pairs", "2", "--val-pairs", "2", "--matchers", "sm,maximin,none"]
     argv += ["--rates", "0,0.01", "--keep", "1,0", "--regime-runs", "1", "--spread-runs", "1"]
     argv += ["--runs", "2", "--out", str(out), "--data", str(data), "--cache", str(cache)]
-    argv += ["--sweep-runs", "2", "--workers", "2", "--quiet"]
+    argv += ["--sweep-runs", "2", "--workers", "2", "--no-progress"]
     argv += ["--localisation-sigmas", "0,2", "--localisation-runs", "1"]
     argv += ["--external-runs", "1", "--external-tune-pairs", "3"]
     assert reproduce.main(argv) == 0

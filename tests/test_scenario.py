@@ -169,7 +169,7 @@ def test_fixture_files_give_the_promised_messages(fixture, key, words):
         ),
         (external("[noise]\nnoise_rat = 0.1\n"), "noise.noise_rat", ["unknown key", "noise_rate"]),
         (external('[noise]\nnoise_rate = "high"\n'), "noise.noise_rate", ["wrong type", "float"]),
-        (external("[noise]\nnoise_rate = -1.0\n"), "noise.noise_rate", ["rejected"]),
+        (external("[noise]\nnoise_rate = -1.0\n"), "noise.noise_rate", ["invalid value", "must be >= 0"]),
         (
             external("[detection]\nmin_pixels = 2.5\n"),
             "detection.min_pixels",
@@ -241,7 +241,7 @@ class _LocalConfig:
         ({"count": True}, "t.count", ["wrong type"]),
         ({"enabled": 1}, "t.enabled", ["wrong type", "bool"]),
         ({"sizes": [1.0, "b"]}, "t.sizes", ["wrong type", "tuple[float, ...]"]),
-        ({"rate": 2.0}, "t.rate", ["rejected", "rate must be <= 1"]),
+        ({"rate": 2.0}, "t.rate", ["invalid value", "rate must be <= 1"]),
     ],
 )
 def test_generic_dataclass_validation_rejects(table, key, words):
@@ -298,3 +298,23 @@ def test_sumo_home_paths_fall_back_to_the_installed_wheel(monkeypatch, tmp_path)
     s = load_scenario(ROOT / "scenarios" / "sumo-game-cross.toml")
     cfg = Path(s.traffic["sumocfg"])
     assert cfg.is_file() and cfg.name == "cross.sumocfg" and tmp_path not in cfg.parents
+
+
+def test_a_misspelt_key_gets_a_suggestion_and_no_class_name_leaks(tmp_path):
+    text = (ROOT / "scenarios" / "cad-intersection.toml").read_text()
+    bad = tmp_path / "bad.toml"
+    for right, wrong, want in (
+        ("step_length = 0.1", "step_lenght = 0.1", "did you mean 'step_length'?"),
+        ("noise_rate = 0.001", "noise_rat = 0.001", "did you mean 'noise_rate'?"),
+    ):
+        assert right in text
+        bad.write_text(text.replace(right, wrong, 1))
+        (tmp_path / "cad-vtypes.add.xml").write_text(
+            (ROOT / "scenarios" / "cad-vtypes.add.xml").read_text()
+        )
+        with pytest.raises(ScenarioError, match=want.replace("?", r"\?")):
+            load_scenario(bad)
+    bad.write_text(text.replace("noise_rate = 0.001", "noise_rate = -1.0", 1))
+    with pytest.raises(ScenarioError) as exc:
+        load_scenario(bad)
+    assert "Config" not in str(exc.value) and "noise_rate must be >= 0" in str(exc.value)

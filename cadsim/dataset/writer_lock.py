@@ -4,7 +4,9 @@
 final manifest, so a second run on the same ``--out`` cannot delete the first one's unfinished
 records. The lock file records who holds it (pid, host, start time); the second run stops at
 once with that in its message. The kernel drops the lock when the holder exits, however it
-exits (kill -9 included), so a stale lock file never blocks anyone; the file itself stays.
+exits (kill -9 included), so a stale lock file never blocks anyone. The holder removes the
+file when it is done (while it still holds the lock), so a finished dataset holds none; one
+left by a killed run is harmless.
 """
 
 from __future__ import annotations
@@ -57,6 +59,9 @@ def exclusive_writer(dataset_dir: str | Path) -> Iterator[None]:
         }
         os.ftruncate(fd, 0)
         os.pwrite(fd, json.dumps(info).encode("utf-8"), 0)
-        yield
+        try:
+            yield
+        finally:
+            path.unlink(missing_ok=True)  # still ours: nobody else can hold it until we close
     finally:
         os.close(fd)  # releases the lock

@@ -167,7 +167,9 @@ def write_sweep(out_dir: str | Path, rows: pd.DataFrame) -> Path:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("dataset", metavar="DATASET_DIR", help="test dataset (simulated, CAD)")
-    parser.add_argument("--val", default=None, help="validation dataset (default: DATASET_DIR-val)")
+    parser.add_argument(
+        "--val", default=None, metavar="DIR", help="validation dataset (default: DATASET_DIR-val)"
+    )
     parser.add_argument(
         "--sigmas",
         default=",".join(f"{s:g}" for s in DEFAULT_SIGMAS),

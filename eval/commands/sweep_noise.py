@@ -115,7 +115,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=",".join(str(r) for r in DEFAULT_RATES),
         help="comma-separated noise rates (σ = rate·d², d in metres)",
     )
-    parser.add_argument("--val", default=None, help="validation dataset (default: DATASET_DIR-val)")
+    parser.add_argument(
+        "--val", default=None, metavar="DIR", help="validation dataset (default: DATASET_DIR-val)"
+    )
     parser.add_argument(
         "--pairs",
         type=int_in(1, MAX_PAIRS),

@@ -180,7 +180,9 @@ def write_sweep(out_dir: str | Path, result: SweepResult) -> list[Path]:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("dataset", metavar="DATASET_DIR", help="test dataset")
-    parser.add_argument("--val", default=None, help="validation dataset (default: DATASET_DIR-val)")
+    parser.add_argument(
+        "--val", default=None, metavar="DIR", help="validation dataset (default: DATASET_DIR-val)"
+    )
     parser.add_argument(
         "--keep",
         default=",".join(f"{k:g}" for k in DEFAULT_KEEP),

@@ -84,8 +84,9 @@ def paired_differences(
     resamples: int = RESAMPLES,
     seed: int = SEED,
 ) -> pd.DataFrame:
-    """``reference`` − every other matcher, per dataset and metric (percentage points), with
-    episode-bootstrap intervals; empty when `reference` is absent."""
+    """``reference`` − every other matcher, per dataset and metric (a difference of fractions;
+    printed as percentage points), with episode-bootstrap intervals; empty when `reference` is
+    absent."""
     metrics = [m for m in metrics if m in per_pair.columns]
     means = per_pair_means(per_pair, metrics)
     rows = []
@@ -96,7 +97,7 @@ def paired_differences(
         for other, rest in group[group["matcher"] != reference].groupby("matcher", sort=False):
             joined = ref.merge(rest, on="pair", suffixes=("", "_b"))
             for metric in metrics:
-                d = 100 * (joined[metric] - joined[f"{metric}_b"]).to_numpy()
+                d = (joined[metric] - joined[f"{metric}_b"]).to_numpy()
                 diff, low, high = episode_bootstrap(
                     d, joined["episode"].to_numpy(), resamples, seed
                 )
@@ -125,5 +126,5 @@ def write_paired_differences(out_dir: str | Path) -> Path | None:
         return None
     per_pair = pd.read_csv(source, keep_default_na=False, na_values=[""])
     path = out_dir / "paired_differences.csv"
-    write_csv(paired_differences(per_pair).round(4), path)
+    write_csv(paired_differences(per_pair).round(6), path)
     return path

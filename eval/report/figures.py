@@ -252,7 +252,14 @@ def write_qualitative(out_dir: str | Path) -> list[Path]:
     """The Fig. 3-style figure from ``qualitative.json``; skipped (with a log line) when the
     datasets' images are not on this machine."""
     from cadsim.dataset import Dataset
-    from cadsim.pair_drawing import CORRECT, MISSED, WRONG, draw_pair, side_by_side
+    from cadsim.pair_drawing import (
+        CORRECT,
+        MISSED,
+        WRONG,
+        draw_birdseye,
+        draw_pair,
+        side_by_side,
+    )
 
     out_dir = Path(out_dir)
     path = out_dir / "qualitative.json"
@@ -277,17 +284,22 @@ def write_qualitative(out_dir: str | Path) -> list[Path]:
     first = pairs[datasets[0]]
     canvas, _ = side_by_side(first.color1, first.color2)
     aspect = canvas.shape[0] / canvas.shape[1]
-    width = 5.0
-    fig, axes = _figure(
-        width * len(methods), width * aspect * len(datasets) + 0.6, len(methods), len(datasets)
+    width, above = 5.0, 3.6  # inches per panel; height of a bird's-eye panel
+    from matplotlib.figure import Figure
+
+    fig = Figure(
+        figsize=(width * len(methods), (width * aspect + above) * len(datasets) + 0.6),
+        layout="constrained",
     )
+    ratios = [width * aspect, above] * len(datasets)
+    axes = fig.subplots(2 * len(datasets), len(methods), squeeze=False, height_ratios=ratios)
     from matplotlib.collections import LineCollection
 
     for row, dataset in enumerate(datasets):
         pair, entry = pairs[dataset], spec[dataset]
         gt = np.asarray(entry["gt_pairs"], int).reshape(-1, 2)
         for col, method in enumerate(methods):
-            ax = axes[row, col]
+            ax = axes[2 * row, col]
             pred = np.asarray(entry["methods"].get(method, []), int).reshape(-1, 2)
             correct, wrong, missed = _line_classes(pred, gt)
             shown = np.vstack([correct, wrong])
@@ -310,6 +322,16 @@ def write_qualitative(out_dir: str | Path) -> list[Path]:
                 f"{len(wrong)} wrong, {len(missed)} missed",
                 fontsize=8,
             )
+            birdseye = axes[2 * row + 1, col]
+            if pair.cameras is None:
+                birdseye.set_axis_off()
+                continue
+            draw_birdseye(
+                birdseye,
+                pair,
+                [(correct, CORRECT, "-"), (wrong, WRONG, "-"), (missed, MISSED, "--")],
+            )
+            birdseye.set_title("from above (true positions)", fontsize=7)
     return _save(fig, out_dir / "qualitative")
 
 

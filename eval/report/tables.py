@@ -82,8 +82,9 @@ def load_paper(path: str | Path = PAPER_CSV) -> pd.DataFrame:
 def build_table(
     out_dir: str | Path, paper_csv: str | Path = PAPER_CSV, variant: str = MAIN
 ) -> pd.DataFrame:
-    """One row per (dataset, matcher) of `variant`: our numbers (percent), τ, parameters, time
-    and the paper's beside."""
+    """One row per (dataset, matcher) of `variant`: our numbers, τ, parameters, time and the
+    paper's beside. Rates are fractions in [0, 1] (the paper's percent divided by 100), as in
+    every results CSV; the Markdown and LaTeX renderings print percent (:func:`as_percent`)."""
     out_dir = Path(out_dir)
     per_pair = pd.read_csv(
         variant_path(out_dir, "metrics_per_pair", variant, ".csv"),
@@ -94,9 +95,6 @@ def build_table(
     if {"tp", "n_pred", "n_gt"} <= set(per_pair.columns):
         pooled = summarise_pooled(per_pair, by=["dataset", "matcher"])
         summary = summary.merge(pooled, on=["dataset", "matcher"], how="left")
-    for col in summary.columns:
-        if col.rsplit("_", 1)[0] in (*METRICS, *POOLED) and col.endswith(("_mean", "_std")):
-            summary[col] = 100 * summary[col]
     sizes = per_pair.groupby(["dataset", "matcher"]).agg(
         frames=("pair", "nunique"), time_median_ms=("time_s", lambda t: 1000 * float(np.median(t)))
     )
@@ -107,9 +105,7 @@ def build_table(
     ap_path = variant_path(out_dir, "average_precision", variant, ".csv")
     if ap_path.is_file():
         ap = pd.read_csv(ap_path).groupby(["dataset", "matcher"])["ap"]
-        ap = pd.DataFrame(
-            {"ap_mean": 100 * ap.mean(), "ap_std": 100 * ap.std(ddof=1).fillna(0.0)}
-        ).reset_index()
+        ap = pd.DataFrame({"ap_mean": ap.mean(), "ap_std": ap.std(ddof=1).fillna(0.0)}).reset_index()
         table = table.merge(ap, on=["dataset", "matcher"], how="left")
     tau_path = variant_path(out_dir, "thresholds", variant, ".csv")
     if tau_path.is_file():
@@ -118,7 +114,9 @@ def build_table(
     else:
         table["tau"] = np.nan
     table.insert(1, "method", table["matcher"].map(method_name))
-    paper = load_paper(paper_csv).add_prefix("paper_")
+    paper = load_paper(paper_csv)
+    paper[[c for c in paper.columns if c.endswith(("_mean", "_spread"))]] /= 100  # fractions
+    paper = paper.add_prefix("paper_")
     table["_paper_dataset"] = table["dataset"].map(lambda d: PAPER_COLUMN.get(d, d))
     table = table.merge(
         paper,
@@ -131,10 +129,29 @@ def build_table(
     return table.sort_values(["_d", "_m"]).drop(columns=["_d", "_m"]).reset_index(drop=True)
 
 
+def is_rate_column(column: str) -> bool:
+    """Whether a table column holds a rate (a metric's mean, std or the paper's spread)."""
+    base = column.removeprefix("paper_")
+    for suffix in ("_mean", "_std", "_spread"):
+        if base.endswith(suffix):
+            return base[: -len(suffix)] in (*METRICS, *POOLED, "ap")
+    return False
+
+
+def as_percent(table: pd.DataFrame) -> pd.DataFrame:
+    """A copy of ``table`` with its rate columns (:func:`is_rate_column`) in percent, to print."""
+    table = table.copy()
+    for column in table.columns:
+        if is_rate_column(column):
+            table[column] = 100 * table[column]
+    return table
+
+
 def _pm(mean: float, std: float, digits: int = 1) -> str:
+    """``mean ± std`` of two fractions, printed in percent."""
     if pd.isna(mean):
         return "–"
-    return f"{mean:.{digits}f} ± {std:.{digits}f}"
+    return f"{100 * mean:.{digits}f} ± {100 * std:.{digits}f}"
 
 
 def params_text(params: object) -> str:
@@ -176,11 +193,12 @@ def _cells(row: pd.Series, show_params: bool) -> dict[str, str]:
 
 
 def pooled_text(row: pd.Series) -> str:
-    """``P / R / F1`` pooled over frame pairs (percent, mean over runs), or – without them."""
+    """``P / R / F1`` pooled over frame pairs (mean over runs), printed in percent, or –
+    without them; ``row`` holds fractions."""
     values = [row.get(f"{m}_mean", np.nan) for m in POOLED]
     if any(pd.isna(v) for v in values):
         return "–"
-    return " / ".join(f"{v:.1f}" for v in values)
+    return " / ".join(f"{100 * v:.1f}" for v in values)
 
 
 def _show_params(table: pd.DataFrame) -> bool:
@@ -221,6 +239,7 @@ def _latex_escape(text: str) -> str:
 
 def to_latex(table: pd.DataFrame) -> str:
     """A booktabs table per dataset: ours (paper) for each metric, then F1, AP, τ, ms per pair."""
+    table = as_percent(table)
     out = []
     for dataset, rows in table.groupby("dataset", sort=False):
         out += [
@@ -265,7 +284,7 @@ def write_table1(
     table = build_table(out_dir, paper_csv, variant)
     markdown = to_markdown(table)
     write_text(variant_path(out_dir, "table1", variant, ".md"), markdown)
-    write_csv(table.round(4), variant_path(out_dir, "table1", variant, ".csv"))
+    write_csv(table.round(6), variant_path(out_dir, "table1", variant, ".csv"))
     if variant == MAIN:
         write_text(out_dir / "table1.tex", to_latex(table))
     return markdown

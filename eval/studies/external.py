@@ -50,14 +50,14 @@ TABLE_COLUMNS = [
     "uses_prior",
     "params",
     "tau",
-    "precision",
-    "recall",
-    "f1",
-    "balanced_accuracy",
-    "ap",
-    "precision_pooled",
-    "recall_pooled",
-    "f1_pooled",
+    "precision_mean",
+    "recall_mean",
+    "f1_mean",
+    "balanced_accuracy_mean",
+    "ap_mean",
+    "precision_pooled_mean",
+    "recall_pooled_mean",
+    "f1_pooled_mean",
     "runs",
     "frames",
     "source",
@@ -126,10 +126,10 @@ def build_external(out_dir: str | Path) -> pd.DataFrame:
             "source": "ours",
         }
         for metric in ("precision", "recall", "f1", "balanced_accuracy", "ap", *POOLED):
-            row[metric] = r.get(f"{metric}_mean", np.nan) / 100
+            row[f"{metric}_mean"] = r.get(f"{metric}_mean", np.nan)
         rows.append(row)
     ours = pd.DataFrame(rows, columns=TABLE_COLUMNS)
-    ours = ours.sort_values(["uses_prior", "f1_pooled"], ascending=[True, False], kind="stable")
+    ours = ours.sort_values(["uses_prior", "f1_pooled_mean"], ascending=[True, False], kind="stable")
     dataset = ours["dataset"].iloc[0] if len(ours) else "DMGM"
     published = {
         "dataset": dataset,
@@ -138,9 +138,9 @@ def build_external(out_dir: str | Path) -> pd.DataFrame:
         "uses_prior": True,
         "params": "",
         "tau": DMGM_PUBLISHED["threshold"],
-        "precision_pooled": DMGM_PUBLISHED["precision"],
-        "recall_pooled": DMGM_PUBLISHED["recall"],
-        "f1_pooled": DMGM_PUBLISHED["f1"],
+        "precision_pooled_mean": DMGM_PUBLISHED["precision"],
+        "recall_pooled_mean": DMGM_PUBLISHED["recall"],
+        "f1_pooled_mean": DMGM_PUBLISHED["f1"],
         "frames": 9209,
         "source": "published (threshold chosen on the test set)",
     }
@@ -180,18 +180,17 @@ def to_markdown(table: pd.DataFrame) -> str:
     ]
     for _, r in table.iterrows():
         published = r["source"] != "ours"
-        pooled = {f"{m}_mean": 100 * r[m] for m in POOLED}
         cells = [
             f"**{r['method']}**" if published else r["method"],
             "yes" if r["uses_prior"] else "no",
             "–" if published else params_text(r["params"]),
             "–" if pd.isna(r["tau"]) else f"{r['tau']:.3f}" + (" (test)" if published else ""),
-            _pct(r["precision"]),
-            _pct(r["recall"]),
-            _pct(r["f1"]),
-            _pct(r["balanced_accuracy"]),
-            _pct(r["ap"]),
-            pooled_text(pd.Series(pooled)),
+            _pct(r["precision_mean"]),
+            _pct(r["recall_mean"]),
+            _pct(r["f1_mean"]),
+            _pct(r["balanced_accuracy_mean"]),
+            _pct(r["ap_mean"]),
+            pooled_text(r),
         ]
         lines.append("| " + " | ".join(cells) + " |")
     lines += ["", PUBLISHED_NOTE]
@@ -210,8 +209,8 @@ def write_table_external(out_dir: str | Path) -> pd.DataFrame:
 def best_pooled(table: pd.DataFrame) -> tuple[str, float]:
     """(method, pooled F1) of our best matcher by pooled F1."""
     ours = table[table["source"] == "ours"]
-    best = ours.loc[ours["f1_pooled"].idxmax()]
-    return str(best["method"]), float(best["f1_pooled"])
+    best = ours.loc[ours["f1_pooled_mean"].idxmax()]
+    return str(best["method"]), float(best["f1_pooled_mean"])
 
 
 def findings(table: pd.DataFrame) -> list[str]:
@@ -223,28 +222,28 @@ def findings(table: pd.DataFrame) -> list[str]:
     out = []
 
     def best(rows: pd.DataFrame) -> pd.Series:
-        return rows.loc[rows["f1_pooled"].idxmax()]
+        return rows.loc[rows["f1_pooled_mean"].idxmax()]
 
     if len(free):
         b = best(free)
         out.append(
             f"without the prior (camera-frame geometry and appearance), the best matcher is "
-            f"{b['method']} at pooled F1 {100 * b['f1_pooled']:.1f}"
+            f"{b['method']} at pooled F1 {100 * b['f1_pooled_mean']:.1f}"
         )
     pose = prior[prior["matcher"] == "pose"]
     if len(pose):
         out.append(
             f"Hungarian on the noisy world positions alone (pose) reaches "
-            f"{100 * pose['f1_pooled'].iloc[0]:.1f}"
+            f"{100 * pose['f1_pooled_mean'].iloc[0]:.1f}"
         )
     if len(prior):
         b = best(prior)
         out.append(
-            f"the best matcher with the prior is {b['method']} at {100 * b['f1_pooled']:.1f}"
+            f"the best matcher with the prior is {b['method']} at {100 * b['f1_pooled_mean']:.1f}"
         )
     maximin_pose = prior[prior["matcher"] == "maximin_pose"]
     if len(maximin_pose) and len(prior):
-        gap = 100 * (best(prior)["f1_pooled"] - maximin_pose["f1_pooled"].iloc[0])
+        gap = 100 * (best(prior)["f1_pooled_mean"] - maximin_pose["f1_pooled_mean"].iloc[0])
         if gap > 0:
             out.append(f"maximin given the prior is {gap:.1f} points below that")
     out.append(

@@ -93,9 +93,7 @@ def check_kinds(t: dict, ctx: ScenarioContext, prefix: str) -> None:
         key = f"{prefix}.kinds[{i}]"
         for name in kind:
             if name not in KIND_KEYS:
-                raise ctx.error(
-                    f"{key}.{name}", "unknown key", "one of " + ", ".join(sorted(KIND_KEYS))
-                )
+                raise ctx.unknown_key(f"{key}.{name}", KIND_KEYS)
         for name in ("cls", "size"):
             if name not in kind:
                 raise ctx.error(f"{key}.{name}", "missing", "a value")
