@@ -262,23 +262,41 @@ def _crossovers(crossovers: pd.DataFrame | None, sweep: pd.DataFrame | None) -> 
 
 
 def _noise(noise: pd.DataFrame | None) -> list[str]:
-    """Bullet: F1 at the lowest and highest noise rate for maximin and its rivals."""
+    """Bullets, one per swept dataset: F1 at the lowest and highest noise rate for maximin and
+    its rivals, and the rates at which the F1 leader changes (how the ranking hangs on the
+    geometry's precision)."""
     if noise is None or "f1" not in noise.columns:
         return []
-    means = noise.groupby(["matcher", "noise_rate"])["f1"].mean()
-    rates = sorted(noise["noise_rate"].unique())
-    parts = []
-    for matcher in ("maximin", *RIVALS):
-        if matcher in means.index.get_level_values(0):
-            m = means.loc[matcher]
-            parts.append(
-                f"{method_name(matcher)} {100 * m.loc[rates[0]]:.1f} → {100 * m.loc[rates[-1]]:.1f}"
-            )
-    if not parts or len(rates) < 2:
-        return []
-    return [
-        f"**Noise** (Fig. 4, F1 from rate {rates[0]:g} to {rates[-1]:g}): " + ", ".join(parts) + "."
-    ]
+    bullets = []
+    for dataset, rows in noise.groupby("dataset", sort=False):
+        means = rows.groupby(["matcher", "noise_rate"])["f1"].mean()
+        rates = sorted(rows["noise_rate"].unique())
+        if len(rates) < 2:
+            continue
+        parts = [
+            f"{method_name(m)} {_pct(means.loc[(m, rates[0])])} → {_pct(means.loc[(m, rates[-1])])}"
+            for m in ("maximin", *RIVALS)
+            if m in means.index.get_level_values(0)
+        ]
+        table = means.unstack("noise_rate")[rates]
+        table = table.drop(index=[m for m in ("none",) if m in table.index])
+        leaders = [str(table[r].idxmax()) for r in rates]
+        changes = [f"{method_name(leaders[0])} at {rates[0]:g}"] + [
+            f"{method_name(leaders[k])} from {rates[k]:g}"
+            for k in range(1, len(rates))
+            if leaders[k] != leaders[k - 1]
+        ]
+        lead = (
+            f"the F1 leader stays {method_name(leaders[0])} at every rate"
+            if len(changes) == 1
+            else "the F1 leader changes with the noise: " + ", ".join(changes)
+        )
+        bullets.append(
+            f"**Noise, {dataset}** (Fig. 4, F1 from rate {rates[0]:g} to {rates[-1]:g}): "
+            + ", ".join(parts)
+            + f"; {lead}."
+        )
+    return bullets
 
 
 def agreement_bullets(results: Path) -> list[str]:
@@ -402,7 +420,7 @@ def results_section(results: Path, readme_dir: Path) -> str:
     noise = record.get("noise_sweep", {})
     rates = ", ".join(f"{r:g}" for r in noise.get("rates", []))
     out += [
-        "### Fig. 4 — CAD, against depth noise",
+        "### Fig. 4 — against depth noise (CAD, as in the paper, and MRC)",
         "",
         f"![Fig. 4: accuracy, precision, recall against noise rate]({rel}/fig4.png)",
         "",

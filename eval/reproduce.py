@@ -70,12 +70,12 @@ SCENARIOS = (
     "scenarios/cad-dense.toml",
 )
 VAL_SEED_OFFSET = 1000
-DEFAULT_VAL_PAIRS = 25
+DEFAULT_VAL_PAIRS = 50
 # The sweeps are lighter than Table I to keep a cold `make reproduce` within 15 minutes on two
 # cores (docs/evaluation.md). Noise: the first SWEEP_PAIRS test pairs, SWEEP_RUNS seeds.
 SWEEP_PAIRS = 25
 SWEEP_RUNS = 4
-SWEEP_DATASET = "CAD"
+SWEEP_DATASETS = ("CAD", "MRC")  # Fig. 4 rows: the paper's CAD, and MRC for its geometry
 # Regime sweep: every dataset, the first REGIME_PAIRS test pairs × REGIME_RUNS runs per level (each
 # run its own thinning draw: 5 independent draws), τ recalibrated per level on the thinned
 # validation set with run 0 alone.
@@ -353,12 +353,13 @@ def main(argv: list[str] | None = None) -> int:
             log.info("[paper protocol] image-space pairwise terms, full assignment, no τ")
             evaluate(entries, matchers, seeds, runner, out, protocol="paper")
         count("paper_protocol", before)
-        sweep_entry = next((e for e in entries if e.label == SWEEP_DATASET), None)
+        sweep_entries = [e for e in entries if e.label in SWEEP_DATASETS]
         with timer.stage("noise_sweep"):
             before = asdict(runner.totals)
-            if sweep_entry is None:
-                log.warning("[noise sweep] skipped: no %s dataset", SWEEP_DATASET)
-            else:
+            (out / "noise_runs.csv").unlink(missing_ok=True)
+            if not sweep_entries:
+                log.warning("[noise sweep] skipped: none of %s", ", ".join(SWEEP_DATASETS))
+            for sweep_entry in sweep_entries:
                 log.info(
                     "[noise sweep] %s: rates %s × %d runs",
                     sweep_entry.label,
@@ -412,8 +413,9 @@ def main(argv: list[str] | None = None) -> int:
             before = asdict(runner.totals)
             (out / "localisation_sweep.csv").unlink(missing_ok=True)
             if loc_entry is not None and loc_sigmas:
-                loc_named = sweep_specs(
-                    out, loc_entry, parse_matchers(LOCALISATION_MATCHERS), runner, args.tune
+                loc_base = parse_matchers(LOCALISATION_MATCHERS)
+                loc_named = (
+                    loc_base if args.tune else sweep_specs(out, loc_entry, loc_base, runner, False)
                 )
                 log.info(
                     "[localisation sweep] %s: position σ %s m × %d runs, first %s test pairs",
@@ -429,6 +431,7 @@ def main(argv: list[str] | None = None) -> int:
                     loc_sigmas,
                     runner,
                     args.localisation_pairs or None,
+                    tune=args.tune,
                 )
                 write_localisation_sweep(out, rows)
         count("localisation_sweep", before)
@@ -470,7 +473,7 @@ def main(argv: list[str] | None = None) -> int:
         seeds=seeds,
         tuning=_tuning_record(out) if args.tune else {},
         paper_protocol={"options": PAPER_OPTIONS, "threshold": None, "tuned": False},
-        noise_sweep={"dataset": SWEEP_DATASET if sweep_entry else None, "rates": rates}
+        noise_sweep={"datasets": [e.label for e in sweep_entries], "rates": rates}
         | {"seeds": sweep_seeds, "pairs": sweep_pairs},
         regime_sweep={"datasets": [e.label for e in entries] if keeps else [], "keep": keeps}
         | {"seeds": regime_seeds, "val_seeds": regime_val_seeds, "pairs": regime_pairs},

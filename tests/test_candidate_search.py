@@ -58,8 +58,8 @@ def test_random_descriptors_match_the_definition():
     queries = np.round(rng.uniform(-1, 1, (40, 3)), 2)  # coarse: ties everywhere
     candidates = np.round(rng.uniform(-1, 1, (3000, 3)), 2)
     for p in (1, 2):
-        got = nearest(queries, candidates, 200, p)
         want = _reference(queries, candidates, 200, p)
+        got = nearest(queries, candidates, 200, p)
         assert np.array_equal(got[1], want[1]) and np.array_equal(got[0], want[0])
 
 

@@ -5,6 +5,7 @@ the cache key, and the localisation sweep end to end on a small fake dataset."""
 from __future__ import annotations
 
 import dataclasses
+import json
 
 import numpy as np
 import pandas as pd
@@ -29,6 +30,7 @@ from eval.report.tables import write_table1
 from eval.studies.agreement import agreement, pair_f1, paper_f1, spearman_rows, write_agreement
 from eval.studies.evaluation import open_entry
 from eval.studies.external import DMGM_PUBLISHED, best_pooled, write_table_external
+from matchers import search_space
 
 
 def _per_pair(rows: list[tuple]) -> pd.DataFrame:
@@ -111,7 +113,7 @@ def test_spearman_rows_matches_scipy_with_ties():
             assert got[k] == pytest.approx(spearmanr(a[k], b[k]).statistic)
 
 
-def test_agreement_bootstrap_resamples_pairs_of_both_sides():
+def test_agreement_interval_comes_from_both_sides():
     rng = np.random.default_rng(1)
     levels = np.array([0.9, 0.7, 0.5, 0.3, 0.1])
     matchers = ["a", "b", "c", "d", "e"]
@@ -124,16 +126,27 @@ def test_agreement_bootstrap_resamples_pairs_of_both_sides():
     same = agreement(table(0.02), table(0.02), draws=500)
     assert same["rho"] == pytest.approx(1.0) and same["ci_low"] > 0.8
     assert same["matchers"] == "a;b;c;d;e"
-    opposite = agreement(table(0.02), table(0.02, flip=True), draws=500)
+    opposite = agreement(table(0.02), table(0.02, flip=True))
     assert opposite["rho"] == pytest.approx(-1.0) and opposite["ci_high"] < -0.8
     # Noisy pairs on either side widen the interval.
-    noisy = agreement(table(0.6), table(0.6), draws=500)
+    noisy = agreement(table(0.6), table(0.6))
     assert noisy["ci_high"] - noisy["ci_low"] > same["ci_high"] - same["ci_low"]
     # A fixed side (the paper's column): only the reference is resampled.
-    fixed = agreement(None, table(0.02), paper_f1=pd.Series(levels, index=matchers), draws=500)
+    fixed = agreement(None, table(0.02), paper_f1=pd.Series(levels, index=matchers))
     assert fixed["rho"] == pytest.approx(1.0)
     # Fewer than three matchers in common: no ranking to compare.
     assert np.isnan(agreement(table(0.1).iloc[:2], table(0.1))["rho"])
+    # Clusters: pairs of one episode share an effect per matcher, so they move together; drawing
+    # whole episodes widens the interval that drawing pairs would give.
+    episode = np.repeat(np.arange(4), 10)
+    shared = rng.normal(0, 0.3, (5, 4))[:, episode]  # matcher x pair, constant within an episode
+    clustered = pd.DataFrame(np.clip(levels[:, None] + shared, 0, 1), index=matchers)
+    labels = pd.Series(episode, index=clustered.columns)
+    by_pair = agreement(clustered, table(0.02))
+    by_episode = agreement(clustered, table(0.02), None, labels)
+    assert by_episode["rho"] == by_pair["rho"]
+    width = lambda r: r["ci_high"] - r["ci_low"]  # noqa: E731
+    assert width(by_episode) > width(by_pair)
 
 
 def test_write_agreement_uses_prior_free_matchers_without_none(tmp_path):
@@ -209,3 +222,42 @@ def test_localisation_sweep_end_to_end(tmp_path):
     assert [p.suffix for p in write_fig_localisation(tmp_path / "out")] == [".png", ".pdf"]
     saved = pd.read_csv(tmp_path / "out" / "localisation_sweep.csv")
     assert list(saved.columns) == COLUMNS and len(saved) == 4
+    # appearance ignores the prior and its seed: the same F1 every run, reported as such
+    flat = rows[rows["matcher"] == "appearance"]
+    assert flat["deterministic"].all() and flat["f1_std"].isna().all()
+    assert set(rows["params"]) == {"{}"}  # not tuned: the defaults at every level
+
+
+def test_localisation_sweep_tunes_every_level_on_validation_at_that_level(tmp_path, monkeypatch):
+    from cadsim.generation.pipeline import generate_dataset
+    from eval.protocol import tuning
+
+    for name, seed in (("fake", 11), ("fake-val", 1011)):
+        generate_dataset(_Scenario(noise={"noise_rate": 0.0}), tmp_path / name, pairs=3,
+                         seed=seed, workers=1, stages=FAKE_STAGES, progress=False)  # fmt: skip
+    entry = open_entry(tmp_path / "fake", tmp_path / "fake-val")
+    runner = Runner(ResultCache(tmp_path / "cache"), SerialExecutor(), progress=False)
+    calls, requested, tuning_now = [], [], []
+    real_tune, real_run = tuning.tune_entry, runner.run
+
+    def tune_spy(entry, matchers, runner, limit=None, localisation=None):
+        calls.append(localisation)
+        tuning_now.append(True)
+        try:
+            return real_tune(entry, matchers, runner, limit, localisation)
+        finally:
+            tuning_now.pop()
+
+    def run_spy(requests, desc="runs"):
+        requested.extend((bool(tuning_now), r) for r in requests)
+        return real_run(requests, desc)
+
+    monkeypatch.setattr(tuning, "tune_entry", tune_spy)
+    monkeypatch.setattr(runner, "run", run_spy)
+    rows = sweep_localisation(entry, [MatcherSpec("pose")], [0], [0.0, 8.0], runner, tune=True)
+    assert calls == [(0.0, 0.0), (8.0, pytest.approx(8.0 * 0.2 / 1.2))]  # once per level
+    searched = [r for during, r in requested if during]
+    assert {r.dataset_dir for r in searched} == {str(entry.val_dir)}  # never the test pairs
+    assert {r.localisation[0] for r in searched} == {0.0, 8.0}  # each level at its own error
+    assert len({r.matcher for r in searched}) == len(search_space("pose"))
+    assert len(rows) == 2 and rows["params"].map(json.loads).map(type).eq(dict).all()

@@ -1,5 +1,5 @@
-"""Paired differences: runs averaged per frame pair first, a seeded bootstrap over episodes (never
-single pairs) whose 95 % interval covers a known difference."""
+"""Paired differences: runs averaged per frame pair first, a cluster-robust t-interval over
+episodes (never single pairs) whose 95 % interval holds its level at the suite's test-set shape."""
 
 from __future__ import annotations
 
@@ -7,7 +7,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from eval.protocol.paired_differences import episode_bootstrap, paired_differences
+from eval.protocol.cluster_interval import t_interval, t_intervals
+from eval.protocol.paired_differences import paired_differences
 
 
 def _per_pair(true_diff: float, episodes: int, per_episode: int, seed: int = 0) -> pd.DataFrame:
@@ -53,31 +54,42 @@ def test_runs_are_averaged_per_pair_before_the_difference():
     assert f1(shifted)["ci_low"] == pytest.approx(f1(plain)["ci_low"])
 
 
-def test_bootstrap_is_seeded():
-    rng = np.random.default_rng(1)
-    values, episodes = rng.normal(size=60), np.repeat(np.arange(12), 5)
-    assert episode_bootstrap(values, episodes, seed=3) == episode_bootstrap(
-        values, episodes, seed=3
-    )
-    assert episode_bootstrap(values, episodes, seed=3) != episode_bootstrap(
-        values, episodes, seed=4
-    )
+def _clustered(rng, sims, episodes, per_episode, truth):
+    """(sims, episodes * per_episode) differences: truth + episode effect + pair noise, the
+    episode effect as large as the pair noise (what CAD's per-pair F1 differences show)."""
+    effect = rng.normal(scale=0.08, size=(sims, episodes, 1))
+    noise = rng.normal(scale=0.08, size=(sims, episodes, per_episode))
+    return (truth + effect + noise).reshape(sims, -1)
 
 
-def test_bootstrap_resamples_whole_episodes_not_pairs():
-    # One episode: every resample draws it whole, so the interval is the mean itself, however
-    # much its pairs differ (a pair bootstrap would spread).
-    values = np.array([0.0, 10.0, 20.0, 30.0])
-    mean, low, high = episode_bootstrap(values, np.zeros(4, int))
-    assert mean == low == high == 15.0
-    # Episodes with constant values: every resampled mean is a mixture of the episode means, and
-    # the interval is as wide as with one pair per episode, not narrower with more pairs each.
-    few = episode_bootstrap(np.array([0.0, 4.0, 8.0]), np.array([0, 1, 2]))
-    many = episode_bootstrap(np.repeat([0.0, 4.0, 8.0], 50), np.repeat([0, 1, 2], 50))
+@pytest.mark.parametrize("episodes,per_episode", [(10, 5), (5, 10)])
+def test_nominal_95_percent_interval_covers_at_the_suite_shape(episodes, per_episode):
+    rng = np.random.default_rng(7)
+    values = _clustered(rng, 4000, episodes, per_episode, truth=0.05)
+    index = np.repeat(np.arange(episodes), per_episode)
+    _, low, high = t_intervals(values, index, episodes)
+    coverage = np.mean((low <= 0.05) & (0.05 <= high))
+    assert coverage >= 0.93, coverage
+    # a pair-level interval (ignoring the episodes) would be far too narrow here
+    half = 1.96 * values.std(axis=1, ddof=1) / np.sqrt(values.shape[1])
+    naive = np.mean(np.abs(values.mean(axis=1) - 0.05) <= half)
+    assert naive < 0.85, naive
+
+
+def test_interval_uses_whole_episodes_not_pairs():
+    # One episode: no interval at all, however many pairs it has.
+    mean, low, high, groups = t_interval(np.array([0.0, 0.1, 0.2, 0.3]), np.zeros(4, int))
+    assert mean == pytest.approx(0.15) and np.isnan(low) and np.isnan(high) and groups == 1
+    # Episodes with constant values: the interval is that of the episode means, as wide with 50
+    # pairs per episode as with one.
+    few = t_interval(np.array([0.0, 0.04, 0.08]), np.array([0, 1, 2]))
+    many = t_interval(np.repeat([0.0, 0.04, 0.08], 50), np.repeat([0, 1, 2], 50))
     assert many == pytest.approx(few)
-    assert 0.0 <= many[1] <= many[2] <= 8.0
+    # ... and equals the textbook t-interval on the episode means (t at 2 degrees of freedom)
+    half = 4.302652729749464 * 0.04 / np.sqrt(3)
+    assert few[1] == pytest.approx(0.04 - half) and few[2] == pytest.approx(0.04 + half)
 
 
-def test_bootstrap_rejects_mismatched_input():
-    with pytest.raises(ValueError, match="episodes"):
-        episode_bootstrap(np.zeros(3), np.zeros(2))
+def test_interval_rejects_mismatched_input():
+    with pytest.raises(ValueError, match="clusters"):
+        t_interval(np.zeros(3), np.zeros(2))

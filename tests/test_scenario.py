@@ -169,7 +169,11 @@ def test_fixture_files_give_the_promised_messages(fixture, key, words):
         ),
         (external("[noise]\nnoise_rat = 0.1\n"), "noise.noise_rat", ["unknown key", "noise_rate"]),
         (external('[noise]\nnoise_rate = "high"\n'), "noise.noise_rate", ["wrong type", "float"]),
-        (external("[noise]\nnoise_rate = -1.0\n"), "noise.noise_rate", ["invalid value", "must be >= 0"]),
+        (
+            external("[noise]\nnoise_rate = -1.0\n"),
+            "noise.noise_rate",
+            ["invalid value", "must be >= 0"],
+        ),
         (
             external("[detection]\nmin_pixels = 2.5\n"),
             "detection.min_pixels",

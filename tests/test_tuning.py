@@ -86,13 +86,32 @@ def test_tuning_never_sees_test_pairs_and_uses_seed_zero(world, tmp_path, monkey
     assert choices["flat"].params == {} and len(choices["flat"].candidates) == 1
 
 
-def test_ties_go_to_the_earlier_configuration(world, tmp_path, monkeypatch):
-    monkeypatch.setattr(tuning, "grid", lambda name: [{}, {"blur": 1.0}])  # same as the default
+@pytest.mark.parametrize("order", [[{}, {"blur": 1.0}], [{"blur": 1.0}, {}]])
+def test_ties_do_not_favour_the_defaults_or_the_grid_order(world, tmp_path, monkeypatch, order):
+    monkeypatch.setattr(tuning, "grid", lambda name: order)  # blur 1.0 is the default: a tie
     choices = tuning.tune_entry(
         open_entry("data/cad", "data/cad-val"), [MatcherSpec("noisy")], _runner(tmp_path)
     )
     a, b = choices["noisy"].candidates
-    assert a.val_f1 == b.val_f1 and choices["noisy"].chosen == 0
+    assert a.val_f1 == b.val_f1 and choices["noisy"].params == {"blur": 1.0}
+
+
+def test_untunable_matchers_are_left_out_of_the_tuning_table(world, tmp_path):
+    entry = open_entry("data/cad", "data/cad-val")
+    choices = tuning.tune_entry(
+        entry, [MatcherSpec("noisy"), MatcherSpec("flat")], _runner(tmp_path)
+    )
+    rows = pd.DataFrame(tuning.tuning_rows(choices.values()))
+    assert set(rows["matcher"]) == {"noisy"} and len(rows) == len(GRIDS["noisy"])
+
+
+def test_every_tunable_builtin_matcher_gets_the_same_budget():
+    from matchers import available, search_space
+    from matchers.core.search_spaces import TUNING_BUDGET
+
+    sizes = {name: len(search_space(name)) for name in available()}
+    assert {size for size in sizes.values() if size > 1} == {TUNING_BUDGET}, sizes
+    assert sorted(n for n, size in sizes.items() if size == 1) == ["appearance", "none"]
 
 
 def test_tuned_evaluation_writes_tuning_the_untuned_table_and_the_chosen_parameters(

@@ -4,13 +4,17 @@ against the observers' localisation error — the connected-driving counterpart 
 At each position sigma s (metres per ground axis; heading sigma s × 0.2°/1.2 m, DMGM's ratio) and
 run seed, every frame pair's localisation prior is re-drawn (``FramePair.localise(s, yaw, seed)``:
 nothing is re-rendered or re-detected; for one seed the error scales with s) and every matcher of
-that run sees the same prior. τ is calibrated per sigma on the validation dataset re-drawn at
-the same sigma (a deployed system knows its stated uncertainty); the matchers' parameters are
-those ``DIR/thresholds.csv`` records (tuned when ``cadsim evaluate --tune`` ran); a matcher it
-lacks is tuned here on the validation dataset with the records' own prior (:mod:`eval.protocol.tuning`,
-seed 0; ``--no-tune``: its defaults). Writes ``localisation_sweep.csv`` (dataset, position_sigma_m, yaw_sigma_deg, matcher,
-f1_mean, f1_std: mean and sample std over runs of the per-run mean per-pair F1) and
-``fig_localisation.png/.pdf``.
+that run sees the same prior. The matcher is told the *stated* uncertainty of that level
+(``Problem.world_sigma`` = the level's σ, at least 0.5 m — the detections' own position error,
+:data:`cadsim.sensing.localisation.MIN_STATED_SIGMA_M`), never the error actually drawn. Because
+the level changes what the best kernel is, every level is tuned again: each matcher's grid runs
+on the validation dataset re-drawn at that level (:mod:`eval.protocol.tuning`, seed 0, the first
+:data:`TUNE_PAIRS` pairs), then τ is calibrated on the validation dataset at that level with the
+chosen configuration (``--no-tune``: the parameters ``DIR/thresholds.csv`` records, else the
+defaults, at every level). Writes ``localisation_sweep.csv`` (:data:`COLUMNS`: f1_mean, f1_std
+— mean and sample std over runs of the per-run mean per-pair F1; ``runs``; ``deterministic``:
+every run gave the same F1, so there is no spread to report and f1_std is empty; ``params``: the
+configuration used at that level, JSON) and ``fig_localisation.png/.pdf``.
 
 Matchers that do not read the prior are run at every sigma too (their curves are flat by
 construction; they are the reference a prior has to beat).
@@ -46,7 +50,19 @@ DEFAULT_SIGMAS = (0.0, 0.5, 1.2, 2.5, 5.0)
 YAW_PER_METRE = 0.2 / 1.2
 """Heading sigma (degrees) per metre of position sigma: DMGM's GPS noise (1.2 m, 0.2°)."""
 DEFAULT_MATCHERS = "pose,pose_refine,pose_appearance,maximin_pose,maximin,consistency"
-COLUMNS = ["dataset", "position_sigma_m", "yaw_sigma_deg", "matcher", "f1_mean", "f1_std"]
+COLUMNS = [
+    "dataset",
+    "position_sigma_m",
+    "yaw_sigma_deg",
+    "matcher",
+    "f1_mean",
+    "f1_std",
+    "runs",
+    "deterministic",
+    "params",
+]
+TUNE_PAIRS = 25
+"""Validation pairs each level's parameter search runs on (τ is then calibrated on all of them)."""
 
 
 def parse_sigmas(text: str) -> list[float]:
@@ -109,15 +125,25 @@ def sweep_localisation(
     runner: Runner,
     limit: int | None = None,
     val_limit: int | None = None,
+    tune: bool = False,
 ) -> pd.DataFrame:
     """One row per (sigma, matcher) with the columns of :data:`COLUMNS`, on the first `limit`
-    test pairs (None: all); τ per sigma from the first `val_limit` validation pairs."""
+    test pairs (None: all); τ per sigma from the first `val_limit` validation pairs; with
+    `tune`, each matcher's grid searched again at every sigma (module docstring)."""
     if entry.val_dir is None:
         raise ValueError(f"{entry.test_dir}: the localisation sweep needs a validation dataset")
-    named = as_named(matchers)
+    base = as_named(matchers)
     rows = []
     for sigma in sigmas:
         position, yaw = localisation_of(sigma)
+        named, params = base, {label: dict(spec.options) for label, spec in base.items()}
+        if tune:
+            limit_tune = TUNE_PAIRS if val_limit is None else min(val_limit, TUNE_PAIRS)
+            chosen = tuning.tune_entry(
+                entry, list(base.values()), runner, limit_tune, localisation_of(sigma)
+            )
+            named = {label: chosen[label].spec for label in base}
+            params = {label: chosen[label].params for label in base}
         val_runs = _runs(
             runner,
             (entry.val_dir, entry.val_checksum),
@@ -139,8 +165,9 @@ def sweep_localisation(
         )
         per_pair = score_runs(test_runs, taus, dataset=entry.label)
         per_run = per_pair.groupby(["matcher", "seed"], sort=False)["f1"].mean()
-        stats = per_run.groupby(level=0, sort=False).agg(["mean", "std"])
+        stats = per_run.groupby(level=0, sort=False).agg(["mean", "std", "min", "max", "size"])
         for label, row in stats.iterrows():
+            same = row["min"] == row["max"]  # every run the same: nothing to report as spread
             rows.append(
                 {
                     "dataset": entry.label,
@@ -148,7 +175,10 @@ def sweep_localisation(
                     "yaw_sigma_deg": yaw,
                     "matcher": label,
                     "f1_mean": float(row["mean"]),
-                    "f1_std": 0.0 if pd.isna(row["std"]) else float(row["std"]),
+                    "f1_std": float("nan") if same else float(row["std"]),
+                    "runs": int(row["size"]),
+                    "deterministic": bool(same),
+                    "params": tuning.params_json(params[label]),
                 }
             )
     return pd.DataFrame(rows, columns=COLUMNS)
@@ -180,7 +210,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--no-tune",
         dest="tune",
         action="store_false",
-        help="matchers without a recorded choice run with their defaults (no parameter search)",
+        help="no parameter search per level: the parameters DIR/thresholds.csv records, else "
+        "the defaults, at every level",
     )
     add_runner_arguments(parser)
     for action in parser._actions:
@@ -196,8 +227,10 @@ def run(args: argparse.Namespace) -> int:
     sigmas = parse_sigmas(args.sigmas)
     with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(ResultCache(args.cache), executor, progress=not args.no_progress)
-        named = sweep_specs(args.out, entry, matchers, runner, args.tune)
-        rows = sweep_localisation(entry, named, range(args.runs), sigmas, runner, args.pairs)
+        named = matchers if args.tune else sweep_specs(args.out, entry, matchers, runner, False)
+        rows = sweep_localisation(
+            entry, named, range(args.runs), sigmas, runner, args.pairs, tune=args.tune
+        )
     write_sweep(args.out, rows)
     from eval.report.figures import write_fig_localisation
 

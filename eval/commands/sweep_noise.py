@@ -21,7 +21,7 @@ from cadsim.limits import MAX_NOISE_RATE, MAX_PAIRS
 from eval.commands.evaluate import add_runner_arguments
 from eval.core.cache import ResultCache
 from eval.core.executor import make_executor
-from eval.core.result_files import write_csv
+from eval.core.keyed_csv import upsert_csv
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
 from eval.protocol.metrics import METRICS
@@ -77,8 +77,9 @@ def sweep(
     out_dir: str | Path,
     limit: int | None = None,
 ) -> pd.DataFrame:
-    """Run the sweep on the first `limit` frame pairs (None: all); write ``noise_runs.csv``
-    (per-run means over the frame pairs) and return it."""
+    """Run the sweep on the first `limit` frame pairs (None: all); write this dataset's rows of
+    ``noise_runs.csv`` (per-run means over the frame pairs; other datasets' rows are kept) and
+    return them."""
     if limit is not None and limit < 1:
         raise ValueError(f"--pairs: expected >= 1 frame pairs, got {limit}")
     out_dir = Path(out_dir)
@@ -104,7 +105,7 @@ def sweep(
         )
         .reset_index()
     )
-    write_csv(per_run, out_dir / "noise_runs.csv")
+    upsert_csv(out_dir / "noise_runs.csv", per_run)
     return per_run
 
 

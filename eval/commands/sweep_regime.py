@@ -9,8 +9,11 @@ evaluation was; else their defaults). Level 1 is the untouched dataset and share
 
 Each run is its own thinning draw (the run's seed is the draw index, :mod:`eval.core.thinning`), so
 ``--runs`` sets how many independent draws each level averages; ``f1_ci_low``/``f1_ci_high`` is the
-95 % interval of the level's mean F1 with episodes and runs resampled together
-(:mod:`eval.protocol.episode_draw_bootstrap`), and every crossover carries such an interval too.
+95 % cluster-robust t-interval of the level's mean F1 over simulation episodes, each frame pair
+averaged over its draws first (:mod:`eval.protocol.cluster_interval`). Every crossover carries a
+bootstrap interval that resamples episodes and draws together
+(:mod:`eval.protocol.episode_draw_bootstrap`: a crossing share is not a mean, so it has no
+t-interval).
 
 Writes (rows of other datasets already there are kept, this dataset's replaced):
 ``regime_sweep.csv`` (:data:`SWEEP_COLUMNS`), ``crossovers.csv`` (:mod:`eval.protocol.crossovers`) and
@@ -32,7 +35,7 @@ from eval.core.executor import make_executor
 from eval.core.keyed_csv import upsert_csv
 from eval.core.runner import Runner
 from eval.core.thinning import check_keep, noncovisible_share
-from eval.protocol import episode_draw_bootstrap as boot
+from eval.protocol.cluster_interval import t_interval
 from eval.protocol.crossovers import find_crossovers
 from eval.studies.evaluation import (
     DatasetEntry,
@@ -105,18 +108,18 @@ def summarise_level(per_pair: pd.DataFrame, dataset: str, keep: float) -> pd.Dat
 
 
 def level_intervals(per_pair: pd.DataFrame, metric: str = "f1") -> pd.DataFrame:
-    """Per (matcher, keep): the 95 % interval of the mean `metric` over frame pairs and runs,
-    episodes and runs resampled together (the same resamples at every level); columns
-    ``matcher``, ``keep``, ``{metric}_ci_low``, ``{metric}_ci_high``."""
+    """Per (matcher, keep): the 95 % interval of the mean `metric` over frame pairs (each pair
+    averaged over its runs first), a cluster-robust t-interval over simulation episodes
+    (:mod:`eval.protocol.cluster_interval`); columns ``matcher``, ``keep``,
+    ``{metric}_ci_low``, ``{metric}_ci_high``."""
     rows = []
-    axes, weights = boot.axes_of(per_pair), boot.weights_for(per_pair)
-    for matcher, group in per_pair.groupby("matcher", sort=False):
-        levels, _, resampled = boot.means(group, metric, weights, axes)
-        low, high = boot.interval(resampled)
-        rows += [
-            {"matcher": matcher, "keep": k, f"{metric}_ci_low": lo, f"{metric}_ci_high": hi}
-            for k, lo, hi in zip(levels, low, high, strict=True)
-        ]
+    means = per_pair.groupby(["matcher", "keep", "pair"], sort=False).agg(
+        value=(metric, "mean"), episode=("episode", "first")
+    )
+    for (matcher, keep), group in means.groupby(level=[0, 1], sort=False):
+        _, low, high, _ = t_interval(group["value"].to_numpy(), group["episode"].to_numpy())
+        rows.append({"matcher": matcher, "keep": keep, f"{metric}_ci_low": low,
+                     f"{metric}_ci_high": high})  # fmt: skip
     return pd.DataFrame(rows)
 
 

@@ -6,8 +6,8 @@ Missing runs are grouped into :class:`eval.core.tasks.RunTask` s: all matchers a
 (dataset, seed, pairs, keep level, localisation draw) share a task — the reading of every record,
 its re-detection plan and the hypergraph matchers' k-NN search (``matchers.shared_tensors``) —
 split into interleaved halves while there are fewer than two tasks per worker. A matcher that
-ignores its seed (``matchers.deterministic``) is run with seed 0 only where nothing else uses the
-seed (no noise re-draw, no localisation re-draw):
+ignores its seed (``matchers.deterministic``) is run with seed 0 only where nothing else it reads
+uses the seed (no noise re-draw; a localisation re-draw only if it reads the prior):
 its runs for other seeds are that run, read once and relabelled — same bits, a quarter of Table
 I's cost. Tasks go to an :class:`eval.core.executor.Executor`; results come back to this process, which writes the cache — workers need no access to it (only to the
 datasets), whichever executor runs them (local processes or a Dask cluster, docs/scale-out.md).
@@ -107,15 +107,17 @@ def requests_for(
 
 def _seed_free(req: RunRequest) -> RunRequest:
     """`req` with seed 0 when its matcher ignores the seed and nothing else in the run uses it
-    (no noise re-detection, no localisation re-draw, no thinning: the run's seed is its draw)."""
-    if req.seed == 0 or req.noise_rate is not None or req.localisation is not None:
+    (no noise re-detection, no thinning — the run's seed is its draw — and no localisation
+    re-draw unless the matcher does not read the prior)."""
+    if req.seed == 0 or req.noise_rate is not None or req.keep is not None:
         return req
-    if req.keep is not None:
-        return req
-    from matchers.core.registry import deterministic
+    from matchers.blocks.prior import PRIOR_FIELDS
+    from matchers.core.registry import deterministic, requires
 
     try:
         free = deterministic(req.matcher.name)
+        if req.localisation is not None and requires(req.matcher.name) & PRIOR_FIELDS:
+            return req  # the seed re-draws the prior it reads
     except ValueError:  # unknown matcher: let the task report it
         return req
     return dataclasses.replace(req, seed=0) if free else req

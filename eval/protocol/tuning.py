@@ -5,8 +5,13 @@ kernel widths relative to each problem's own scale, the defaults ``{}`` among th
 dataset, :func:`tune_entry` runs every configuration on the *validation* dataset with run seed 0
 only, fits τ on those runs (:func:`eval.protocol.calibration.calibrate`) and scores each configuration by
 the mean per-pair F1 at that τ — the quantity τ itself maximises. The best configuration wins;
-ties go to the earlier one in the grid (the defaults come first). The test dataset is never
-opened here. τ is then calibrated as usual, on every seed of the validation runs of the chosen
+exact ties go to the configuration whose canonical parameters JSON sorts first — a fixed rule
+that does not look at which configuration is the default (``{}`` sorts after every other, so
+the defaults never win a tie). Every tunable built-in matcher has the same budget,
+``matchers.core.search_spaces.TUNING_BUDGET`` (8) configurations; a matcher whose grid is only
+its defaults is run as it is and left out of ``tuning.csv``; a grid of another size (a matcher
+of your own) is tuned as given, with a warning that the budgets differ. The test dataset is
+never opened here. τ is then calibrated as usual, on every seed of the validation runs of the chosen
 configuration (``eval.studies.evaluation``).
 
 Because configurations are matcher options, they are part of each run's cache key, and the
@@ -16,6 +21,7 @@ defaults' validation runs are the same runs the untuned table uses.
 from __future__ import annotations
 
 import json
+import logging
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -24,6 +30,7 @@ from eval.core.tasks import MatcherSpec
 from eval.protocol import calibration
 
 TUNING_SEED = 0
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -75,17 +82,30 @@ def candidates_of(base: MatcherSpec) -> list[tuple[MatcherSpec, dict]]:
 
 
 def tune_entry(
-    entry, matchers: Sequence[MatcherSpec], runner: Runner, limit: int | None = None
+    entry,
+    matchers: Sequence[MatcherSpec],
+    runner: Runner,
+    limit: int | None = None,
+    localisation: tuple[float, float] | None = None,
 ) -> dict[str, TuningChoice]:
     """Pick each matcher's configuration on `entry`'s validation dataset (seed 0 runs only; its
-    first `limit` frame pairs, None: all). `entry` is an ``eval.studies.evaluation.DatasetEntry``;
-    returns {matcher label: choice}."""
+    first `limit` frame pairs, None: all; with ``localisation`` = (position σ m, yaw σ °) the
+    validation records' prior re-drawn at that error, as a sweep level sees it). `entry` is an
+    ``eval.studies.evaluation.DatasetEntry``; returns {matcher label: choice}."""
     if entry.val_dir is None:
         raise ValueError(f"{entry.test_dir}: tuning needs a validation dataset")
     grids = {m.label: candidates_of(m) for m in matchers}
+    for m in matchers:
+        check_budget(m.name, len(grid(m.name)))
     specs = [spec for options in grids.values() for spec, _ in options]
     runs = runner.run(
-        requests_for([(entry.val_dir, entry.val_checksum)], specs, [TUNING_SEED], limit=limit),
+        requests_for(
+            [(entry.val_dir, entry.val_checksum)],
+            specs,
+            [TUNING_SEED],
+            limit=limit,
+            localisation=localisation,
+        ),
         desc=f"{entry.label} tuning",
     )
     by_spec = {run.spec.matcher: run for run in runs}
@@ -95,9 +115,34 @@ def tune_entry(
         for spec, config in options:
             fit = calibration.calibrate([by_spec[spec]])
             candidates.append(Candidate(spec, config, fit.val_f1, fit.tau))
-        best = max(range(len(candidates)), key=lambda k: (candidates[k].val_f1, -k))
+        best = best_candidate(candidates)
         choices[label] = TuningChoice(entry.label, label, tuple(candidates), best)
     return choices
+
+
+def best_candidate(candidates: Sequence[Candidate]) -> int:
+    """Index of the highest validation F1; exact ties to the smallest canonical params JSON."""
+    top = max(c.val_f1 for c in candidates)
+    tied = [k for k, c in enumerate(candidates) if c.val_f1 == top]
+    return min(tied, key=lambda k: params_json(candidates[k].config))
+
+
+def check_budget(name: str, size: int) -> None:
+    """Warn (once per matcher) when a tunable grid's size differs from the equal budget."""
+    from matchers.core.search_spaces import TUNING_BUDGET
+
+    if size > 1 and size != TUNING_BUDGET and name not in _WARNED:
+        _WARNED.add(name)
+        log.warning(
+            "%s: a tuning grid of %d configurations, not the %d every built-in matcher gets; "
+            "its tuned row is not on an equal footing",
+            name,
+            size,
+            TUNING_BUDGET,
+        )
+
+
+_WARNED: set[str] = set()
 
 
 def params_json(options: dict) -> str:
@@ -119,5 +164,6 @@ def tuning_rows(choices: Sequence[TuningChoice]) -> list[dict]:
             "chosen": k == c.chosen,
         }
         for c in choices
+        if len(c.candidates) > 1  # only its defaults: not tuned
         for k, cand in enumerate(c.candidates)
     ]

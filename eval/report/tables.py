@@ -105,7 +105,9 @@ def build_table(
     ap_path = variant_path(out_dir, "average_precision", variant, ".csv")
     if ap_path.is_file():
         ap = pd.read_csv(ap_path).groupby(["dataset", "matcher"])["ap"]
-        ap = pd.DataFrame({"ap_mean": ap.mean(), "ap_std": ap.std(ddof=1).fillna(0.0)}).reset_index()
+        ap = pd.DataFrame(
+            {"ap_mean": ap.mean(), "ap_std": ap.std(ddof=1).fillna(0.0)}
+        ).reset_index()
         table = table.merge(ap, on=["dataset", "matcher"], how="left")
     tau_path = variant_path(out_dir, "thresholds", variant, ".csv")
     if tau_path.is_file():

@@ -129,7 +129,9 @@ def build_external(out_dir: str | Path) -> pd.DataFrame:
             row[f"{metric}_mean"] = r.get(f"{metric}_mean", np.nan)
         rows.append(row)
     ours = pd.DataFrame(rows, columns=TABLE_COLUMNS)
-    ours = ours.sort_values(["uses_prior", "f1_pooled_mean"], ascending=[True, False], kind="stable")
+    ours = ours.sort_values(
+        ["uses_prior", "f1_pooled_mean"], ascending=[True, False], kind="stable"
+    )
     dataset = ours["dataset"].iloc[0] if len(ours) else "DMGM"
     published = {
         "dataset": dataset,

@@ -17,14 +17,19 @@ import math
 from collections.abc import Mapping, Sequence
 
 MAX_CONFIGS = 12
+TUNING_BUDGET = 8
+"""Configurations every tunable built-in matcher gets on every dataset (its defaults included):
+an equal budget, so that no matcher wins by having been searched harder. A matcher whose grid
+is only its defaults is not tuned (and not listed in ``tuning.csv``)."""
 
-_PAIRWISE_WIDTHS = (0.02, 0.05, 0.1, 0.2, 0.5)  # sigma / median within-view distance
-_TENSOR_WIDTHS = (0.1, 0.2, 1.0, 2.0)  # Eq. (1) sigma on summed cosine differences (0.5 default)
-_SPREADS = (1.0, 2.0, 3.0, 4.0)  # prior likelihood width / stated world_sigma (2 default)
+_TENSOR_WIDTHS = (0.02, 0.05, 0.1, 0.2, 1.0, 2.0, 5.0)  # Eq. (1) sigma (0.5 default)
+_PAIRWISE_WIDTHS = (0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0)  # sigma / median within-view distance
+_MOS_WIDTHS = (0.02, 0.05, 0.1, 0.2, 0.5)  # its pairwise width; its tensor sigma: 0.1, 0.2
+_TOLERANCES = (0.02, 0.03, 0.05, 0.15, 0.2, 0.3, 0.5)  # consistency (0.1 default)
 
 
 def _hypergraph() -> list[dict]:
-    """Third-order matchers: Eq. (1)'s bandwidth, default 0.5 first."""
+    """Third-order matchers: Eq. (1)'s bandwidth, the default 0.5 first, 0.02-5 around it."""
     return [{}] + [{"sigma": s} for s in _TENSOR_WIDTHS]
 
 
@@ -33,43 +38,30 @@ def _pairwise() -> list[dict]:
     return [{}] + [{"sigma_scale": s} for s in _PAIRWISE_WIDTHS]
 
 
-def _prior_and_evidence() -> list[dict]:
-    """pose_appearance / maximin_pose: likelihood width, the prior as stated or refined, gate."""
-    return (
-        [{}]
-        + [{"spread": s} for s in _SPREADS if s != 2.0]
-        + [{"spread": s, "refine": True} for s in _SPREADS]
-        + [{"gate": 4.0}, {"gate": 12.0}]
-    )
-
-
-def _maximin_prior() -> list[dict]:
-    """maximin_pose: the prior's grid plus two values of Eq. (1)'s bandwidth."""
-    return _prior_and_evidence() + [{"sigma": 0.2}, {"sigma": 1.0}]
-
-
 BUILTIN_SEARCH_SPACES: dict[str, list[dict]] = {
     "appearance": [{}],
     "none": [{}],
     "sm": _pairwise(),
     "rrwm": _pairwise(),
-    "mos": [{}] + [{"sigma_scale": s, "sigma": t} for s in _PAIRWISE_WIDTHS for t in (0.2, 0.5)],
+    "mos": [{}] + [{"sigma_scale": s} for s in _MOS_WIDTHS] + [{"sigma": 0.1}, {"sigma": 0.2}],
     "tm": _hypergraph(),
     "hgm": _hypergraph(),
     "bcagm": _hypergraph(),
     "rrwhm": _hypergraph(),
     "maximin": _hypergraph(),
     "pose": [{}]
-    + [
-        {"spread": s, "gate": g} for s in _SPREADS for g in (4.0, 8.0, 12.0) if (s, g) != (2.0, 8.0)
-    ],
+    + [{"spread": s} for s in (1.0, 3.0, 4.0)]
+    + [{"gate": 4.0}, {"gate": 12.0}, {"spread": 1.0, "gate": 4.0}, {"spread": 4.0, "gate": 12.0}],
     "pose_refine": [{}]
-    + [{"spread": s} for s in _SPREADS if s != 2.0]
-    + [{"tighten": 0.25}, {"tighten": 1.0}, {"gate": 4.0}, {"gate": 12.0}, {"confident": 0.3}]
-    + [{"rotation": True}, {"rotation": True, "spread": 4.0}],
-    "pose_appearance": _prior_and_evidence(),
-    "consistency": [{}] + [{"tolerance_scale": s} for s in (0.03, 0.05, 0.15, 0.2, 0.3)],
-    "maximin_pose": _maximin_prior(),
+    + [{"spread": s} for s in (1.0, 3.0, 4.0)]
+    + [{"tighten": 0.25}, {"tighten": 1.0}, {"gate": 4.0}, {"rotation": True}],
+    "pose_appearance": [{}]
+    + [{"spread": s} for s in (1.0, 3.0, 4.0)]
+    + [{"spread": 2.0, "refine": True}, {"spread": 4.0, "refine": True}]
+    + [{"gate": 4.0}, {"gate": 12.0}],
+    "consistency": [{}] + [{"tolerance_scale": s} for s in _TOLERANCES],
+    "maximin_pose": [{}, {"spread": 1.0}, {"spread": 4.0}, {"spread": 2.0, "refine": True}]
+    + [{"gate": 4.0}, {"gate": 12.0}, {"sigma": 0.2}, {"sigma": 1.0}],
 }
 
 
