@@ -23,6 +23,7 @@ from eval.core.result_files import write_text
 from eval.report.tables import PAPER_COLUMN, PAPER_NAMES, dataset_order, method_name, params_text
 from eval.studies.agreement import readme_part as agreement_readme
 from eval.studies.external import readme_part as external_readme
+from eval.studies.prior_defaults import readme_part as prior_sensitivity_readme
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
 RIVALS = ("mos", "rrwhm")
@@ -403,6 +404,7 @@ def results_section(results: Path, readme_dir: Path) -> str:
             "",
         ]
     out += external_readme(results, rel)
+    out += prior_sensitivity_readme(results, rel)
     if (results / "fig_localisation.png").is_file():
         loc = record.get("localisation_sweep", {})
         out += [

@@ -58,7 +58,14 @@ from eval.studies.evaluation import (
     open_entry,
     parse_matchers,
 )
-from eval.studies.external import CALIBRATION_DIR, TEST_DIR, evaluate_external, external_matchers
+from eval.studies.external import (
+    CALIBRATION_DIR,
+    SUBDIR,
+    TEST_DIR,
+    evaluate_external,
+    external_matchers,
+)
+from eval.studies.prior_defaults import SENSITIVITY, write_sensitivity
 from eval.studies.spread import spread_rows
 
 log = logging.getLogger("eval.reproduce")
@@ -455,6 +462,13 @@ def main(argv: list[str] | None = None) -> int:
                 )
                 write_agreement(out)
         count("external", before)
+        with timer.stage("prior_sensitivity"):
+            before = asdict(runner.totals)
+            (out / SUBDIR / SENSITIVITY).unlink(missing_ok=True)
+            if external_seeds and args.tune:
+                log.info("[prior sensitivity] every grid point of the prior matchers on 069 + 071")
+                write_sensitivity(out, runner)
+        count("prior_sensitivity", before)
 
     with timer.stage("tables_figures"):
         markdown = write_tables(out, PAPER_CSV)

@@ -13,7 +13,7 @@ import time
 import numpy as np
 
 from matchers.blocks.appearance_similarity import appearance_similarity
-from matchers.blocks.memory_models import tensor_matcher
+from matchers.blocks.memory_models import prior_evidence_memory, tensor_matcher
 from matchers.blocks.prior import PRIOR_FIELDS
 from matchers.blocks.sinkhorn import sinkhorn
 from matchers.core.matching import Matching
@@ -190,20 +190,23 @@ def checked_first_order(first_order: np.ndarray, n: int, m: int) -> np.ndarray:
     return b.reshape(-1)
 
 
-@budgeted(tensor_matcher("maximin"), "max_tensor_entries, triangles or neighbours")
+@budgeted(
+    prior_evidence_memory(2.0, 12.0, True, tensor_matcher("maximin")),
+    "max_tensor_entries, triangles or neighbours",
+)
 def maximin_pose(
     problem: Problem,
     seed: int | None = 0,
     threshold: float | None = None,
     *,
     spread: float = 2.0,
-    gate: float = 8.0,
-    refine: bool = False,
+    gate: float = 12.0,
+    refine: bool = True,
     **options,
 ) -> Matching:
-    """Maximin with b' = b * L (module docstring). ``spread`` (2) and ``gate`` (8) shape the
+    """Maximin with b' = b * L (module docstring). ``spread`` (2) and ``gate`` (12) shape the
     prior likelihood L as for :func:`matchers.pose.pose` (multiples of world_sigma; ground
-    plane x, y, z up); ``refine`` (False) first corrects the prior's relative rigid error as
+    plane x, y, z up); ``refine`` (True) first corrects the prior's relative rigid error as
     :func:`matchers.pose_refine.pose_refine` does; every other option is :func:`~matchers.maximin.maximin`'s (tensor,
     alpha, beta, init, ...), except ``first_order``, which this matcher sets. Scores as
     maximin's (x / max). Needs ``problem.world1/world2/world_sigma``.

@@ -10,7 +10,7 @@ from __future__ import annotations
 import time
 
 from matchers.blocks.appearance_similarity import appearance_similarity
-from matchers.blocks.memory_models import unary_memory
+from matchers.blocks.memory_models import prior_evidence_memory, unary_memory
 from matchers.blocks.prior import PRIOR_FIELDS, check_prior_options, prior_likelihood, require_prior
 from matchers.core.matching import Matching
 from matchers.core.memory_budget import budgeted
@@ -26,7 +26,7 @@ def pose(
     seed: int | None = 0,
     threshold: float | None = None,
     *,
-    spread: float = 2.0,
+    spread: float = 3.0,
     gate: float = 8.0,
 ) -> Matching:
     """Match by the localisation prior: scores = the prior likelihood L_ij in [0, 1] of the
@@ -57,15 +57,15 @@ pose.requires = PRIOR_FIELDS
 pose.deterministic = True  # the result does not depend on `seed`
 
 
-@budgeted(unary_memory, "the number of objects")
+@budgeted(prior_evidence_memory(4.0, 8.0, True), "the number of objects, or refine=False")
 def pose_appearance(
     problem: Problem,
     seed: int | None = 0,
     threshold: float | None = None,
     *,
-    spread: float = 2.0,
+    spread: float = 4.0,
     gate: float = 8.0,
-    refine: bool = False,
+    refine: bool = True,
 ) -> Matching:
     """Scores = L_ij * b_ij in [0, 1]: the prior likelihood (options ``spread``, ``gate`` as
     for :func:`matchers.pose.pose`; ground plane, z up; with ``refine`` the prior corrected

@@ -115,21 +115,21 @@ def pose_refine(
     seed: int | None = 0,
     threshold: float | None = None,
     *,
-    spread: float = 2.0,
+    spread: float = 4.0,
     gate: float = 8.0,
     tighten: float = 0.5,
     confident: float = 0.1,
-    rotation: bool = False,
+    rotation: bool = True,
     max_iter: int = 5,
 ) -> Matching:
     """Pose matching with the prior's relative rigid error estimated and removed (module
     docstring, :func:`refined_prior`), then Hungarian.
 
-    Options: ``spread`` (2) and ``gate`` (8) of the first round as for :func:`matchers.pose.pose`
+    Options: ``spread`` (4) and ``gate`` (8) of the first round as for :func:`matchers.pose.pose`
     (multiples of world_sigma); ``tighten`` (0.5) — the factor on width and gate once the
     views are aligned; ``confident`` (0.1) — least likelihood of a match that may support the
-    fit; ``rotation`` (False) — fit the yaw as well as the translation (off by default: a
-    GPS-grade yaw error moves objects less than a yaw fitted from a handful of matches errs);
+    fit; ``rotation`` (True) — fit the yaw as well as the translation (False: translation
+    only);
     ``max_iter`` (5) fits.
     Scores: the refined likelihood in [0, 1] (absolute, as ``pose``). Needs
     ``problem.world1/world2/world_sigma``. Deterministic; ``seed`` unused.

@@ -5,7 +5,9 @@ then, after the same number of iterations, and nearly the same scores: the fused
 another order (last bits), and the candidate search now breaks ties at a triangle's k-th
 neighbour by candidate index where the k-d tree of the base commit used its traversal order,
 which swaps a few equal-distance entries and moves the hypergraph matchers' scores by up to
-3e-3 on these problems (:mod:`matchers.hypergraph.candidate_search`). ``python -m tests.test_matchers_golden record`` (from the repository root) rewrites the file — only ever run
+3e-3 on these problems (:mod:`matchers.hypergraph.candidate_search`); TM stops once its iterate
+changes by less than 1e-3 (relative, over 5 products), so it makes fewer products and its scores
+move by up to 2e-2 — the pairs stay the same. ``python -m tests.test_matchers_golden record`` (from the repository root) rewrites the file — only ever run
 it on the base commit.
 """
 
@@ -82,8 +84,12 @@ def test_matching_is_unchanged_below_the_cap(case, name):
     result = _run(case, name)
     assert np.array_equal(result.pairs, golden[f"{case}/{name}/pairs"])
     atol = 5e-3 if name in HYPER else 1e-9  # tie rule of the candidate search (docstring)
+    if name == "tm":  # now stops at a relative change of 1e-3 instead of running 100 products
+        atol = 2e-2
+        assert result.iterations <= int(golden[f"{case}/{name}/iterations"])
+    else:
+        assert result.iterations == int(golden[f"{case}/{name}/iterations"])
     np.testing.assert_allclose(result.scores, golden[f"{case}/{name}/scores"], rtol=0, atol=atol)
-    assert result.iterations == int(golden[f"{case}/{name}/iterations"])
 
 
 if __name__ == "__main__" and sys.argv[1:] == ["record"]:

@@ -168,8 +168,10 @@ def test_pose_is_exact_on_a_noise_free_prior(seed):
 def test_pose_scores_fall_with_distance_and_the_gate_cuts():
     w1, w2, c1, c2, truth = two_views(4)
     shifted = Problem(c1, c2, world1=w1, world2=w2 + [2.0, 0.0, 0.0], world_sigma=1.0)
-    scores = get("pose")(shifted).scores
+    scores = get("pose")(shifted, spread=2.0).scores
     assert all(scores[i, j] == pytest.approx(np.exp(-4 / 16)) for i, j in truth)
+    wider = get("pose")(shifted).scores  # the default spread, 3: exp(-d^2 / (4 (3 sigma)^2))
+    assert all(wider[i, j] == pytest.approx(np.exp(-4 / 36)) for i, j in truth)
     gated = get("pose")(shifted, gate=1.5).scores
     assert all(gated[i, j] == 0.0 for i, j in truth)
 
@@ -201,9 +203,9 @@ def test_pose_refine_recovers_a_planted_rigid_offset_with_outliers(seed):
     assert matching.info["yaw_deg"] == pytest.approx(-4.0, abs=1e-6)  # the inverse motion
 
 
-def test_pose_refine_translation_only_by_default():
+def test_pose_refine_translation_only_on_request():
     problem, truth = planted_offset(5, yaw_deg=0.0, shift=(5.0, 2.0))
-    matching = get("pose_refine")(problem, threshold=0.5)
+    matching = get("pose_refine")(problem, threshold=0.5, rotation=False)
     assert as_set(matching.pairs) == truth
     assert matching.info["yaw_deg"] == 0.0
     assert matching.info["shift_m"] == pytest.approx([-5.0, -2.0], abs=1e-6)
@@ -228,7 +230,8 @@ def test_pose_appearance_lets_appearance_break_a_tie_of_the_prior():
     assert get("pose_appearance")(problem, threshold=0.1).pairs.tolist() == [[0, 1], [1, 0]]
     no_features = Problem(np.zeros((2, 3)), np.zeros((2, 3)), world1=w, world2=w, world_sigma=2.0)
     np.testing.assert_array_equal(
-        get("pose_appearance")(no_features).scores, get("pose")(no_features).scores
+        get("pose_appearance")(no_features, refine=False).scores,
+        get("pose")(no_features, spread=4.0).scores,
     )
 
 

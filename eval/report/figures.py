@@ -336,6 +336,37 @@ def write_qualitative(out_dir: str | Path) -> list[Path]:
     return _save(fig, out_dir / "qualitative")
 
 
+def write_fig_prior_sensitivity(out_dir: str | Path) -> list[Path]:
+    """``fig_prior_sensitivity.png/.pdf``: per prior matcher, pooled test F1 of every grid
+    configuration (dots), the one chosen on sequence 070 ringed, the defaults marked."""
+    out_dir = Path(out_dir)
+    path = out_dir / "external" / "prior_sensitivity.csv"  # eval.studies.prior_defaults writes it
+    if not path.is_file():
+        return []
+    table = pd.read_csv(path)
+    matchers = list(dict.fromkeys(table["matcher"]))
+    colors = _colors(matchers)
+    fig, axes = _figure(7.0, 3.6)
+    ax = axes[0, 0]
+    for x, name in enumerate(matchers):
+        rows = table[table["matcher"] == name]
+        y = 100 * rows["test_f1_pooled"].to_numpy()
+        offsets = (rows["config"].to_numpy() - (len(rows) - 1) / 2) * 0.06
+        ax.scatter(x + offsets, y, s=22, color=colors[name], zorder=3)
+        chosen = rows["chosen"].to_numpy(bool)
+        ax.scatter(x + offsets[chosen], y[chosen], s=110, facecolor="none", edgecolor="black",
+                   zorder=4, label="chosen on 070" if x == 0 else None)  # fmt: skip
+        default = (rows["params"] == "{}").to_numpy()
+        ax.scatter(x + offsets[default], y[default], marker="x", s=40, color="black", zorder=5,
+                   label="defaults" if x == 0 else None)  # fmt: skip
+    ax.set_xticks(range(len(matchers)), [method_name(m) for m in matchers], fontsize=8)
+    ax.set_ylabel("pooled F1 on 069 + 071 (%)")
+    ax.set_title("Prior matchers: test F1 over each tuning grid (8 configurations)", fontsize=9)
+    ax.grid(alpha=0.3, axis="y")
+    ax.legend(fontsize=7, loc="lower left")
+    return _save(fig, out_dir / "fig_prior_sensitivity")
+
+
 def render_all(out_dir: str | Path) -> list[Path]:
     """Every figure whose inputs are in `out_dir`."""
     return (
@@ -344,4 +375,5 @@ def render_all(out_dir: str | Path) -> list[Path]:
         + write_fig_regime(out_dir)
         + write_fig_localisation(out_dir)
         + write_qualitative(out_dir)
+        + write_fig_prior_sensitivity(out_dir)
     )

@@ -70,8 +70,8 @@ def regime_markdown(path: str | Path) -> str:
                 cells.append("–")
             elif c in ("noncovisible_share", "covisible_share_of_smaller"):
                 cells.append(f"{100 * v:.0f} %")
-            elif c == "appearance_auc":
-                cells.append(f"{v:.2f}")
+            elif c in ("appearance_auc", "position_error_median_m"):
+                cells.append(f"{v:.2f}")  # MRC's 0.06 m would read "0.1" at one decimal
             else:
                 cells.append(f"{v:.1f}")
         lines.append("| " + " | ".join(cells) + " |")

@@ -148,7 +148,7 @@ def pose_refine_memory(problem: Problem, **options) -> float:
     hypotheses = min(HYPOTHESES, nm)
     if problem.world1 is not None and problem.world_sigma is not None and nm:
         try:
-            spread, gate = check_prior_options(options.get("spread", 2.0), options.get("gate", 8.0))
+            spread, gate = check_prior_options(options.get("spread", 4.0), options.get("gate", 8.0))
         except ValueError:
             return 0.0
         likelihood = prior_likelihood(
@@ -160,3 +160,22 @@ def pose_refine_memory(problem: Problem, **options) -> float:
 
 def unary_memory(problem: Problem, **options) -> float:
     return _unary(problem)
+
+
+def prior_evidence_memory(
+    spread: float, gate: float, refine: bool, also: Estimate | None = None
+) -> Estimate:
+    """pose_appearance / maximin_pose: with ``refine`` (default as given) the refined prior's
+    translation vote (:func:`pose_refine_memory` at the matcher's own spread and gate), else the
+    plain likelihood; ``also`` (maximin's tensor) runs after it, so the larger of the two."""
+
+    def estimate(problem: Problem, **options) -> float:
+        if options.get("refine", refine):
+            prior = pose_refine_memory(
+                problem, spread=options.get("spread", spread), gate=options.get("gate", gate)
+            )
+        else:
+            prior = _unary(problem)
+        return prior if also is None else max(prior, also(problem, **options))
+
+    return estimate

@@ -49,19 +49,20 @@ BUILTIN_SEARCH_SPACES: dict[str, list[dict]] = {
     "bcagm": _hypergraph(),
     "rrwhm": _hypergraph(),
     "maximin": _hypergraph(),
-    "pose": [{}]
-    + [{"spread": s} for s in (1.0, 3.0, 4.0)]
+    # The prior matchers' defaults come from DMGM sequence 070 (eval/data/prior-defaults.json);
+    # their grids hold absolute values, the defaults they replaced among them.
+    "pose": [{}]  # spread 3, gate 8
+    + [{"spread": s} for s in (1.0, 2.0, 4.0)]
     + [{"gate": 4.0}, {"gate": 12.0}, {"spread": 1.0, "gate": 4.0}, {"spread": 4.0, "gate": 12.0}],
-    "pose_refine": [{}]
-    + [{"spread": s} for s in (1.0, 3.0, 4.0)]
-    + [{"tighten": 0.25}, {"tighten": 1.0}, {"gate": 4.0}, {"rotation": True}],
-    "pose_appearance": [{}]
-    + [{"spread": s} for s in (1.0, 3.0, 4.0)]
-    + [{"spread": 2.0, "refine": True}, {"spread": 4.0, "refine": True}]
-    + [{"gate": 4.0}, {"gate": 12.0}],
+    "pose_refine": [{}]  # spread 4, gate 8, tighten 0.5, rigid (yaw fitted too)
+    + [{"spread": s} for s in (1.0, 2.0, 3.0)]
+    + [{"tighten": 0.25}, {"tighten": 1.0}, {"gate": 4.0}, {"rotation": False}],
+    "pose_appearance": [{}]  # spread 4, gate 8, refined prior
+    + [{"spread": s, "refine": False} for s in (2.0, 3.0, 4.0)]
+    + [{"spread": 1.0}, {"spread": 2.0}, {"gate": 4.0}, {"gate": 12.0}],
     "consistency": [{}] + [{"tolerance_scale": s} for s in _TOLERANCES],
-    "maximin_pose": [{}, {"spread": 1.0}, {"spread": 4.0}, {"spread": 2.0, "refine": True}]
-    + [{"gate": 4.0}, {"gate": 12.0}, {"sigma": 0.2}, {"sigma": 1.0}],
+    "maximin_pose": [{}, {"refine": False}, {"spread": 1.0}, {"spread": 4.0}]  # refined, 2, 12
+    + [{"gate": 4.0}, {"gate": 8.0}, {"sigma": 0.2}, {"sigma": 1.0}],
 }
 
 
