@@ -78,7 +78,10 @@ COMMAND_EXAMPLES: dict[str, tuple[str, ...]] = {
         "cadsim sweep-localisation data/cad --sigmas 0,1.2,2.5,5 --matchers pose,maximin_pose "
         "--out localisation",
     ),
-    "table": ("cadsim table results", "cadsim table my-run --paper-table eval/data/paper-table1.csv"),
+    "table": (
+        "cadsim table results",
+        "cadsim table my-run --paper-table eval/data/paper-table1.csv",
+    ),
     "synthetic": (
         "cadsim synthetic --protocol deformation --matchers tm,rrwhm,maximin",
         "cadsim synthetic --protocol house --house-n1 20 --workers 2 --out house",
