@@ -196,7 +196,8 @@ def readme_part(results: Path, rel: str) -> list[str]:
         "",
         "Spearman's ρ between the matchers' F1 on each dataset (or the paper's Table I column) "
         f"and on the external DMGM CAD test pairs, same matchers, none given the localisation "
-        f"prior; 95 % interval from a bootstrap over frame pairs of both sides "
+        f"prior; 95 % interval from a bootstrap over clusters of both sides (simulation "
+        f"episodes; blocks of 10 consecutive external pairs), never single pairs "
         f"(`{rel}/agreement.csv`).",
         "",
     ]

@@ -148,7 +148,11 @@ def readme_part(results: Path, rel: str) -> list[str]:
     for name, rows in table.groupby("matcher", sort=False):
         f1 = 100 * rows["test_f1_pooled"]
         chosen = 100 * rows.loc[rows["chosen"].astype(bool), "test_f1_pooled"].iloc[0]
-        spans.append(f"{name} {f1.min():.1f}–{f1.max():.1f} (chosen on 070: {chosen:.1f})")
+        default = 100 * rows.loc[rows["params"] == "{}", "test_f1_pooled"].iloc[0]
+        spans.append(
+            f"{name} {f1.min():.1f}–{f1.max():.1f} (tuned on 070: {chosen:.1f}; defaults: "
+            f"{default:.1f})"
+        )
     return [
         f"![Test F1 over each prior matcher's tuning grid]({rel}/fig_prior_sensitivity.png)",
         "",
