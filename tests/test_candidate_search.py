@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from matchers import Problem, build_tensor
+from matchers.core import row_threads
 from matchers.hypergraph import candidate_search, tensor_build
 from matchers.hypergraph.candidate_search import nearest, nearest_numpy
 from matchers.hypergraph.triangles import angle_cosines, ordered_descriptors
@@ -45,8 +46,8 @@ def test_every_path_keeps_the_lowest_indexed_of_tied_candidates(p, k, monkeypatc
     by_numpy = nearest_numpy(queries, candidates, k, p)
     monkeypatch.setattr(candidate_search, "BLOCK_CELLS", 1000)  # numpy, many small blocks
     blocked = nearest_numpy(queries, candidates, k, p)
-    monkeypatch.setattr(candidate_search, "THREAD_CELLS", 1)  # compiled, split over threads
-    monkeypatch.setattr(candidate_search, "_threads", lambda: 3)
+    monkeypatch.setattr(row_threads, "MIN_WORK", 1)  # compiled, split over 3 threads
+    monkeypatch.setattr(row_threads, "threads", lambda: 3)
     split = nearest(queries, candidates, k, p)
     for dist, idx in (compiled, by_numpy, blocked, split):
         assert np.array_equal(idx, want_idx)

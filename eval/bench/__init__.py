@@ -139,7 +139,7 @@ register(
 register(
     lazy_section(
         "targets",
-        "the speed and memory targets of issues 2 and 11, PASS/FAIL",
+        "the speed and memory targets (matchers at 20 v 20 and 100 v 100), PASS/FAIL",
         "eval.bench.matchers:targets_section",
     )
 )

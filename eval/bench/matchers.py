@@ -66,7 +66,8 @@ def matchers_section(args: argparse.Namespace) -> list[Target]:
 
 
 def targets_section(args: argparse.Namespace) -> list[Target]:
-    """The speed and memory targets of issue 11 (and issue 2's RRWM ratio), PASS/FAIL. The 100 vs
+    """The speed and memory targets (20 vs 20 build + maximin: 10 ms and 0.15 x pygmtools' RRWM;
+    our RRWM against pygmtools'; 100 vs 100: 1.5 s and 600 MB), PASS/FAIL. The 100 vs
     100 points run each in a fresh process (:func:`eval.bench.scaling.run_point`), so that
     their peak RSS is their own."""
     import pygmtools as pygm
@@ -94,7 +95,7 @@ def targets_section(args: argparse.Namespace) -> list[Target]:
                 Target(
                     "tensor build + maximin / pygmtools rrwm, 20 vs 20",
                     maximin_s / pygm_s,
-                    0.12,
+                    0.15,
                     "x",
                 )
             )

@@ -56,6 +56,7 @@ from scipy.spatial import cKDTree
 from matchers.core.jit import njit
 from matchers.core.memory_budget import check_memory
 from matchers.core.problem import Problem
+from matchers.core.row_threads import split_rows
 from matchers.hypergraph.candidate_search import nearest
 from matchers.hypergraph.sparse_tensor import SparseTensor
 from matchers.hypergraph.tensor_sharing import build_or_reuse
@@ -148,9 +149,15 @@ def build_tensor(
         mean = float(found.dist.mean())
         bandwidth = mean if mean > 0 else 1.0
     dist = found.dist
-    values = (
-        np.exp(-dist / bandwidth) if _decay_jit is None else _decay_jit(dist, float(bandwidth))
-    ).reshape(-1)
+    if _decay_jit is None:
+        values = np.exp(-dist / bandwidth).reshape(-1)
+    else:
+        flat, values = dist.reshape(-1), np.empty(dist.size)
+
+        def job(lo: int, hi: int) -> None:
+            _decay_jit(flat[lo:hi], float(bandwidth), values[lo:hi])
+
+        split_rows(job, flat.size, flat.size * 4)
     info |= {
         "triangles": found.triangles,
         "neighbours": found.neighbours,
@@ -236,7 +243,12 @@ def _candidates(
         desc_s, desc_f = np.round(desc_s, _DECIMALS), np.round(desc_f, _DECIMALS)
         dist, idx = nearest(desc_s, desc_f, k, spec.minkowski_p)
         if _match_indices_jit is not None:
-            matches = _match_indices_jit(tri_s, tri_f, idx, m, swap)
+            matches = np.empty((3, *idx.shape), dtype=np.int64)
+
+            def job(lo: int, hi: int) -> None:
+                _match_indices_jit(tri_s[lo:hi], tri_f, idx[lo:hi], m, swap, matches[:, lo:hi])
+
+            split_rows(job, len(idx), idx.size * 8)
         else:
             mine = tri_s[:, :, None]  # (T, 3, 1)
             theirs = [np.take(np.ascontiguousarray(tri_f[:, f]), idx) for f in range(3)]  # (T, k)
@@ -260,12 +272,11 @@ def _candidates(
 
 
 def _match_indices(
-    tri_s: np.ndarray, tri_f: np.ndarray, idx: np.ndarray, m: int, swap: bool
-) -> np.ndarray:
-    # (3, T, k) match indices a = i*m + j of sampled triangle t's vertex f paired with vertex f
-    # of its neighbour idx[t, q] (view 1 index first: swapped when view 2 was sampled)
+    tri_s: np.ndarray, tri_f: np.ndarray, idx: np.ndarray, m: int, swap: bool, out: np.ndarray
+) -> None:
+    # into out (3, T, k): match indices a = i*m + j of sampled triangle t's vertex f paired with
+    # vertex f of its neighbour idx[t, q] (view 1 index first: swapped when view 2 was sampled)
     count, k = idx.shape
-    out = np.empty((3, count, k), dtype=np.int64)
     for t in range(count):
         for q in range(k):
             other = idx[t, q]
@@ -274,20 +285,17 @@ def _match_indices(
                     out[f, t, q] = tri_f[other, f] * m + tri_s[t, f]
                 else:
                     out[f, t, q] = tri_s[t, f] * m + tri_f[other, f]
-    return out
 
 
 _match_indices_jit = njit(_match_indices)
 
 
-def _decay(dist: np.ndarray, bandwidth: float) -> np.ndarray:
-    # np.exp(-dist / bandwidth): the same division, and the same C library exp numpy calls on
-    # CPUs without AVX-512 (tested bit for bit), without numpy's 4x slower loop around it
-    out = np.empty_like(dist)
-    flat, flat_out = dist.reshape(-1), out.reshape(-1)
+def _decay(flat: np.ndarray, bandwidth: float, out: np.ndarray) -> None:
+    # into out: np.exp(-flat / bandwidth) of a 1-D array — the same division, and the same C
+    # library exp numpy calls on CPUs without AVX-512 (tested bit for bit), without numpy's 4x
+    # slower loop around it
     for i in range(flat.size):
-        flat_out[i] = np.exp(-flat[i] / bandwidth)
-    return out
+        out[i] = np.exp(-flat[i] / bandwidth)
 
 
 _decay_jit = njit(_decay)
