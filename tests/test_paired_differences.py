@@ -93,3 +93,11 @@ def test_interval_uses_whole_episodes_not_pairs():
 def test_interval_rejects_mismatched_input():
     with pytest.raises(ValueError, match="clusters"):
         t_interval(np.zeros(3), np.zeros(2))
+
+
+def test_an_interval_stays_inside_the_range_of_its_quantity():
+    values = np.array([0.0, 0.0, 0.0, 0.02, 0.0, 0.01])  # rates near 0: mean - t * se < 0
+    _, low, high, _ = t_interval(values, np.arange(6) // 2)
+    assert low < 0
+    _, low, high, _ = t_interval(values, np.arange(6) // 2, bounds=(0.0, 1.0))
+    assert low == 0.0 and 0 < high <= 1

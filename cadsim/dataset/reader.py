@@ -27,6 +27,8 @@ from cadsim.dataset.encoding import decode_png, load_npz
 from cadsim.dataset.manifest import DatasetError, read_manifest
 from cadsim.dataset.seeds import localisation_seed, noise_seed
 from cadsim.observer_pose import ObserverPose, camera_to_world
+from cadsim.sensing.gnss_error import draw_error as draw_gnss_error
+from cadsim.sensing.gnss_error import preset as gnss_preset
 from cadsim.sensing.localisation import LocalisationConfig, PoseError, perturbed_world
 from cadsim.world import WorldObject
 
@@ -254,7 +256,7 @@ class FramePair:
         if prior.get("kind") != "pose_error" or self.cameras is None:
             return None
         config = LocalisationConfig(
-            **{k: prior[k] for k in ("position_sigma_m", "yaw_sigma_deg") if k in prior}
+            **{k: prior[k] for k in ("position_sigma_m", "yaw_sigma_deg", "preset") if k in prior}
         )
         obs = self.record["observers"]
         return config, (int(obs[0]["localisation_seed"]), int(obs[1]["localisation_seed"]))
@@ -273,10 +275,16 @@ class FramePair:
         if loc is None:
             return None
         config, seeds = loc
+        model = None if config.preset is None else gnss_preset(config.preset)
+        if model is not None and not model.given:
+            return None  # denied: the vehicles have no pose to share
         worlds = []
         views = (self.view1, self.view2)
-        for view, camera, pose, seed in zip(views, self.cameras, self.observer_poses, seeds, strict=True):  # fmt: skip
-            error = PoseError.draw(config, np.random.default_rng(seed))
+        for view, camera, pose, seed, vehicle in zip(views, self.cameras, self.observer_poses, seeds, self.observer_ids, strict=True):  # fmt: skip
+            if model is None:
+                error = PoseError.draw(config, np.random.default_rng(seed))
+            else:
+                error = draw_gnss_error(model, self.sim_seed, vehicle, self.time, seed)
             world = camera.camera_to_world(view.positions)
             worlds.append(perturbed_world(world, np.asarray(pose.position), error))
         return worlds[0], worlds[1], config.stated_sigma_m

@@ -21,7 +21,7 @@ bumps ``FORMAT_VERSION``; the reader refuses other versions with a message namin
 from __future__ import annotations
 
 import json
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -122,7 +122,7 @@ def encode_record(rec: PairRecord) -> dict[str, bytes]:
             }
             for v in views
         ],
-        "prior": {"kind": "pose_error", **asdict(LocalisationConfig(**rec.localisation))},
+        "prior": {"kind": "pose_error", **LocalisationConfig(**rec.localisation).as_record()},
         "objects": [o.as_dict() for o in rec.objects],
         "ground_truth": [{"object_id": ids1[i], "i": int(i), "j": int(j)} for i, j in gt],
         "counts": {

@@ -38,15 +38,27 @@ class LocalisationConfig:
 
     position_sigma_m: standard deviation of an observer's position error per ground-plane axis,
     metres (DMGM's CAD data: 1.2). yaw_sigma_deg: standard deviation of its heading error, degrees
-    (DMGM: 0.2). Both 0: exact poses (the prior is still given, error-free).
+    (DMGM: 0.2). Both 0: exact poses (the prior is still given, error-free). preset: a
+    GNSS-like error model of :mod:`cadsim.sensing.gnss_error` (``exact``, ``rtk``,
+    ``gnss-open-sky``, ``gnss-urban``, ``denied``) used instead of the two sigmas; None (the
+    default): the i.i.d. model above.
     """
 
     position_sigma_m: float = 1.2
     yaw_sigma_deg: float = 0.2
+    preset: str | None = None
 
     def __post_init__(self) -> None:
         check_number("[localisation]", "position_sigma_m", self.position_sigma_m, minimum=0.0)
         check_number("[localisation]", "yaw_sigma_deg", self.yaw_sigma_deg, minimum=0.0)
+        if self.preset is not None:
+            from cadsim.sensing.gnss_error import PRESETS
+
+            if self.preset not in PRESETS:
+                raise ValueError(
+                    f"[localisation] preset must be one of {', '.join(PRESETS)}, got "
+                    f"{self.preset!r}"
+                )
 
     @classmethod
     def from_table(cls, table: Mapping, where: str = "[localisation]") -> LocalisationConfig:
@@ -55,9 +67,20 @@ class LocalisationConfig:
 
     @property
     def stated_sigma_m(self) -> float:
-        """The uncertainty a matcher is told (``Problem.world_sigma``): position_sigma_m, at least
-        :data:`MIN_STATED_SIGMA_M`."""
-        return max(float(self.position_sigma_m), MIN_STATED_SIGMA_M)
+        """The uncertainty a matcher is told (``Problem.world_sigma``): position_sigma_m — with
+        a preset, the uncertainty its receiver reports — at least :data:`MIN_STATED_SIGMA_M`."""
+        stated = float(self.position_sigma_m)
+        if self.preset is not None:
+            from cadsim.sensing.gnss_error import PRESETS
+
+            stated = PRESETS[self.preset].stated_sigma_m
+        return max(stated, MIN_STATED_SIGMA_M)
+
+    def as_record(self) -> dict:
+        """The ``prior`` fields a record stores (``preset`` only when one is set, so records of
+        scenarios without one stay byte-identical)."""
+        out = {"position_sigma_m": self.position_sigma_m, "yaw_sigma_deg": self.yaw_sigma_deg}
+        return out if self.preset is None else out | {"preset": self.preset}
 
 
 @dataclass(frozen=True)

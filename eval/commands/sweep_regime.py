@@ -117,7 +117,8 @@ def level_intervals(per_pair: pd.DataFrame, metric: str = "f1") -> pd.DataFrame:
         value=(metric, "mean"), episode=("episode", "first")
     )
     for (matcher, keep), group in means.groupby(level=[0, 1], sort=False):
-        _, low, high, _ = t_interval(group["value"].to_numpy(), group["episode"].to_numpy())
+        values, episodes = group["value"].to_numpy(), group["episode"].to_numpy()
+        _, low, high, _ = t_interval(values, episodes, bounds=(0.0, 1.0))  # a rate
         rows.append({"matcher": matcher, "keep": keep, f"{metric}_ci_low": low,
                      f"{metric}_ci_high": high})  # fmt: skip
     return pd.DataFrame(rows)

@@ -176,6 +176,21 @@ def matcher_function(name: str):
     return get(name)
 
 
+def _has_what_it_needs(fn, problem) -> bool:
+    """Whether ``problem`` has every optional field matcher ``fn`` requires (``requires``)."""
+    return all(getattr(problem, f, None) is not None for f in getattr(fn, "requires", ()))
+
+
+def _declares_nothing(name: str, problem):
+    """The matching of a matcher whose input is not there (a prior under the ``denied``
+    localisation preset): no pair declared, all scores 0 — its row is kept, and scores 0."""
+    from matchers.core.matching import Matching
+
+    return Matching(
+        np.empty((0, 2), dtype=np.int64), np.zeros((problem.n1, problem.n2)), name, time_s=0.0
+    )
+
+
 def _pair_outcomes(pair, task: RunTask, functions: list) -> list[PairOutcome]:
     """Every matcher of `task` (``functions``: theirs, in order) on one frame pair, already
     re-detected at the run's noise rate; thinned and re-localised as the task says."""
@@ -191,6 +206,8 @@ def _pair_outcomes(pair, task: RunTask, functions: list) -> list[PairOutcome]:
     with shared_tensors():  # the hypergraph matchers of a pair share its k-NN search
         matchings = [
             fn(problem, seed=task.seed, threshold=None, **dict(spec.options))
+            if _has_what_it_needs(fn, problem)
+            else _declares_nothing(spec.name, problem)
             for spec, fn in zip(task.matchers, functions, strict=True)
         ]
     outcomes = []

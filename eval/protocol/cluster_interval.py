@@ -19,10 +19,14 @@ LEVEL = 0.95
 
 
 def t_interval(
-    values: np.ndarray, clusters: np.ndarray, level: float = LEVEL
+    values: np.ndarray,
+    clusters: np.ndarray,
+    level: float = LEVEL,
+    bounds: tuple[float, float] = (-np.inf, np.inf),
 ) -> tuple[float, float, float, int]:
     """(mean, low, high, clusters) of per-item ``values`` (1-D) grouped by ``clusters`` (one label
-    per item): the pair-weighted mean and its cluster-robust t-interval (module docstring)."""
+    per item): the pair-weighted mean and its cluster-robust t-interval (module docstring),
+    clipped to ``bounds`` (a rate's [0, 1], a difference of rates' [-1, 1])."""
     values = np.asarray(values, dtype=float).reshape(-1)
     labels, index = np.unique(np.asarray(clusters).reshape(-1), return_inverse=True)
     if len(values) != len(index):
@@ -32,6 +36,7 @@ def t_interval(
     if not 0 < level < 1:
         raise ValueError(f"level: expected a number in (0, 1), got {level}")
     mean, low, high = t_intervals(values[None, :], index, len(labels), level)
+    low, high = np.clip(low, *bounds), np.clip(high, *bounds)
     return float(mean[0]), float(low[0]), float(high[0]), len(labels)
 
 

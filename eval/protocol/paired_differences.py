@@ -68,7 +68,9 @@ def paired_differences(
             joined = ref.merge(rest, on="pair", suffixes=("", "_b"))
             for metric in metrics:
                 d = (joined[metric] - joined[f"{metric}_b"]).to_numpy()
-                diff, low, high, _ = t_interval(d, joined["episode"].to_numpy(), level)
+                diff, low, high, _ = t_interval(
+                    d, joined["episode"].to_numpy(), level, bounds=(-1.0, 1.0)
+                )
                 rows.append(
                     {
                         "dataset": dataset,

@@ -1,0 +1,151 @@
+"""GNSS-like localisation error: a connected vehicle's pose error as satellite positioning makes it.
+
+The i.i.d. model of :mod:`cadsim.sensing.localisation` draws a fresh error for every view. A real
+receiver's error is not like that: most of it is a slowly varying bias (satellite geometry,
+atmosphere, multipath from the same buildings) that two snapshots a few seconds apart share, plus
+a little white noise, a heading error of its own (a heading estimate does not come from the same
+measurement as the position), and now and then a jump of several metres (a multipath outlier or a
+cycle slip). Per vehicle (observer id) and simulation episode, in the ground plane (x, y metres,
+heading radians CCW):
+
+    error(t) = bias + walk(t) + noise + outlier
+    bias     ~ N(0, bias_m²) per axis            constant within the episode
+    walk(t)  = Σ increments ~ N(0, walk²·1 s)    on a 1 s grid from the episode's start,
+                                                 linear between grid points (slow drift)
+    noise    ~ N(0, noise_m²) per axis           per view (snapshot)
+    outlier  = outlier_m in a uniform direction  with probability outlier_rate, per view
+    heading  = heading_bias (episode) + N(0, heading_noise²) (view), drawn from their own streams
+
+Episode-level draws (bias, walk, heading bias) come from ``SeedSequence(episode seed, spawn_key=
+(5, crc32(vehicle id)))`` — the same for every record of that episode in which the vehicle
+observes, whatever order records are read in; per-view draws from the view's localisation seed.
+
+Presets (:data:`PRESETS`; values and their sources: docs/localisation.md): ``exact`` (no error,
+the prior given), ``rtk`` (centimetre-level), ``gnss-open-sky``, ``gnss-urban``, ``denied``
+(no prior at all: a matcher that needs one declares nothing). ``stated_sigma_m`` is what the
+vehicle reports as its 1-σ uncertainty — what a matcher is told — not the error drawn.
+
+Imports numpy only.
+"""
+
+from __future__ import annotations
+
+import zlib
+from dataclasses import dataclass
+
+import numpy as np
+
+from cadsim.sensing.localisation import PoseError
+
+_EPISODE_STREAM = 5
+WALK_STEP_S = 1.0
+
+
+@dataclass(frozen=True)
+class GnssErrorModel:
+    """One preset's parameters (metres per ground axis, degrees, seconds; module docstring)."""
+
+    bias_m: float = 0.0
+    walk_m_per_sqrt_s: float = 0.0
+    noise_m: float = 0.0
+    heading_bias_deg: float = 0.0
+    heading_noise_deg: float = 0.0
+    outlier_rate: float = 0.0
+    outlier_m: float = 0.0
+    stated_sigma_m: float = 0.0
+    given: bool = True  # False: the vehicle has no pose to share (denied)
+
+    def __post_init__(self) -> None:
+        for name in (
+            "bias_m",
+            "walk_m_per_sqrt_s",
+            "noise_m",
+            "heading_bias_deg",
+            "heading_noise_deg",
+            "outlier_m",
+            "stated_sigma_m",
+        ):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and np.isfinite(value) and value >= 0):
+                raise ValueError(f"{name}: expected a finite number >= 0, got {value!r}")
+        if not 0.0 <= self.outlier_rate <= 1.0:
+            raise ValueError(f"outlier_rate: expected a probability, got {self.outlier_rate!r}")
+
+
+PRESETS: dict[str, GnssErrorModel] = {
+    "exact": GnssErrorModel(),
+    "rtk": GnssErrorModel(bias_m=0.02, noise_m=0.01, heading_noise_deg=0.1, stated_sigma_m=0.03),
+    "gnss-open-sky": GnssErrorModel(
+        bias_m=1.5,
+        walk_m_per_sqrt_s=0.05,
+        noise_m=0.5,
+        heading_bias_deg=0.3,
+        heading_noise_deg=0.2,
+        outlier_rate=0.01,
+        outlier_m=5.0,
+        stated_sigma_m=1.6,
+    ),
+    "gnss-urban": GnssErrorModel(
+        bias_m=3.0,
+        walk_m_per_sqrt_s=0.2,
+        noise_m=1.0,
+        heading_bias_deg=1.0,
+        heading_noise_deg=0.5,
+        outlier_rate=0.05,
+        outlier_m=10.0,
+        stated_sigma_m=3.2,
+    ),
+    "denied": GnssErrorModel(given=False),
+}
+
+
+def preset(name: str) -> GnssErrorModel:
+    """The model of preset ``name``; ValueError naming the choices otherwise."""
+    if name not in PRESETS:
+        raise ValueError(f"preset: expected one of {', '.join(PRESETS)}, got {name!r}")
+    return PRESETS[name]
+
+
+def vehicle_key(vehicle: str) -> int:
+    """A stable integer for an observer id (the same on every machine and Python)."""
+    return zlib.crc32(str(vehicle).encode("utf-8"))
+
+
+def episode_draws(
+    model: GnssErrorModel, episode_seed: int, vehicle: str, time_s: float
+) -> tuple[np.ndarray, float]:
+    """(bias + walk at ``time_s`` (2,) metres, heading bias radians) of ``vehicle`` in the episode
+    seeded ``episode_seed``: the same for every view of that vehicle in that episode."""
+    ss = np.random.SeedSequence(
+        int(episode_seed), spawn_key=(_EPISODE_STREAM, vehicle_key(vehicle))
+    )
+    rng = np.random.default_rng(ss)
+    bias = rng.standard_normal(2) * model.bias_m
+    heading = float(rng.standard_normal()) * np.radians(model.heading_bias_deg)
+    t = max(0.0, float(time_s))
+    steps = int(np.floor(t / WALK_STEP_S))
+    walk = np.zeros(2)
+    if model.walk_m_per_sqrt_s > 0:
+        increments = rng.standard_normal((steps + 1, 2)) * (
+            model.walk_m_per_sqrt_s * np.sqrt(WALK_STEP_S)
+        )
+        path = np.cumsum(increments, axis=0)  # path[k]: the walk at (k + 1) steps
+        before = path[steps - 1] if steps else np.zeros(2)
+        walk = before + (t / WALK_STEP_S - steps) * increments[steps]
+    return bias + walk, heading
+
+
+def draw_error(
+    model: GnssErrorModel, episode_seed: int, vehicle: str, time_s: float, view_seed: int
+) -> PoseError:
+    """The pose error of one view: the episode's bias, walk and heading bias of ``vehicle`` at
+    ``time_s`` plus this view's noise, heading noise and outlier (seeded by ``view_seed``)."""
+    shared, heading = episode_draws(model, episode_seed, vehicle, time_s)
+    rng = np.random.default_rng(int(view_seed))
+    noise = rng.standard_normal(2) * model.noise_m
+    heading += float(rng.standard_normal()) * np.radians(model.heading_noise_deg)
+    jump, direction = rng.random(), rng.random() * 2 * np.pi
+    offset = shared + noise
+    if jump < model.outlier_rate:
+        offset = offset + model.outlier_m * np.array([np.cos(direction), np.sin(direction)])
+    return PoseError(float(offset[0]), float(offset[1]), heading)
