@@ -16,12 +16,8 @@ from test_generate_fakes import FAKE_STAGES, FakeScenario
 from cadsim.dataset import Dataset
 from cadsim.generation.pipeline import generate_dataset
 from cadsim.scenario import ScenarioError, load_scenario
-from cadsim.sensing.localisation import (
-    MIN_STATED_SIGMA_M,
-    LocalisationConfig,
-    PoseError,
-    perturbed_world,
-)
+from cadsim.sensing.localisation import MIN_STATED_SIGMA_M, LocalisationConfig
+from cadsim.sensing.pose_error import PoseError, perturbed_world
 from matchers.core.registry import get
 
 REPO = Path(__file__).resolve().parents[1]

@@ -29,7 +29,8 @@ from cadsim.dataset.seeds import localisation_seed, noise_seed
 from cadsim.observer_pose import ObserverPose, camera_to_world
 from cadsim.sensing.gnss_error import draw_error as draw_gnss_error
 from cadsim.sensing.gnss_error import preset as gnss_preset
-from cadsim.sensing.localisation import LocalisationConfig, PoseError, perturbed_world
+from cadsim.sensing.localisation import LocalisationConfig
+from cadsim.sensing.pose_error import PoseError, perturbed_world
 from cadsim.world import WorldObject
 
 if TYPE_CHECKING:  # imported where used: reading a dataset needs neither

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cadsim.sensing.localisation import PoseError
+from cadsim.sensing.pose_error import PoseError
 
 _EPISODE_STREAM = 5
 WALK_STEP_S = 1.0

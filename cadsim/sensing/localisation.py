@@ -21,9 +21,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-import numpy as np
-
 from cadsim.config_tables import check_number, config_from_table
+from cadsim.sensing.gnss_error import PRESETS
 
 MIN_STATED_SIGMA_M = 0.5
 """Floor of the prior's stated uncertainty (``Problem.world_sigma``), metres. With an exact pose
@@ -52,8 +51,6 @@ class LocalisationConfig:
         check_number("[localisation]", "position_sigma_m", self.position_sigma_m, minimum=0.0)
         check_number("[localisation]", "yaw_sigma_deg", self.yaw_sigma_deg, minimum=0.0)
         if self.preset is not None:
-            from cadsim.sensing.gnss_error import PRESETS
-
             if self.preset not in PRESETS:
                 raise ValueError(
                     f"[localisation] preset must be one of {', '.join(PRESETS)}, got "
@@ -71,8 +68,6 @@ class LocalisationConfig:
         a preset, the uncertainty its receiver reports — at least :data:`MIN_STATED_SIGMA_M`."""
         stated = float(self.position_sigma_m)
         if self.preset is not None:
-            from cadsim.sensing.gnss_error import PRESETS
-
             stated = PRESETS[self.preset].stated_sigma_m
         return max(stated, MIN_STATED_SIGMA_M)
 
@@ -81,36 +76,3 @@ class LocalisationConfig:
         scenarios without one stay byte-identical)."""
         out = {"position_sigma_m": self.position_sigma_m, "yaw_sigma_deg": self.yaw_sigma_deg}
         return out if self.preset is None else out | {"preset": self.preset}
-
-
-@dataclass(frozen=True)
-class PoseError:
-    """One observer's pose error: ground-plane translation dx, dy (metres), heading dyaw (rad)."""
-
-    dx: float
-    dy: float
-    dyaw: float
-
-    @classmethod
-    def draw(cls, config: LocalisationConfig, rng: np.random.Generator) -> PoseError:
-        """Three standard normals from ``rng`` (always three, whatever the sigmas), scaled."""
-        z = rng.standard_normal(3)
-        s = float(config.position_sigma_m)
-        return cls(s * z[0], s * z[1], np.radians(float(config.yaw_sigma_deg)) * z[2])
-
-
-def perturbed_world(world: np.ndarray, pivot: np.ndarray, error: PoseError) -> np.ndarray:
-    """(k, 3) world positions (metres, z up) as seen through a pose with ``error``: rotated by
-    dyaw about the vertical through ``pivot`` (the observer's body origin, world metres), then
-    shifted by (dx, dy); z unchanged."""
-    world = np.asarray(world, dtype=float).reshape(-1, 3)
-    out = world.copy()
-    if error.dyaw != 0.0:  # (no heading error: no round trip through the pivot, exact)
-        pivot = np.asarray(pivot, dtype=float)[:2]
-        c, s = np.cos(error.dyaw), np.sin(error.dyaw)
-        rel = world[:, :2] - pivot
-        out[:, 0] = c * rel[:, 0] - s * rel[:, 1] + pivot[0]
-        out[:, 1] = s * rel[:, 0] + c * rel[:, 1] + pivot[1]
-    out[:, 0] += error.dx
-    out[:, 1] += error.dy
-    return out
