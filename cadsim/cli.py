@@ -69,6 +69,7 @@ COMMAND_EXAMPLES: dict[str, tuple[str, ...]] = {
         "cadsim evaluate data/cad --val data/cad-val --matchers sm,maximin --runs 1 --out my-run",
         "cadsim evaluate data/cad data/mrc --val data/cad-val data/mrc-val --tune --out my-tuned",
         "cadsim evaluate data/cad --no-calibration --matchers my_pkg.matcher:match --out mine",
+        "cadsim evaluate data/cad --matchers pose,maximin_pose --localisation gnss-urban --out urban",
     ),
     "sweep-noise": (
         "cadsim sweep-noise data/cad --rates 0,0.002,0.005 --matchers sm,maximin --out noise",

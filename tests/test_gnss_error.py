@@ -92,7 +92,7 @@ def test_a_record_without_a_preset_stores_exactly_what_it_did_before():
     assert LocalisationConfig(preset="rtk").as_record()["preset"] == "rtk"
 
 
-def _generated(tmp_path, localisation: dict):
+def _generated(tmp_path, localisation: dict, seed: int = 11):
     from test_generate_fakes import FAKE_STAGES, FakeScenario
 
     from cadsim.dataset import Dataset
@@ -104,7 +104,9 @@ def _generated(tmp_path, localisation: dict):
 
     out = tmp_path / "ds"
     scenario = Scenario(noise={"noise_rate": 0.0}, localisation=localisation)
-    generate_dataset(scenario, out, pairs=3, workers=1, stages=FAKE_STAGES, progress=False)
+    generate_dataset(
+        scenario, out, pairs=3, seed=seed, workers=1, stages=FAKE_STAGES, progress=False
+    )
     return Dataset(out)
 
 
@@ -140,3 +142,39 @@ def test_under_denied_a_prior_matcher_declares_nothing_and_the_run_succeeds(tmp_
     sm = next(r for r in runs if r.spec.matcher.name == "sm")
     assert all(len(o.assigned) == 0 and not o.scores.any() for o in pose.outcomes)
     assert any(len(o.assigned) for o in sm.outcomes)  # the others run as usual
+
+
+def test_re_drawing_with_the_root_seed_and_own_preset_gives_back_the_records_prior(tmp_path):
+    urban = _generated(tmp_path, {"preset": "gnss-urban"})
+    root = int(urban.manifest["seeds"]["root"])
+    for pair in urban:
+        own = pair.prior()
+        again = pair.localise_preset("gnss-urban", seed=root).prior()
+        assert np.array_equal(own[0], again[0]) and np.array_equal(own[1], again[1])
+        other = pair.localise_preset("gnss-urban", seed=root + 1).prior()
+        assert not np.array_equal(own[0], other[0])
+        assert pair.localise_preset("denied", seed=root).prior() is None
+
+
+def test_evaluate_with_a_preset_re_draws_every_prior_and_denied_keeps_the_rows(tmp_path, capsys):
+    import pandas as pd
+
+    from cadsim.cli import main
+
+    data = _generated(tmp_path / "t", {})
+    val = _generated(tmp_path / "v", {}, seed=1011)
+    common = ["--val", str(val.path), "--matchers", "pose,sm", "--runs", "1", "--workers", "1"]
+    common += ["--cache", str(tmp_path / "cache"), "--no-progress"]
+    out = tmp_path / "denied"
+    assert (
+        main(["evaluate", str(data.path), *common, "--localisation", "denied", "--out", str(out)])
+        == 0
+    )
+    table = pd.read_csv(out / "table1.csv").set_index("matcher")
+    assert table.loc["pose", "f1_mean"] == 0.0 and table.loc["sm", "f1_mean"] > 0
+    own = tmp_path / "own"
+    assert main(["evaluate", str(data.path), *common, "--out", str(own)]) == 0
+    assert pd.read_csv(own / "table1.csv").set_index("matcher").loc["pose", "f1_mean"] > 0
+    with pytest.raises(SystemExit) as stop:  # a usage error, one line naming the choices
+        main(["evaluate", str(data.path), *common, "--localisation", "gps", "--out", str(own)])
+    assert stop.value.code == 2 and "invalid choice: 'gps'" in capsys.readouterr().err

@@ -25,7 +25,7 @@ from cadsim.dataset.checksum import dataset_checksum, record_dir_checksum
 from cadsim.dataset.detections import ViewDetections, ground_truth_pairs
 from cadsim.dataset.encoding import decode_png, load_npz
 from cadsim.dataset.manifest import DatasetError, read_manifest
-from cadsim.dataset.seeds import localisation_seed, noise_seed
+from cadsim.dataset.seeds import localisation_seed, noise_seed, simulation_seed
 from cadsim.observer_pose import ObserverPose, camera_to_world
 from cadsim.sensing.gnss_error import draw_error as draw_gnss_error
 from cadsim.sensing.gnss_error import preset as gnss_preset
@@ -281,11 +281,12 @@ class FramePair:
             return None  # denied: the vehicles have no pose to share
         worlds = []
         views = (self.view1, self.view2)
-        for view, camera, pose, seed, vehicle in zip(views, self.cameras, self.observer_poses, seeds, self.observer_ids, strict=True):  # fmt: skip
+        for view, camera, pose, seed, vehicle in zip(views, self.cameras, self.observer_poses, seeds[:2], self.observer_ids, strict=True):  # fmt: skip
             if model is None:
                 error = PoseError.draw(config, np.random.default_rng(seed))
             else:
-                error = draw_gnss_error(model, self.sim_seed, vehicle, self.time, seed)
+                episode_seed = seeds[2] if len(seeds) > 2 else self.sim_seed
+                error = draw_gnss_error(model, episode_seed, vehicle, self.time, seed)
             world = camera.camera_to_world(view.positions)
             worlds.append(perturbed_world(world, np.asarray(pose.position), error))
         return worlds[0], worlds[1], config.stated_sigma_m
@@ -310,6 +311,25 @@ class FramePair:
         if self.cameras is None:
             raise ValueError(f"{self.path}: record has no camera poses to localise from")
         seeds = tuple(localisation_seed(seed, self.episode, self.slot, v) for v in (1, 2))
+        return self._derived((self.view1, self.view2), self.noise_rate, (config, seeds))
+
+    def localise_preset(self, preset: str, seed: int) -> FramePair:
+        """This pair with its localisation prior re-drawn by the GNSS-like model ``preset``
+        (:mod:`cadsim.sensing.gnss_error`: ``exact``, ``rtk``, ``gnss-open-sky``, ``gnss-urban``,
+        ``denied`` — no prior), seeded by (seed, episode, slot, view) for the per-view draws and
+        by (seed, episode) for the episode's bias and drift. With the dataset's root seed and the
+        scenario's own preset it gives back the record's own prior. ``ValueError`` as
+        :meth:`localise`."""
+        config = LocalisationConfig(preset=preset)
+        if self.view1.world is not None:
+            raise ValueError(
+                f"{self.path}: the localisation prior is stored with this (imported) record and "
+                "cannot be re-drawn"
+            )
+        if self.cameras is None:
+            raise ValueError(f"{self.path}: record has no camera poses to localise from")
+        seeds = tuple(localisation_seed(seed, self.episode, self.slot, v) for v in (1, 2))
+        seeds += (simulation_seed(seed, self.episode),)  # the episode's draws
         return self._derived((self.view1, self.view2), self.noise_rate, (config, seeds))
 
     def select(self, rows1, rows2) -> FramePair:

@@ -86,7 +86,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME",
         help="a title per dataset, same order (default: from its scenario's name)",
     )
+    add_localisation_argument(parser)
     add_runner_arguments(parser)
+
+
+def add_localisation_argument(parser: argparse.ArgumentParser) -> None:
+    """``--localisation PRESET``: every record's prior re-drawn by a GNSS-like preset."""
+    from cadsim.sensing.gnss_error import PRESETS
+
+    parser.add_argument(
+        "--localisation",
+        choices=list(PRESETS),
+        default=None,
+        metavar="PRESET",
+        help="re-draw every record's localisation prior with a GNSS-like preset: "
+        + ", ".join(PRESETS)
+        + " (denied: no prior; docs/localisation.md). Default: the records' own",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -97,7 +113,8 @@ def run(args: argparse.Namespace) -> int:
     if len(labels) != len(args.datasets):
         raise ValueError(f"--label: {len(labels)} names for {len(args.datasets)} datasets")
     entries = [
-        open_entry(d, v, name) for d, v, name in zip(args.datasets, vals, labels, strict=True)
+        open_entry(d, v, name, args.localisation)
+        for d, v, name in zip(args.datasets, vals, labels, strict=True)
     ]
     matchers = parse_matchers(args.matchers)
     with make_executor(args.workers, args.scheduler) as executor:

@@ -18,7 +18,7 @@ import pandas as pd
 
 from cadsim.cli import int_in
 from cadsim.limits import MAX_NOISE_RATE, MAX_PAIRS
-from eval.commands.evaluate import add_runner_arguments
+from eval.commands.evaluate import add_localisation_argument, add_runner_arguments
 from eval.core.cache import ResultCache
 from eval.core.executor import make_executor
 from eval.core.keyed_csv import upsert_csv
@@ -93,6 +93,7 @@ def sweep(
         f"{entry.label} noise sweep",
         noise_rates=rates,
         limit=limit,
+        localisation=entry.localisation,
     )
     per_pair = score_runs(runs, taus, dataset=entry.label)
     per_run = (
@@ -125,13 +126,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="only the first N frame pairs (N >= 1)",
     )
+    add_localisation_argument(parser)
     add_runner_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> int:
     rates = parse_rates(args.rates)
     (val,) = val_dirs([args.dataset], [args.val] if args.val else None)
-    entry = open_entry(args.dataset, val)
+    entry = open_entry(args.dataset, val, localisation=args.localisation)
     matchers = parse_matchers(args.matchers)
     with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(ResultCache(args.cache), executor, progress=not args.no_progress)

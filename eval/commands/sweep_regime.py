@@ -29,7 +29,7 @@ from typing import NamedTuple
 
 import pandas as pd
 
-from eval.commands.evaluate import add_runner_arguments
+from eval.commands.evaluate import add_localisation_argument, add_runner_arguments
 from eval.core.cache import ResultCache
 from eval.core.executor import make_executor
 from eval.core.keyed_csv import upsert_csv
@@ -158,6 +158,7 @@ def sweep_regime(
             f"{entry.label} keep {keep:g}",
             limit=limit,
             keep=keep_or_none,
+            localisation=entry.localisation,
         )
         per_pair = score_runs(test_runs, taus, dataset=entry.label)
         rows.append(summarise_level(per_pair, entry.label, keep))
@@ -196,12 +197,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--val-runs", type=int, default=None, help="validation runs for τ (default: --runs)"
     )
+    add_localisation_argument(parser)
     add_runner_arguments(parser)
 
 
 def run(args: argparse.Namespace) -> int:
     (val,) = val_dirs([args.dataset], [args.val] if args.val else None)
-    entry = open_entry(args.dataset, val)
+    entry = open_entry(args.dataset, val, localisation=args.localisation)
     named, _ = chosen_specs(args.out, entry.label, parse_matchers(args.matchers))
     keeps = parse_keep(args.keep)
     val_seeds = range(args.val_runs) if args.val_runs else None

@@ -92,9 +92,7 @@ def _spec_from_dict(d: dict) -> RunSpec:
         code_version=d["code_version"],
         limit=None if d.get("limit") is None else int(d["limit"]),
         keep=None if d.get("keep") is None else float(d["keep"]),
-        localisation=None
-        if d.get("localisation") is None
-        else tuple(float(v) for v in d["localisation"]),
+        localisation=_localisation(d.get("localisation")),
     )
 
 
@@ -181,3 +179,10 @@ class ResultCache:
             for p, g, a, s in zip(meta["pairs"], gts, assigned, scores, strict=True)
         ]
         return RunResult(spec, meta["dataset_dir"], outcomes, float(meta["wall_s"]))
+
+
+def _localisation(value) -> tuple[float, float] | str | None:
+    """A stored run's localisation: None, a preset's name, or (position sigma, yaw sigma)."""
+    if value is None or isinstance(value, str):
+        return value
+    return tuple(float(v) for v in value)

@@ -44,7 +44,7 @@ class RunRequest:
     noise_rate: float | None = None
     limit: int | None = None
     keep: float | None = None
-    localisation: tuple[float, float] | None = None
+    localisation: tuple[float, float] | str | None = None
 
     def spec(self, version: str) -> RunSpec:
         return RunSpec(
@@ -86,15 +86,16 @@ def requests_for(
     noise_rates: Iterable[float | None] = (None,),
     limit: int | None = None,
     keep: float | None = None,
-    localisation: tuple[float, float] | None = None,
+    localisation: tuple[float, float] | str | None = None,
 ) -> list[RunRequest]:
     """Every combination of (dataset dir, checksum) × matcher × seed × noise rate (first `limit`
     frame pairs of each dataset; None: all; non-covisible detections thinned to level `keep`,
     where 1 and None both mean no thinning and share the untouched runs; the localisation prior
-    re-drawn at (position sigma m, yaw sigma deg), None: each record's own)."""
+    re-drawn at (position sigma m, yaw sigma deg) or by a GNSS-like preset (its name), None: each
+    record's own)."""
     matchers, seeds, noise_rates = list(matchers), list(seeds), list(noise_rates)
     keep = None if keep is None or float(keep) == 1.0 else float(keep)
-    if localisation is not None:
+    if localisation is not None and not isinstance(localisation, str):
         localisation = (float(localisation[0]), float(localisation[1]))
     return [
         RunRequest(d, c, m, s, r, limit, keep, localisation)

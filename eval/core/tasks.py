@@ -62,8 +62,9 @@ class RunSpec:
     code_version: str
     limit: int | None = None  # only the first `limit` frame pairs (None: all)
     keep: float | None = None  # thinning level of non-covisible detections (None: no thinning)
-    # (position sigma m, yaw sigma deg) of a re-drawn localisation prior (None: the record's own)
-    localisation: tuple[float, float] | None = None
+    # a re-drawn localisation prior: (position sigma m, yaw sigma deg) of the i.i.d. model, or a
+    # GNSS-like preset's name (cadsim.sensing.gnss_error); None: the record's own
+    localisation: tuple[float, float] | str | None = None
 
     def key(self) -> str:
         """Hex SHA-256 of the canonical JSON of the fields."""
@@ -84,7 +85,7 @@ class RunTask:
     code_version: str
     limit: int | None = None
     keep: float | None = None
-    localisation: tuple[float, float] | None = None
+    localisation: tuple[float, float] | str | None = None
 
     def __post_init__(self) -> None:
         if not self.noise_rates or (None in self.noise_rates and len(self.noise_rates) > 1):
@@ -199,7 +200,9 @@ def _pair_outcomes(pair, task: RunTask, functions: list) -> list[PairOutcome]:
 
     if task.keep is not None:
         pair = thin_pair(pair, task.keep, draw=task.seed)  # each run: its own thinning draw
-    if task.localisation is not None:
+    if isinstance(task.localisation, str):
+        pair = pair.localise_preset(task.localisation, seed=task.seed)
+    elif task.localisation is not None:
         pair = pair.localise(*task.localisation, seed=task.seed)
     problem = pair.problem()
     gt = np.asarray(pair.gt_pairs, dtype=np.int64).reshape(-1, 2)

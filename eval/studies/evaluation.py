@@ -51,7 +51,9 @@ Named = dict[str, MatcherSpec]
 
 @dataclass(frozen=True)
 class DatasetEntry:
-    """A test dataset and its validation dataset. label: the table's dataset name (``CAD``)."""
+    """A test dataset and its validation dataset. label: the table's dataset name (``CAD``);
+    localisation: the name of a GNSS-like preset (:mod:`cadsim.sensing.gnss_error`) that
+    re-draws every record's localisation prior in every run (None: the records' own)."""
 
     label: str
     scenario: str
@@ -61,6 +63,7 @@ class DatasetEntry:
     val_dir: str | None = None
     val_checksum: str | None = None
     val_pairs: int = 0
+    localisation: str | None = None  # a GNSS-like preset re-drawing every record's prior
 
 
 PAPER_FAMILIES = ("cad", "mrc")  # scenario-name prefixes titled like the paper's datasets
@@ -77,7 +80,10 @@ def dataset_label(scenario_name: str) -> str:
 
 
 def open_entry(
-    test_dir: str | Path, val_dir: str | Path | None, label: str | None = None
+    test_dir: str | Path,
+    val_dir: str | Path | None,
+    label: str | None = None,
+    localisation: str | None = None,
 ) -> DatasetEntry:
     """Open the test (and validation) dataset and describe them, titled `label` (default:
     :func:`dataset_label` of its scenario). Each is verified against its
@@ -93,6 +99,10 @@ def open_entry(
             f"{val_dir}: validation scenario {val.scenario_name!r} differs from "
             f"{test_dir}'s {test.scenario_name!r}"
         )
+    if localisation is not None:
+        from cadsim.sensing.gnss_error import preset
+
+        preset(localisation)  # ValueError naming the presets
     return DatasetEntry(
         label=label or dataset_label(test.scenario_name),
         scenario=test.scenario_name,
@@ -102,6 +112,7 @@ def open_entry(
         val_dir=None if val is None else str(val_dir),
         val_checksum=None if val is None else val.checksum,
         val_pairs=0 if val is None else len(val),
+        localisation=localisation,
     )
 
 
@@ -162,11 +173,13 @@ def run_named(
     noise_rates: Sequence[float | None] = (None,),
     limit: int | None = None,
     keep: float | None = None,
+    localisation: str | None = None,
 ) -> dict[str, list[RunResult]]:
     """Runs of every spec of `named` on `dataset` (dir, checksum) × seeds × noise rates, grouped
-    by row label (seed order, then rate order)."""
+    by row label (seed order, then rate order); `localisation`: a preset re-drawing the prior."""
     specs = list(dict.fromkeys(named.values()))
-    runs = runner.run(requests_for([dataset], specs, seeds, noise_rates, limit, keep), desc=desc)
+    requests = requests_for([dataset], specs, seeds, noise_rates, limit, keep, localisation)
+    runs = runner.run(requests, desc=desc)
     by_spec: dict[MatcherSpec, list[RunResult]] = {}
     for run in runs:
         by_spec.setdefault(run.spec.matcher, []).append(run)
@@ -237,6 +250,7 @@ def calibrate_entry(
         seeds,
         f"{entry.label} validation",
         keep=keep,
+        localisation=entry.localisation,
     )
     return val_runs, calibrate_named(val_runs)
 
@@ -320,7 +334,12 @@ def evaluate_entry(
     """Validation runs and τ (when `calibrate`), then the test runs scored at τ."""
     val_runs, fits = calibrate_entry(entry, named, seeds, runner) if calibrate else ({}, {})
     test_runs = run_named(
-        runner, (entry.test_dir, entry.test_checksum), named, seeds, f"{entry.label} test"
+        runner,
+        (entry.test_dir, entry.test_checksum),
+        named,
+        seeds,
+        f"{entry.label} test",
+        localisation=entry.localisation,
     )
     if val_runs:
         calibration.check_disjoint(
@@ -456,7 +475,9 @@ def evaluate(
             )
             continue
         if tune:
-            chosen = tuning.tune_entry(entry, list(base.values()), runner, tune_limit)
+            chosen = tuning.tune_entry(
+                entry, list(base.values()), runner, tune_limit, entry.localisation
+            )
             choices += chosen.values()
             named = {label: chosen[label].spec for label in base}
             if untuned:
