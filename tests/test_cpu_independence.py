@@ -157,3 +157,23 @@ def test_a_small_reproduce_gives_the_same_tables_on_every_dispatch_level(tmp_pat
 
 def _checksums(record: dict) -> list[tuple]:
     return [(d["label"], d["test_checksum"], d.get("val_checksum")) for d in record["datasets"]]
+
+
+def test_gnss_localisation_draws_are_the_same_on_every_dispatch_level(tmp_path):
+    # the GNSS-like prior is drawn at read time, so no dataset checksum covers it: hash its draws
+    script = tmp_path / "gnss_draws.py"
+    script.write_text(
+        "import hashlib, sys\nimport numpy as np\n"
+        "from cadsim.sensing.gnss_error import PRESETS, draw_error\n"
+        "from cadsim.sensing.pose_error import perturbed_world\n"
+        "world = np.random.default_rng(0).uniform(-60, 60, (50, 3))\n"
+        "h = hashlib.sha256()\n"
+        "for name, model in PRESETS.items():\n"
+        "    for e in range(40):\n"
+        "        err = draw_error(model, 1000 + e, f'veh{e % 7}', 3.7 * e, 99 + e)\n"
+        "        h.update(perturbed_world(world, world[e], err).tobytes())\n"
+        "open(sys.argv[1], 'w').write(h.hexdigest())\n"
+    )
+    done = _run_all(["--path", str(script), "{out}"], tmp_path)
+    digests = {name: (tmp_path / name).read_text() for name in done}
+    assert len(set(digests.values())) == 1, digests
