@@ -422,9 +422,7 @@ def main(argv: list[str] | None = None) -> int:
             (out / "localisation_sweep.csv").unlink(missing_ok=True)
             if loc_entry is not None and loc_sigmas:
                 loc_base = parse_matchers(LOCALISATION_MATCHERS)
-                loc_named = (
-                    loc_base if args.tune else sweep_specs(out, loc_entry, loc_base, runner, False)
-                )
+                loc_named = loc_base if args.tune else sweep_specs(out, loc_entry, loc_base)
                 log.info(
                     "[localisation sweep] %s: position σ %s m × %d runs, first %s test pairs",
                     loc_entry.label,

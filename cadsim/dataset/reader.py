@@ -303,15 +303,7 @@ class FramePair:
         2.5
         """
         config = LocalisationConfig(position_sigma_m=position_sigma_m, yaw_sigma_deg=yaw_sigma_deg)
-        if self.view1.world is not None:
-            raise ValueError(
-                f"{self.path}: the localisation prior is stored with this (imported) record and "
-                "cannot be re-drawn"
-            )
-        if self.cameras is None:
-            raise ValueError(f"{self.path}: record has no camera poses to localise from")
-        seeds = tuple(localisation_seed(seed, self.episode, self.slot, v) for v in (1, 2))
-        return self._derived((self.view1, self.view2), self.noise_rate, (config, seeds))
+        return self._redrawn(config, self._view_seeds(seed))
 
     def localise_preset(self, preset: str, seed: int) -> FramePair:
         """This pair with its localisation prior re-drawn by the GNSS-like model ``preset``
@@ -321,6 +313,16 @@ class FramePair:
         scenario's own preset it gives back the record's own prior. ``ValueError`` as
         :meth:`localise`."""
         config = LocalisationConfig(preset=preset)
+        episode = (simulation_seed(seed, self.episode),)  # the episode's bias and drift
+        return self._redrawn(config, self._view_seeds(seed) + episode)
+
+    def _view_seeds(self, seed: int) -> tuple[int, int]:
+        """The two views' localisation seeds under root ``seed`` (stream 4)."""
+        return tuple(localisation_seed(seed, self.episode, self.slot, v) for v in (1, 2))
+
+    def _redrawn(self, config: LocalisationConfig, seeds: tuple[int, ...]) -> FramePair:
+        """This pair with its prior drawn from ``config`` and ``seeds``; ValueError for a stored
+        (imported) prior or a record without cameras."""
         if self.view1.world is not None:
             raise ValueError(
                 f"{self.path}: the localisation prior is stored with this (imported) record and "
@@ -328,8 +330,6 @@ class FramePair:
             )
         if self.cameras is None:
             raise ValueError(f"{self.path}: record has no camera poses to localise from")
-        seeds = tuple(localisation_seed(seed, self.episode, self.slot, v) for v in (1, 2))
-        seeds += (simulation_seed(seed, self.episode),)  # the episode's draws
         return self._derived((self.view1, self.view2), self.noise_rate, (config, seeds))
 
     def select(self, rows1, rows2) -> FramePair:

@@ -82,19 +82,11 @@ def localisation_of(sigma: float) -> tuple[float, float]:
 
 
 def sweep_specs(
-    out_dir: str | Path,
-    entry: DatasetEntry,
-    matchers: Sequence[MatcherSpec],
-    runner: Runner,
-    tune: bool = True,
+    out_dir: str | Path, entry: DatasetEntry, matchers: Sequence[MatcherSpec]
 ) -> dict[str, MatcherSpec]:
-    """{label: spec}: the parameters ``out_dir/thresholds.csv`` records for `entry`; matchers it
-    lacks tuned on `entry`'s validation dataset (record's own prior, seed 0) when `tune`."""
-    named, taus = chosen_specs(out_dir, entry.label, matchers)
-    missing = [named[label] for label, tau in taus.items() if tau is None]
-    if tune and missing and entry.val_dir is not None:
-        chosen = tuning.tune_entry(entry, missing, runner)
-        named |= {label: choice.spec for label, choice in chosen.items()}
+    """{label: spec}: the parameters ``out_dir/thresholds.csv`` records for `entry` (the
+    defaults for a matcher it lacks) — what ``--no-tune`` runs at every level."""
+    named, _ = chosen_specs(out_dir, entry.label, matchers)
     return named
 
 
@@ -227,7 +219,7 @@ def run(args: argparse.Namespace) -> int:
     sigmas = parse_sigmas(args.sigmas)
     with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(ResultCache(args.cache), executor, progress=not args.no_progress)
-        named = matchers if args.tune else sweep_specs(args.out, entry, matchers, runner, False)
+        named = matchers if args.tune else sweep_specs(args.out, entry, matchers)
         rows = sweep_localisation(
             entry, named, range(args.runs), sigmas, runner, args.pairs, tune=args.tune
         )
