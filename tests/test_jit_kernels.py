@@ -52,20 +52,23 @@ def test_compiled_sinkhorn_falls_back_outside_its_shapes():
 
 
 def _reference_products(tensor, x, y, z):
-    """slot_sums and bilinear as the np.bincount passes (the pre-compiled formulation)."""
+    """slot_sums and bilinear as one np.bincount over the incidences in triple order (slots 0,
+    1, 2 of triple 0, then of triple 1, ...)."""
     ia, ib, ic = (tensor.indices[:, k] for k in range(3))
-    slots = np.concatenate([ia, ib, ic])
-    v = np.tile(tensor.values, 3)
+    slots = np.stack([ia, ib, ic], axis=1).reshape(-1)
+    v = np.repeat(tensor.values, 3)
     sums = np.bincount(
-        slots, np.concatenate([x[ib] * x[ic], x[ia] * x[ic], x[ia] * x[ib]]) * v, tensor.size
+        slots, np.stack([x[ib] * x[ic], x[ia] * x[ic], x[ia] * x[ib]], axis=1).reshape(-1) * v,
+        tensor.size,
     )
-    w = np.concatenate(
+    w = np.stack(
         [
             y[ib] * z[ic] + y[ic] * z[ib],
             y[ia] * z[ic] + y[ic] * z[ia],
             y[ia] * z[ib] + y[ib] * z[ia],
-        ]
-    )
+        ],
+        axis=1,
+    ).reshape(-1)
     return sums, np.bincount(slots, w * v, tensor.size)
 
 
@@ -137,8 +140,8 @@ def test_compiled_degrees_and_worst_case_weights_are_bit_identical():
     problem = Problem(rng.uniform(0, 20, (15, 3)), rng.uniform(0, 20, (17, 3)))
     tensor = build_tensor(problem, "paper", 0)
     b = rng.random(tensor.size)
-    slots = np.concatenate([tensor.indices[:, k] for k in range(3)])
-    expected = np.bincount(slots, np.tile(tensor.values, 3), minlength=tensor.size)
+    slots = tensor.indices.reshape(-1)  # triple order
+    expected = np.bincount(slots, np.repeat(tensor.values, 3), minlength=tensor.size)
     assert np.array_equal(tensor.degrees(), expected)
     assert np.array_equal(tensor.min_weighted(b), tensor.values * b[tensor.indices].min(axis=1))
 

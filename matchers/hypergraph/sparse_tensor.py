@@ -147,7 +147,7 @@ class SparseTensor:
             plan["calls"] = plan.get("calls", 0) + (0 if now else 1)
             if plan["calls"] < FUSE_AFTER and not now:
                 return None
-            plan["layout"] = SlotLayout(self._slots, self.nnz, self.size)
+            plan["layout"] = SlotLayout(self.indices, self.size)
         self._matrix.append(plan["layout"].matrix(self.values))
         return self._matrix[0]
 
@@ -174,11 +174,11 @@ class SparseTensor:
         """Match index of slot 0, 1, 2 of every triple, concatenated: (3N,) (a view)."""
         return self.indices.T.reshape(-1)
 
-    def _gather_slots(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(slot 0, slot 1, slot 2, all three concatenated) match indices, views."""
-        slots = self._slots
-        count = self.nnz
-        return slots[:count], slots[count : 2 * count], slots[2 * count :], slots
+    @property
+    def _incidences(self) -> np.ndarray:
+        """Match index of slot 0, 1, 2 of triple 0, then of triple 1, ...: (3N,) in the order
+        every product adds them (a copy: :attr:`indices` is stored column-major)."""
+        return self.indices.reshape(-1)
 
     def restricted(self, mask: np.ndarray) -> SparseTensor:
         """The triples with at least two of their three matches in ``mask`` (bool, length nm).
@@ -211,16 +211,15 @@ class SparseTensor:
             return fused @ pair.reshape(-1)
         if COMPILED:
             return compiled_bilinear(self._compact_slots, self.values, y, z, self.size)
-        ia, ib, ic, slots = self._gather_slots()
+        ia, ib, ic = self._columns
         ya, yb, yc = np.take(y, ia), np.take(y, ib), np.take(y, ic)
         za, zb, zc = np.take(z, ia), np.take(z, ib), np.take(z, ic)
-        count = self.nnz
-        weights = np.empty(3 * count)
-        weights[:count] = yb * zc + yc * zb
-        weights[count : 2 * count] = ya * zc + yc * za
-        weights[2 * count :] = ya * zb + yb * za
-        weights.reshape(3, count)[:] *= self.values
-        return np.bincount(slots, weights, minlength=self.size)
+        weights = np.empty((self.nnz, 3))
+        weights[:, 0] = yb * zc + yc * zb
+        weights[:, 1] = ya * zc + yc * za
+        weights[:, 2] = ya * zb + yb * za
+        weights *= self.values[:, None]
+        return np.bincount(self._incidences, weights.reshape(-1), minlength=self.size)
 
     def product(self, x: np.ndarray) -> np.ndarray:
         """(T x_2 x x_3 x)[a] = sum_{b,c} T[a, b, c] x[b] x[c], length n*m (2x the 3-slot sum)."""
@@ -238,15 +237,14 @@ class SparseTensor:
             return fused @ np.outer(x, x).reshape(-1)
         if COMPILED:
             return compiled_slot_sums(self._compact_slots, self.values, x, self.size)
-        ia, ib, ic, slots = self._gather_slots()
+        ia, ib, ic = self._columns
         xa, xb, xc = np.take(x, ia), np.take(x, ib), np.take(x, ic)
-        count = self.nnz
-        weights = np.empty(3 * count)
-        np.multiply(xb, xc, out=weights[:count])
-        np.multiply(xa, xc, out=weights[count : 2 * count])
-        np.multiply(xa, xb, out=weights[2 * count :])
-        weights.reshape(3, count)[:] *= self.values
-        return np.bincount(slots, weights, minlength=self.size)
+        weights = np.empty((self.nnz, 3))
+        np.multiply(xb, xc, out=weights[:, 0])
+        np.multiply(xa, xc, out=weights[:, 1])
+        np.multiply(xa, xb, out=weights[:, 2])
+        weights *= self.values[:, None]
+        return np.bincount(self._incidences, weights.reshape(-1), minlength=self.size)
 
     def degrees(self) -> np.ndarray:
         """Stored-entry degree d[a] = sum of h over stored triples containing a (3-slot count);
@@ -255,7 +253,7 @@ class SparseTensor:
             return np.zeros(self.size)
         if COMPILED:
             return compiled_degrees(self._compact_slots, self.values, self.size)
-        return np.bincount(self._slots, np.tile(self.values, 3), minlength=self.size)
+        return np.bincount(self._incidences, np.repeat(self.values, 3), minlength=self.size)
 
     def min_weighted(self, b: np.ndarray) -> np.ndarray:
         """Each stored value times the smallest of ``b`` (length nm) over its triple's three

@@ -4,9 +4,12 @@ Every iterative hypergraph matcher spends its time in one operation: for each st
 (a, b, c) with value h, add h * w(b, c) to slot a, h * w(a, c) to slot b and h * w(a, b) to
 slot c, where w is x_b x_c (``slot_sums``) or y_b z_c + y_c z_b (``bilinear``). Written with
 ``np.bincount`` that is seven passes over 3N numbers (three gathers, four multiplies, the scatter).
+Every path adds the 3N incidences to their slots in one fixed order, triple by triple (slots 0,
+1, 2 of triple 0, then of triple 1, ...): the order a single pass over the triples visits them,
+so that the compiled loop reads each triple once.
 
 :class:`SlotLayout` does it in one pass: the 3N (slot, pair) incidences are sorted once by slot
-(a stable counting sort, so each slot keeps the order in which ``bincount`` would add them) into
+(a stable counting sort, so each slot keeps the order in which ``bincount`` adds them) into
 a CSR matrix of shape (nm, nm*nm) whose column is the pair index b*nm + c; the product is then
 that matrix times the flattened outer product w (nm*nm numbers). scipy's CSR product adds each
 row's terms in storage order, in the same order and with the same roundings as ``bincount`` —
@@ -21,9 +24,9 @@ do not converge early do), or at once on
 :meth:`~matchers.hypergraph.sparse_tensor.SparseTensor.prepare_products` (TM: 100 fixed iterations).
 
 With numba (:mod:`matchers.core.jit`) the ``bincount`` passes are replaced by :func:`compiled_slot_sums`
-and :func:`compiled_bilinear`: the same formulation as one compiled loop per slot — the same
-products, added to each slot in the same order, so again bit-identical — with no sort, no outer
-product and no temporaries, on a uint16 copy of the slot indices. They are faster than the CSR
+and :func:`compiled_bilinear`: one compiled pass over the triples — the same products, added to
+each slot in the same order, so again bit-identical — with no sort, no outer product and no
+temporaries, on a uint16 copy of the slot indices. They are faster than the CSR
 product, so with numba the layout is never sorted (``prepare_products`` does nothing).
 """
 
@@ -46,39 +49,43 @@ def index_dtype(size: int) -> type:
 class SlotLayout:
     """The CSR incidence of a tensor's index pattern (shared by tensors that differ in values)."""
 
-    def __init__(self, slots: np.ndarray, count: int, size: int):
-        # slots: (3N,) slot 0, 1, 2 match indices of the N triples, concatenated
+    def __init__(self, indices: np.ndarray, size: int):
+        # indices: (N, 3) match indices; incidences in triple order (slots 0, 1, 2 of triple 0,
+        # then of triple 1, ...), the order every product adds them in
+        count = indices.shape[0]
         self.size = size
         self.count = count
-        key = slots.astype(np.uint16) if size <= 2**16 else slots  # uint16: a radix sort
+        incidences = indices.reshape(-1)  # triple-major
+        key = incidences.astype(np.uint16) if size <= 2**16 else incidences  # uint16: a radix sort
         dtype = index_dtype(max(size * size, 3 * count + 1))
         self.order = np.argsort(key, kind="stable").astype(dtype)
-        ia, ib, ic = slots[:count], slots[count : 2 * count], slots[2 * count :]
-        pairs = np.empty(3 * count, dtype=dtype)  # column b*nm + c of each incidence
-        np.add(np.multiply(ib, size, dtype=dtype), ic, out=pairs[:count])
-        np.add(np.multiply(ia, size, dtype=dtype), ic, out=pairs[count : 2 * count])
-        np.add(np.multiply(ia, size, dtype=dtype), ib, out=pairs[2 * count :])
-        self.columns = pairs[self.order]
+        ia, ib, ic = indices[:, 0], indices[:, 1], indices[:, 2]
+        pairs = np.empty((count, 3), dtype=dtype)  # column b*nm + c of each incidence
+        np.add(np.multiply(ib, size, dtype=dtype), ic, out=pairs[:, 0])
+        np.add(np.multiply(ia, size, dtype=dtype), ic, out=pairs[:, 1])
+        np.add(np.multiply(ia, size, dtype=dtype), ib, out=pairs[:, 2])
+        self.columns = pairs.reshape(-1)[self.order]
         indptr = np.zeros(size + 1, dtype=dtype)
-        np.cumsum(np.bincount(slots, minlength=size), out=indptr[1:])
+        np.cumsum(np.bincount(incidences, minlength=size), out=indptr[1:])
         self.indptr = indptr
 
     def matrix(self, values: np.ndarray) -> sp.csr_matrix:
         """The (nm, nm*nm) CSR matrix of these incidences with the triples' ``values``."""
-        data = np.concatenate([values, values, values])[self.order]
+        data = np.repeat(values, 3)[self.order]
         return sp.csr_matrix((data, self.columns, self.indptr), shape=(self.size, self.size**2))
 
 
 def _slot_sums_kernel(slots: np.ndarray, values: np.ndarray, x: np.ndarray, size: int):
-    # bincount order: all slot-0 incidences, then slot 1, then slot 2; weight (x x) * h
+    # triple order: slot 0, 1, 2 of triple 0, then of triple 1, ...; weight (x x) * h
     count = values.shape[0]
     out = np.zeros(size)
     for i in range(count):
-        out[slots[i]] += (x[slots[count + i]] * x[slots[2 * count + i]]) * values[i]
-    for i in range(count):
-        out[slots[count + i]] += (x[slots[i]] * x[slots[2 * count + i]]) * values[i]
-    for i in range(count):
-        out[slots[2 * count + i]] += (x[slots[i]] * x[slots[count + i]]) * values[i]
+        a, b, c = slots[i], slots[count + i], slots[2 * count + i]
+        h = values[i]
+        xa, xb, xc = x[a], x[b], x[c]
+        out[a] += (xb * xc) * h
+        out[b] += (xa * xc) * h
+        out[c] += (xa * xb) * h
     return out
 
 
@@ -88,24 +95,25 @@ def _bilinear_kernel(
     count = values.shape[0]
     out = np.zeros(size)
     for i in range(count):
-        b, c = slots[count + i], slots[2 * count + i]
-        out[slots[i]] += (y[b] * z[c] + y[c] * z[b]) * values[i]
-    for i in range(count):
-        a, c = slots[i], slots[2 * count + i]
-        out[slots[count + i]] += (y[a] * z[c] + y[c] * z[a]) * values[i]
-    for i in range(count):
-        a, b = slots[i], slots[count + i]
-        out[slots[2 * count + i]] += (y[a] * z[b] + y[b] * z[a]) * values[i]
+        a, b, c = slots[i], slots[count + i], slots[2 * count + i]
+        h = values[i]
+        ya, yb, yc = y[a], y[b], y[c]
+        za, zb, zc = z[a], z[b], z[c]
+        out[a] += (yb * zc + yc * zb) * h
+        out[b] += (ya * zc + yc * za) * h
+        out[c] += (ya * zb + yb * za) * h
     return out
 
 
 def _degrees_kernel(slots: np.ndarray, values: np.ndarray, size: int):
-    # np.bincount(slots, np.tile(values, 3)): slot 0 incidences, then slot 1, then slot 2
+    # np.bincount(row-major indices, np.repeat(values, 3)): the three slots of each triple in turn
     count = values.shape[0]
     out = np.zeros(size)
-    for f in range(3):
-        for i in range(count):
-            out[slots[f * count + i]] += values[i]
+    for i in range(count):
+        h = values[i]
+        out[slots[i]] += h
+        out[slots[count + i]] += h
+        out[slots[2 * count + i]] += h
     return out
 
 
