@@ -78,6 +78,8 @@ COMMAND_EXAMPLES: dict[str, tuple[str, ...]] = {
     "sweep-localisation": (
         "cadsim sweep-localisation data/cad --sigmas 0,1.2,2.5,5 --matchers pose,maximin_pose "
         "--out localisation",
+        "cadsim sweep-localisation data/cad-v2x --preset gnss-urban --scales 0,1,3 "
+        "--latencies 0,300 --out localisation",
     ),
     "table": (
         "cadsim table results",

@@ -179,8 +179,9 @@ class CameraConfig:
 class Scenario:
     """A validated scenario file. ``text`` is the file's exact contents (for manifests);
     ``traffic`` is the validated [traffic] table with relative paths resolved to absolute;
-    ``noise``, ``detection`` and ``localisation`` are the raw tables (keys checked against
-    NoiseConfig / DetectionConfig / LocalisationConfig); ``observers`` and ``sampling`` have their
+    ``noise``, ``detection``, ``localisation`` and ``appearance`` are the raw tables (keys
+    checked against NoiseConfig / DetectionConfig / LocalisationConfig / AppearanceConfig; an
+    empty ``appearance``: no appearance realism); ``observers`` and ``sampling`` have their
     defaults filled in."""
 
     path: Path
@@ -195,6 +196,7 @@ class Scenario:
     detection: dict
     sampling: dict
     localisation: dict = dataclasses.field(default_factory=dict)
+    appearance: dict = dataclasses.field(default_factory=dict)
 
 
 def _set_sumo_home() -> None:
@@ -346,7 +348,16 @@ TOP_LEVEL = {
     "seed": Field(int, 0, "base seed of every random choice", ge=0),
     "pairs": Field(int, 50, "number of frame pairs in a dataset", ge=1, le=MAX_PAIRS),
 }
-TABLES = ("traffic", "camera", "observers", "noise", "detection", "sampling", "localisation")
+TABLES = (
+    "traffic",
+    "camera",
+    "observers",
+    "noise",
+    "detection",
+    "sampling",
+    "localisation",
+    "appearance",
+)
 
 # kind -> schema of its [traffic] table; kinds listed in _SCHEMA_MODULES register on first use.
 _SOURCE_SCHEMAS: dict[str, Table] = {}
@@ -361,6 +372,7 @@ _CONFIG_CLASSES: dict[str, tuple[str, str]] = {
     "noise": ("cadsim.sensing.depth_noise", "NoiseConfig"),
     "detection": ("cadsim.sensing.detection", "DetectionConfig"),
     "localisation": ("cadsim.sensing.localisation", "LocalisationConfig"),
+    "appearance": ("cadsim.render.appearance", "AppearanceConfig"),
 }
 
 
@@ -430,7 +442,13 @@ def load_scenario(path: str | Path) -> Scenario:
     noise = dict(raw.get("noise", {}))
     detection = dict(raw.get("detection", {}))
     localisation = dict(raw.get("localisation", {}))
-    for key, table in (("noise", noise), ("detection", detection), ("localisation", localisation)):
+    appearance = dict(raw.get("appearance", {}))
+    for key, table in (
+        ("noise", noise),
+        ("detection", detection),
+        ("localisation", localisation),
+        ("appearance", appearance),
+    ):
         config_class = _config_class(key)
         if config_class is not None:
             validate_dataclass_table(table, config_class, ctx, key)
@@ -448,6 +466,7 @@ def load_scenario(path: str | Path) -> Scenario:
         detection=detection,
         sampling=sampling,
         localisation=localisation,
+        appearance=appearance,
     )
 
 

@@ -112,7 +112,8 @@ def _hint_schema(hint: Any) -> dict:
 
 
 def dataclass_schema(cls: type) -> dict:
-    """A table whose keys are the init fields of dataclass ``cls`` (``[noise]``, ``[detection]``)."""
+    """A table whose keys are the init fields of dataclass ``cls`` (``[noise]``, ``[detection]``,
+    ``[localisation]``, ``[appearance]``)."""
     hints = typing.get_type_hints(cls)
     properties = {}
     for f in dataclasses.fields(cls):
@@ -147,7 +148,7 @@ def scenario_json_schema() -> dict:
     properties["traffic"] = traffic_schema()
     for name, table in (("camera", CAMERA), ("observers", OBSERVERS), ("sampling", SAMPLING)):
         properties[name] = table_schema(table)
-    for name in ("noise", "detection"):
+    for name in ("noise", "detection", "localisation", "appearance"):
         cls = _config_class(name)
         properties[name] = dataclass_schema(cls) if cls is not None else {"type": "object"}
     return {

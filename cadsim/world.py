@@ -29,6 +29,8 @@ class WorldObject:
     color: RGB in [0, 1]. target: True for objects that count as detections (False for
     occluders/context such as buildings and the road surface). variant: free mesh variant key
     (e.g. a robot's marker colour). state: source-specific state (e.g. a signal's "r"/"y"/"G").
+    velocity: (3,) world frame, metres per second (0 for static objects; what a message latency
+    moves the object by, ``cadsim.sensing.latency``).
     """
 
     id: str
@@ -41,6 +43,7 @@ class WorldObject:
     target: bool = True
     variant: str = ""
     state: str = ""
+    velocity: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def pose(self) -> np.ndarray:
         """4x4 homogeneous transform from the object's frame (x forward, z up) to world."""
@@ -62,6 +65,7 @@ class WorldObject:
             "target": bool(self.target),
             "variant": self.variant,
             "state": self.state,
+            "velocity": [float(v) for v in self.velocity],
         }
 
     @classmethod
@@ -77,6 +81,7 @@ class WorldObject:
             target=bool(d.get("target", True)),
             variant=d.get("variant", ""),
             state=d.get("state", ""),
+            velocity=tuple(d.get("velocity", (0.0, 0.0, 0.0))),
         )
 
 

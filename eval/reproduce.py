@@ -29,13 +29,19 @@ from pathlib import Path
 import pandas as pd
 
 from eval.commands.sweep_localisation import (
-    DEFAULT_MATCHERS as LOCALISATION_MATCHERS,
-)
-from eval.commands.sweep_localisation import (
+    DEFAULT_LATENCIES_MS,
+    DEFAULT_PRESET,
+    DEFAULT_SCALES,
     DEFAULT_SIGMAS,
     parse_sigmas,
+    preset_levels,
     sweep_localisation,
+    sweep_presets,
     sweep_specs,
+    write_preset_sweep,
+)
+from eval.commands.sweep_localisation import (
+    DEFAULT_MATCHERS as LOCALISATION_MATCHERS,
 )
 from eval.commands.sweep_localisation import write_sweep as write_localisation_sweep
 from eval.commands.sweep_noise import DEFAULT_RATES, parse_rates, sweep
@@ -104,6 +110,16 @@ LOCALISATION_RUNS = 4
 # (docs/external-data.md).
 EXTERNAL_RUNS = 1
 EXTERNAL_TUNE_PAIRS = 0
+# V2X realism (cad-v2x, outside Table I): test, validation and training splits on disjoint
+# scenario seeds (seed, seed + VAL_SEED_OFFSET, seed + V2X_TRAIN_SEED_OFFSET; the training split,
+# V2X_TRAIN_FACTOR × the test pairs, is for learned matchers and is never evaluated on), then the
+# localisation sweep's preset axes (error scale, latency) with CAD's tuned parameters, τ per level.
+V2X_SCENARIO = "scenarios/cad-v2x.toml"
+V2X_LABEL = "CAD-V2X"
+V2X_PAIRS = 25
+V2X_TRAIN_SEED_OFFSET = 2000
+V2X_TRAIN_FACTOR = 2
+V2X_RUNS = 3
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -208,6 +224,12 @@ def build_parser() -> argparse.ArgumentParser:
         type=int,
         default=EXTERNAL_TUNE_PAIRS,
         help=f"tune on the first N pairs of sequence 070 (default {EXTERNAL_TUNE_PAIRS}; 0: all)",
+    )
+    p.add_argument(
+        "--v2x-runs",
+        type=int,
+        default=V2X_RUNS,
+        help=f"runs per level of the cad-v2x preset sweep (default {V2X_RUNS}; 0: skip cad-v2x)",
     )
     p.add_argument("--out", default="results", help="output directory (default: results)")
     p.add_argument("--data", default="data", help="dataset directory (default: data)")
@@ -441,6 +463,28 @@ def main(argv: list[str] | None = None) -> int:
                 )
                 write_localisation_sweep(out, rows)
         count("localisation_sweep", before)
+        v2x_seeds = list(range(args.v2x_runs))
+        v2x_record: dict = {}
+        with timer.stage("v2x_generate"):
+            v2x_entry = _generate_v2x(data, args, v2x_record) if v2x_seeds else None
+        with timer.stage("v2x_sweep"):
+            before = asdict(runner.totals)
+            (out / "localisation_presets.csv").unlink(missing_ok=True)
+            if v2x_entry is not None:
+                levels = preset_levels(DEFAULT_PRESET, DEFAULT_SCALES, DEFAULT_LATENCIES_MS)
+                v2x_named, _ = chosen_specs(out, "CAD", parse_matchers(LOCALISATION_MATCHERS))
+                log.info(
+                    "[v2x sweep] %s: %s × %d levels (scale, latency) × %d runs, CAD's parameters",
+                    V2X_LABEL,
+                    DEFAULT_PRESET,
+                    len(levels),
+                    len(v2x_seeds),
+                )
+                rows = sweep_presets(v2x_entry, v2x_named, v2x_seeds, levels, runner)
+                write_preset_sweep(out, rows)
+                v2x_record |= {"preset": DEFAULT_PRESET, "levels": [lv[1] for lv in levels]}
+                v2x_record |= {"seeds": v2x_seeds, "matchers": list(v2x_named)}
+        count("v2x_sweep", before)
         external_seeds = list(range(args.external_runs))
         with timer.stage("external"):
             before = asdict(runner.totals)
@@ -471,7 +515,7 @@ def main(argv: list[str] | None = None) -> int:
 
     with timer.stage("tables_figures"):
         markdown = write_tables(out, PAPER_CSV)
-        _write_regime_cards(out, entries)
+        _write_regime_cards(out, entries + ([v2x_entry] if v2x_entry is not None else []))
         figures = render_all(out)
         log.info("[figures] %s", ", ".join(str(f) for f in figures))
 
@@ -508,6 +552,7 @@ def main(argv: list[str] | None = None) -> int:
             "generated": [{"dir": d, "scenario_seed": s} for d, _, s in spread_sets],
             "seeds": {"main": seeds, "extra": spread_seeds},
         },
+        v2x=v2x_record,
         thresholds=taus,
         runs=runs,
         code_version=code_version(),
@@ -525,6 +570,35 @@ def main(argv: list[str] | None = None) -> int:
         + ", ".join(f"{k} {v:.1f} s" for k, v in timer.seconds.items())
     )
     return 0
+
+
+def _generate_v2x(data: Path, args: argparse.Namespace, record: dict):
+    """Generate cad-v2x's test, validation and training splits (module constants); its test +
+    validation entry. ``record`` gets what the run record keeps of them."""
+    from cadsim.scenario import load_scenario
+
+    path = ROOT / V2X_SCENARIO
+    scenario = load_scenario(path)
+    pairs = V2X_PAIRS if args.pairs is None else min(args.pairs, V2X_PAIRS)
+    base = data / V2X_LABEL.lower()
+    splits = {
+        "test": (base, pairs, scenario.seed),
+        "val": (data / f"{base.name}-val", pairs, scenario.seed + VAL_SEED_OFFSET),
+        "train": (
+            data / f"{base.name}-train",
+            V2X_TRAIN_FACTOR * pairs,
+            scenario.seed + V2X_TRAIN_SEED_OFFSET,
+        ),
+    }
+    for split, (folder, n, seed) in splits.items():
+        log.info("[v2x generate] %s %s: %d pairs (seed %d)", V2X_LABEL, split, n, seed)
+        made = _generate(path, folder, n, None if split == "test" else seed, args)
+        record[split] = {"dir": str(folder), "pairs": n, "seed": seed}
+        record[split] |= {"new_records": made.new_records}
+    entry = open_entry(splits["test"][0], splits["val"][0], V2X_LABEL)
+    record["scenario"] = scenario_file(path) | {"path": _shown(path)}
+    record["test"]["checksum"], record["val"]["checksum"] = entry.test_checksum, entry.val_checksum
+    return entry
 
 
 def _write_regime_cards(out: Path, entries) -> None:

@@ -55,7 +55,7 @@ def test_the_record_keeps_the_attribute_seed_and_redetect_reuses_it(fake_dataset
     for v in (1, 2):
         stored = pair.record["observers"][v - 1]["attribute_seed"]
         assert stored == attribute_seed(11, pair.episode, pair.slot, v)
-    assert ds.manifest["format_version"] == FORMAT_VERSION == 2
+    assert ds.manifest["format_version"] == FORMAT_VERSION == 3
 
 
 def test_redetect_keeps_the_records_attribute_errors_whatever_the_seed(tmp_path):
@@ -95,11 +95,11 @@ def test_an_older_dataset_is_refused_in_one_line_naming_both_versions(fake_datas
         Dataset(old)
     message = str(info.value)
     assert "\n" not in message and str(old) in message
-    assert "format version 1 is older than the version 2" in message
+    assert "format version 1 is older than the versions 2 or 3" in message
     assert "regenerate" in message
-    manifest["format_version"] = 3
+    manifest["format_version"] = 4
     (old / "manifest.json").write_text(json.dumps(manifest))
-    with pytest.raises(DatasetError, match="version 3 is not the version 2"):
+    with pytest.raises(DatasetError, match="version 4 is not the versions 2 or 3"):
         Dataset(old)
 
 

@@ -101,7 +101,7 @@ def test_pose_error_is_seeded_rigid_and_scales_with_sigma():
 def test_record_stores_parameters_and_seeds_not_positions(default_prior):
     pair = default_prior[0]
     record = json.loads((pair.path / "record.json").read_text())
-    assert record["format_version"] == 2
+    assert record["format_version"] == 3
     assert record["prior"] == {"kind": "pose_error", "position_sigma_m": 1.2, "yaw_sigma_deg": 0.2}
     seeds = [o["localisation_seed"] for o in record["observers"]]
     assert len(set(seeds)) == 2

@@ -18,7 +18,7 @@ from cadsim.dataset import layout
 from cadsim.dataset.atomic_writer import write_file_atomic
 from cadsim.dataset.checksum import dataset_checksum
 from cadsim.dataset.encoding import json_bytes
-from cadsim.dataset.record_format import FORMAT_VERSION, jsonable
+from cadsim.dataset.record_format import FORMAT_VERSION, READABLE_VERSIONS, jsonable
 from cadsim.provenance import git_state, package_versions
 
 FORMAT_NAME = "cadsim-frame-pairs"
@@ -77,6 +77,7 @@ def generation_config(scenario, seed: int, pairs_per_episode: int, criteria: dic
         "detection": _plain(scenario.detection),
         "sampling": _plain(scenario.sampling),
         "localisation": _plain(getattr(scenario, "localisation", {})),
+        "appearance": _plain(getattr(scenario, "appearance", {})),
     }
 
 
@@ -114,8 +115,10 @@ def write_manifest(dataset_dir: Path, manifest: dict) -> None:
     write_file_atomic(Path(dataset_dir) / layout.MANIFEST, json_bytes(manifest))
 
 
-def read_manifest(dataset_dir: Path) -> dict:
-    """The manifest of ``dataset_dir``; ``DatasetError`` if absent or not a cadsim manifest."""
+def read_manifest(dataset_dir: Path, versions: tuple[int, ...] = READABLE_VERSIONS) -> dict:
+    """The manifest of ``dataset_dir``; ``DatasetError`` if absent, not a cadsim manifest, or of
+    a format version outside ``versions`` (reading: every readable one; resuming a generation:
+    only the version it writes)."""
     path = Path(dataset_dir) / layout.MANIFEST
     if not path.is_file():
         raise DatasetError(
@@ -128,8 +131,8 @@ def read_manifest(dataset_dir: Path) -> dict:
     if not isinstance(manifest, dict) or manifest.get("format") != FORMAT_NAME:
         raise DatasetError(f"{path}: 'format' is not {FORMAT_NAME!r}")
     found = manifest.get("format_version")
-    if found != FORMAT_VERSION:
-        older = isinstance(found, int) and found < FORMAT_VERSION
+    if found not in versions:
+        older = isinstance(found, int) and found < min(versions)
         remedy = (
             "regenerate it with `cadsim generate` (docs/dataset.md lists what changed)"
             if older
@@ -137,7 +140,8 @@ def read_manifest(dataset_dir: Path) -> dict:
         )
         raise DatasetError(
             f"{Path(dataset_dir)}: dataset format version {found!r} is "
-            f"{'older than' if older else 'not'} the version {FORMAT_VERSION} this cadsim reads; "
+            f"{'older than' if older else 'not'} the version{'s' if len(versions) > 1 else ''} "
+            f"{' or '.join(map(str, versions))} this cadsim {'reads' if len(versions) > 1 else 'writes'}; "
             + remedy
         )
     for key in ("complete", "records", "checksum", "generation", "scenario", "seeds"):

@@ -28,7 +28,13 @@ from cadsim.dataset.manifest import DatasetError, read_manifest
 from cadsim.dataset.seeds import localisation_seed, noise_seed, simulation_seed
 from cadsim.observer_pose import ObserverPose, camera_to_world
 from cadsim.sensing.gnss_error import draw_error as draw_gnss_error
-from cadsim.sensing.gnss_error import preset as gnss_preset
+from cadsim.sensing.gnss_error import model_of as gnss_model
+from cadsim.sensing.latency import (
+    MIN_VELOCITY_FORMAT,
+    delayed_positions,
+    sender_offset,
+    velocities_of,
+)
 from cadsim.sensing.localisation import LocalisationConfig
 from cadsim.sensing.pose_error import PoseError, perturbed_world
 from cadsim.world import WorldObject
@@ -227,7 +233,7 @@ class FramePair:
         loc = self.localisation
         return Problem(
             self.view1.positions,
-            self.view2.positions,
+            self._sent_view2()[0],
             self.view1.features,
             self.view2.features,
             meta={
@@ -276,20 +282,47 @@ class FramePair:
         if loc is None:
             return None
         config, seeds = loc
-        model = None if config.preset is None else gnss_preset(config.preset)
+        model = None if config.preset is None else gnss_model(config.preset)
         if model is not None and not model.given:
             return None  # denied: the vehicles have no pose to share
+        sent, offset = self._sent_view2()
+        latency = config.latency_s
         worlds = []
-        views = (self.view1, self.view2)
-        for view, camera, pose, seed, vehicle in zip(views, self.cameras, self.observer_poses, seeds[:2], self.observer_ids, strict=True):  # fmt: skip
+        for k, (positions, camera, pose, seed, vehicle) in enumerate(zip((self.view1.positions, sent), self.cameras, self.observer_poses, seeds[:2], self.observer_ids, strict=True)):  # fmt: skip
+            shift = offset if k else np.zeros(3)  # the sender's pose when it sent (latency)
             if model is None:
                 error = PoseError.draw(config, np.random.default_rng(seed))
             else:
                 episode_seed = seeds[2] if len(seeds) > 2 else self.sim_seed
-                error = draw_gnss_error(model, episode_seed, vehicle, self.time, seed)
-            world = camera.camera_to_world(view.positions)
-            worlds.append(perturbed_world(world, np.asarray(pose.position), error))
+                when = self.time - (latency if k else 0.0)
+                error = draw_gnss_error(model, episode_seed, vehicle, when, seed)
+            world = camera.camera_to_world(positions) + shift
+            worlds.append(perturbed_world(world, np.asarray(pose.position) + shift, error))
         return worlds[0], worlds[1], config.stated_sigma_m
+
+    def _sent_view2(self) -> tuple[np.ndarray, np.ndarray]:
+        """View 2's detections as the other vehicle's message reports them under the prior's
+        latency (:mod:`cadsim.sensing.latency`): ((m, 3) positions in its camera frame, metres;
+        (3,) world offset of its pose when it sent from its pose at the snapshot). No latency:
+        the detections as they are and a zero offset. ValueError for a record without object
+        velocities (format version < 3) under a latency."""
+        loc = self.localisation
+        latency = 0.0 if loc is None else loc[0].latency_s
+        if not latency:
+            return self.view2.positions, np.zeros(3)
+        version = int(self.record.get("format_version", 0))
+        if version < MIN_VELOCITY_FORMAT:
+            raise ValueError(
+                f"{self.path}: localisation preset {loc[0].preset!r} has a message latency of "
+                f"{latency * 1000:g} ms, which needs object velocities (dataset format version "
+                f"{MIN_VELOCITY_FORMAT}); this record is version {version} — regenerate it"
+            )
+        by_id = {o.id: o.velocity for o in self.objects}
+        sender = by_id.get(self.observer_ids[1], (0.0, 0.0, 0.0))
+        rotation = self.cameras[1].rotation_cam_to_world()
+        velocities = velocities_of(self.view2.object_ids, by_id)
+        positions = delayed_positions(self.view2.positions, velocities, sender, rotation, latency)
+        return positions, sender_offset(sender, latency)
 
     def localise(self, position_sigma_m: float, yaw_sigma_deg: float, seed: int) -> FramePair:
         """This pair with its localisation prior re-drawn: each observer's pose error has

@@ -14,8 +14,11 @@ only (the manifest's ``record_files``), the prior's world positions stored as ``
 
 Format versions: 1, the first; 2 adds ``observers[].pose``, ``observers[].attribute_seed``
 (features carry detector-like attributes from then on), the localisation prior (``prior``,
-``observers[].localisation_seed``) and image-less imported records. A change of the record layout
-bumps ``FORMAT_VERSION``; the reader refuses other versions with a message naming both.
+``observers[].localisation_seed``) and image-less imported records; 3 adds each object's
+``velocity`` (m/s, world frame), which message latency needs (``cadsim.sensing.latency``).
+A change of the record layout bumps ``FORMAT_VERSION``; the reader reads
+:data:`READABLE_VERSIONS` and refuses others with a message naming them (a version-2 dataset is
+read with every velocity 0, and the latency presets refuse it).
 """
 
 from __future__ import annotations
@@ -33,7 +36,8 @@ from cadsim.observer_pose import ObserverPose
 from cadsim.sensing.localisation import LocalisationConfig
 from cadsim.world import WorldObject
 
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
+READABLE_VERSIONS = (2, 3)
 
 
 @dataclass(frozen=True, eq=False)

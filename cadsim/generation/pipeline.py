@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import concurrent.futures as cf
 import contextvars
+import dataclasses
 import importlib
 import json
 import logging
@@ -57,13 +58,14 @@ from cadsim.dataset.manifest import (
     write_manifest,
 )
 from cadsim.dataset.output_folder import check_output_folder
-from cadsim.dataset.record_format import PairRecord, ViewCapture, encode_record
+from cadsim.dataset.record_format import FORMAT_VERSION, PairRecord, ViewCapture, encode_record
 from cadsim.dataset.seeds import attribute_seed, localisation_seed, noise_seed, simulation_seed
 from cadsim.dataset.writer_lock import exclusive_writer
 from cadsim.generation.executor import Executor, report_progress
 from cadsim.generation.executors import make_executor
 from cadsim.limits import MAX_PAIRS, MAX_SEED, MAX_WORKERS
 from cadsim.observer_pose import ObserverPose
+from cadsim.render.appearance import AppearanceConfig, exposed
 
 log = logging.getLogger(__name__)
 
@@ -233,12 +235,22 @@ def _used_observers(out: Path, episode: int, slots: int) -> set[frozenset]:
     return used
 
 
-def _observe(stages, noise_cfg, det_cfg, renderer, snapshot, camera, exclude_id, seed, attr_seed):
-    """Render one camera, add depth noise with ``seed``, detect with attribute errors seeded by
-    ``attr_seed``."""
+def _appearance(scenario) -> AppearanceConfig | None:
+    """The scenario's appearance realism, or None when it has no ``[appearance]`` table."""
+    table = getattr(scenario, "appearance", None)
+    return AppearanceConfig(**table) if table else None
+
+
+def _observe(stages, noise_cfg, det_cfg, renderer, snapshot, camera, exclude_id, seed, attr_seed, appearance):  # fmt: skip
+    """Render one camera, add depth noise with ``seed``, apply the camera's exposure and white
+    balance (``appearance``: an AppearanceConfig, or None for none), detect with attribute
+    errors seeded by ``attr_seed``."""
     rendered = renderer.render(snapshot, camera, [exclude_id] if exclude_id else [])
     noisy = stages["apply_noise"](rendered.depth, noise_cfg, np.random.default_rng(seed))
     attribute_rng = np.random.default_rng(attr_seed)
+    if appearance is not None:
+        gains = appearance.camera_gains(np.random.default_rng(attr_seed))
+        rendered = dataclasses.replace(rendered, color=exposed(rendered.color, gains))
     det = stages["detect"](
         rendered, noisy, snapshot.objects, camera, det_cfg, attribute_rng=attribute_rng
     )
@@ -334,9 +346,17 @@ def _try_pair(
         seed = noise_seed(task.root_seed, task.episode, slot, v)
         attr_seed = attribute_seed(task.root_seed, task.episode, slot, v)
         t = time.perf_counter()
+        appearance = _appearance(task.scenario)
+        if hasattr(renderer, "set_lighting"):  # the episode's light (the default without a table)
+            if appearance is None:
+                renderer.set_lighting(*renderer.default_lighting)
+            else:
+                light = appearance.lighting(simulation_seed(task.root_seed, task.episode))
+                renderer.set_lighting(*dataclasses.astuple(light))
         rendered, det = _observe(
-            stages, noise_cfg, det_cfg, renderer, snapshot, camera, observer, seed, attr_seed
-        )
+            stages, noise_cfg, det_cfg, renderer, snapshot, camera, observer, seed, attr_seed,
+            appearance,
+        )  # fmt: skip
         result.render_seconds += time.perf_counter() - t
         result.views += 1
         if len(det) < crit.min_covisible + crit.min_exclusive:
@@ -404,7 +424,7 @@ def _check_resume(out: Path, config: dict) -> None:
             raise GenerationError(f"{out}: has frame-pair records but no manifest; use a new --out")
         return
     try:
-        previous = read_manifest(out)["generation"]
+        previous = read_manifest(out, versions=(FORMAT_VERSION,))["generation"]
     except DatasetError as exc:
         if not has_records:
             _clear_recordless(out, f"its manifest is unusable ({exc})")

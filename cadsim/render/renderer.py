@@ -17,7 +17,7 @@ import numpy as np
 from cadsim.camera import Camera
 from cadsim.render.backend import BACKENDS, install_hint, load_pyrender
 from cadsim.render.frustum_culling import box_corners_world, outside_frustum
-from cadsim.render.scene import ObjectScene
+from cadsim.render.scene import DEFAULT_SUN_AZIMUTH_DEG, DEFAULT_SUN_ELEVATION_DEG, ObjectScene
 from cadsim.render.shading import use_lambert_shading
 from cadsim.render.view import RenderedView
 from cadsim.world import Snapshot
@@ -67,6 +67,12 @@ class Renderer:
             raise ValueError(f"Renderer: need 0 < znear < zfar, got znear={znear}, zfar={zfar}")
         self._znear, self._zfar = float(znear), float(zfar)
         self.cull = True
+        self.default_lighting = (
+            DEFAULT_SUN_AZIMUTH_DEG,
+            DEFAULT_SUN_ELEVATION_DEG,
+            float(sun_intensity),
+            float(ambient),
+        )
         pyrender, self.backend = load_pyrender()
         self.width, self.height = int(width), int(height)
         self._flags = pyrender.RenderFlags
@@ -125,6 +131,13 @@ class Renderer:
             depth=np.ascontiguousarray(depth, dtype=np.float32),
             instance=decode_instances(seg),
         )
+
+    def set_lighting(
+        self, azimuth_deg: float, elevation_deg: float, sun_intensity: float, ambient: float
+    ) -> None:
+        """Move the sun (azimuth CCW from +x, elevation; degrees) and set the sun's intensity and
+        the ambient level (``cadsim.render.appearance``: an episode's illumination)."""
+        self._scene.set_lighting(azimuth_deg, elevation_deg, sun_intensity, ambient)
 
     def _culled(self, snapshot: Snapshot, nodes: list, camera: Camera) -> list[str]:
         """Ids of the objects wholly outside ``camera``'s frustum (:mod:`frustum_culling`)."""

@@ -23,6 +23,23 @@ GROUND_Z = -0.03  # metres; just below roads drawn at z = 0 to avoid z-fighting
 GROUND_HALF_SIZE = 2000.0  # metres
 
 
+DEFAULT_SUN_AZIMUTH_DEG = -60.0  # from the south-east
+DEFAULT_SUN_ELEVATION_DEG = 55.0
+
+
+def sun_pose(azimuth_deg: float, elevation_deg: float) -> np.ndarray:
+    """4x4 world pose of a directional light shining from (azimuth CCW from +x, elevation),
+    degrees: the light shines along its node's -z."""
+    el, az = np.radians(elevation_deg), np.radians(azimuth_deg)
+    towards_sun = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+    z = towards_sun
+    x = np.cross([0.0, 0.0, 1.0], z)
+    x /= np.linalg.norm(x)
+    pose = np.eye(4)
+    pose[:3, :3] = np.column_stack([x, np.cross(z, x), z])
+    return pose
+
+
 def srgb_to_linear(c: np.ndarray) -> np.ndarray:
     """sRGB [0, 1] -> linear RGB (pyrender lights in linear space and gamma-encodes its output)."""
     c = np.clip(np.asarray(c, dtype=np.float32), 0.0, 1.0)
@@ -95,18 +112,21 @@ class ObjectScene:
             )
             mesh = parts_to_mesh(pyrender, [Part(plane, tuple(ground_color))], self._material)
             self.ground = self.scene.add(mesh, name="__ground__")
-        # Sun: elevation 55 deg, from the south-east; fixed in the world so both views agree.
-        el, az = np.radians(55.0), np.radians(-60.0)
-        towards_sun = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
-        z = towards_sun  # the light shines along its node's -z
-        x = np.cross([0.0, 0.0, 1.0], z)
-        x /= np.linalg.norm(x)
-        pose = np.eye(4)
-        pose[:3, :3] = np.column_stack([x, np.cross(z, x), z])
-        self.scene.add(
-            pyrender.DirectionalLight(color=np.ones(3), intensity=sun_intensity), pose=pose
+        # Sun: elevation 55 deg, from the south-east; fixed in the world so both views agree
+        # (an [appearance] table moves it per episode: set_lighting).
+        self._sun = self.scene.add(
+            pyrender.DirectionalLight(color=np.ones(3), intensity=sun_intensity),
+            pose=sun_pose(DEFAULT_SUN_AZIMUTH_DEG, DEFAULT_SUN_ELEVATION_DEG),
         )
         self.camera_node = None
+
+    def set_lighting(
+        self, azimuth_deg: float, elevation_deg: float, sun_intensity: float, ambient: float
+    ) -> None:
+        """Move the sun (azimuth CCW from +x, elevation, degrees) and set the light strengths."""
+        self.scene.set_pose(self._sun, sun_pose(azimuth_deg, elevation_deg))
+        self._sun.light.intensity = float(sun_intensity)
+        self.scene.ambient_light = np.full(3, float(ambient))
 
     def _mesh(self, spec: MeshSpec):
         mesh = self._meshes.get(spec)

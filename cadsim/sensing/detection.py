@@ -35,6 +35,7 @@ from cadsim.config_tables import check_number, config_from_table
 from cadsim.render.view import RenderedView
 from cadsim.sensing.attribute_noise import perceived_attributes
 from cadsim.sensing.box_projection import projected_box_areas
+from cadsim.sensing.detector_errors import clutter_boxes, error_stream, jittered, miss_probability
 from cadsim.sensing.features import FEATURE_DIM, object_features
 from cadsim.world import WorldObject
 
@@ -46,7 +47,8 @@ class DetectionConfig:
     class_confusion: probability that a view's detector reports another class of the object's
     confusion group (per view; 0.0075 makes the two views disagree on ≈ 1.5 % of covisible
     objects, the rate of the paper group's CAD data). size_noise: relative (log-normal) error of
-    each reported size dimension."""
+    each reported size dimension. miss_near, miss_far, miss_occluded, false_positives,
+    centre_jitter: the detector errors of :mod:`cadsim.sensing.detector_errors` (all 0: off)."""
 
     min_pixels: int = 40
     border_margin_px: int = 2
@@ -56,6 +58,11 @@ class DetectionConfig:
     surface_to_center: bool = True
     class_confusion: float = 0.0075
     size_noise: float = 0.1
+    miss_near: float = 0.0
+    miss_far: float = 0.0
+    miss_occluded: float = 0.0
+    false_positives: float = 0.0
+    centre_jitter: float = 0.0
 
     def __post_init__(self) -> None:
         check_number("[detection]", "min_pixels", self.min_pixels, minimum=1, integer=True)
@@ -75,10 +82,24 @@ class DetectionConfig:
             "[detection]", "class_confusion", self.class_confusion, minimum=0.0, maximum=1.0
         )
         check_number("[detection]", "size_noise", self.size_noise, minimum=0.0, maximum=2.0)
+        for key in ("miss_near", "miss_far", "miss_occluded"):
+            check_number("[detection]", key, getattr(self, key), minimum=0.0, maximum=1.0)
+        check_number(
+            "[detection]", "false_positives", self.false_positives, minimum=0.0, maximum=50.0
+        )
+        check_number("[detection]", "centre_jitter", self.centre_jitter, minimum=0.0, maximum=1.0)
         if not isinstance(self.surface_to_center, bool):
             raise TypeError(
                 f"[detection] surface_to_center must be true or false, got {self.surface_to_center!r}"
             )
+
+    @property
+    def has_errors(self) -> bool:
+        """Whether any detector error (misses, false positives, jitter) is switched on."""
+        return any(
+            getattr(self, k) > 0
+            for k in ("miss_near", "miss_far", "miss_occluded", "false_positives", "centre_jitter")
+        )
 
     @classmethod
     def from_table(cls, table: Mapping, where: str = "[detection]") -> DetectionConfig:
@@ -227,7 +248,7 @@ def plan_detections(
     boxes_px = ndimage.find_objects(instance + 1, max_label=n)
     clean = clean_depth.ravel()
     m = config.border_margin_px
-    kept, masks, centres, boxes, features = [], [], [], [], []
+    kept, masks, centres, boxes, features, depths, visible = [], [], [], [], [], [], []
     for i in candidates:
         obj = objects[i]
         pix = order[starts[i + 1] : starts[i + 2]]
@@ -253,6 +274,13 @@ def plan_detections(
         masks.append(pix)
         centres.append((u.mean() + 0.5, v.mean() + 0.5))
         boxes.append((x0, y0, x1, y1))
+        depths.append(float(np.median(clean[pix])))
+        visible.append(len(pix) / in_image if in_image > 0 else 1.0)
+    if config.has_errors and attribute_rng is not None:
+        kept, masks, centres, boxes, features = _with_detector_errors(
+            (kept, masks, centres, boxes, features), depths, visible, clean_depth, camera,
+            config, color, error_stream(attribute_rng), known_features,
+        )  # fmt: skip
     empty = Detections.empty()  # its shapes, for a view without detections
     return DetectionPlan(
         pixels=np.concatenate(masks) if masks else np.zeros(0, dtype=np.int64),
@@ -265,6 +293,48 @@ def plan_detections(
         surface_to_center=config.surface_to_center,
         shape=(h, w),
     )
+
+
+def _with_detector_errors(
+    found: tuple[list, list, list, list, list], depths: list, visible: list,
+    clean_depth: np.ndarray, camera: Camera, config: DetectionConfig,
+    color: Callable[[], np.ndarray], rng: np.random.Generator,
+    known_features: Mapping[str, np.ndarray] | None,
+) -> tuple[list, list, list, list, list]:  # fmt: skip
+    """(objects, masks, centres, boxes, features) after the detector's misses, centre jitter
+    and false positives (:mod:`cadsim.sensing.detector_errors`, in that draw order)."""
+    kept, masks, centres, boxes, features = found
+    p_miss = miss_probability(
+        depths, visible, config.miss_near, config.miss_far, config.miss_occluded,
+        config.max_depth_m,
+    )  # fmt: skip
+    stay = rng.random(len(kept)) >= p_miss
+    pick = [k for k in range(len(kept)) if stay[k]]
+    kept, masks, boxes, features = (
+        [seq[k] for k in pick] for seq in (kept, masks, boxes, features)
+    )
+    moved = jittered(
+        np.asarray(centres, dtype=float).reshape(-1, 2)[pick], boxes, config.centre_jitter, rng
+    )
+    centres = [tuple(c) for c in moved]
+    h, w = clean_depth.shape
+    for clutter in clutter_boxes(rng.poisson(config.false_positives), clean_depth, camera, rng, config.min_pixels):  # fmt: skip
+        x0, y0, x1, y1 = clutter.box
+        if known_features is not None and clutter.id in known_features:
+            features.append(known_features[clutter.id])
+        else:
+            mask_crop = np.zeros((y1 - y0, x1 - x0), dtype=np.uint8)
+            v, u = np.divmod(clutter.pixels, w)
+            mask_crop[v - y0, u - x0] = 255
+            features.append(
+                object_features(color(), clutter.box, mask_crop, clutter.cls, clutter.size)
+            )
+        v, u = np.divmod(clutter.pixels, w)
+        kept.append(WorldObject(clutter.id, clutter.cls, "box", (0.0, 0.0, 0.0), 0.0, clutter.size, (0.0, 0.0, 0.0)))  # fmt: skip
+        masks.append(clutter.pixels)
+        centres.append((u.mean() + 0.5, v.mean() + 0.5))
+        boxes.append(clutter.box)
+    return kept, masks, centres, boxes, features
 
 
 def detect(

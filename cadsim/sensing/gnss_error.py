@@ -24,14 +24,21 @@ Presets (:data:`PRESETS`; values and their sources: docs/localisation.md): ``exa
 the prior given), ``rtk`` (centimetre-level), ``gnss-open-sky``, ``gnss-urban``, ``denied``
 (no prior at all: a matcher that needs one declares nothing). ``stated_sigma_m`` is what the
 vehicle reports as its 1-σ uncertainty — what a matcher is told — not the error drawn.
+``latency_ms`` is the age of the other vehicle's message (:mod:`cadsim.sensing.latency`).
+
+A preset *spec* names a preset with optional modifiers (:func:`parse_spec`): ``gnss-urban*2``
+scales every error magnitude and the stated uncertainty by 2 (rates unchanged; ``*0`` is the
+exact pose), ``gnss-urban+300ms`` sets the latency to 300 ms; both may be combined
+(``gnss-urban*2+300ms``). The sweeps over model scale and latency use them.
 
 Imports numpy only.
 """
 
 from __future__ import annotations
 
+import re
 import zlib
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -53,6 +60,7 @@ class GnssErrorModel:
     outlier_rate: float = 0.0
     outlier_m: float = 0.0
     stated_sigma_m: float = 0.0
+    latency_ms: float = 0.0
     given: bool = True  # False: the vehicle has no pose to share (denied)
 
     def __post_init__(self) -> None:
@@ -64,12 +72,27 @@ class GnssErrorModel:
             "heading_noise_deg",
             "outlier_m",
             "stated_sigma_m",
+            "latency_ms",
         ):
             value = getattr(self, name)
             if not (isinstance(value, int | float) and np.isfinite(value) and value >= 0):
                 raise ValueError(f"{name}: expected a finite number >= 0, got {value!r}")
         if not 0.0 <= self.outlier_rate <= 1.0:
             raise ValueError(f"outlier_rate: expected a probability, got {self.outlier_rate!r}")
+
+    def scaled(self, factor: float) -> GnssErrorModel:
+        """Every error magnitude and the stated uncertainty times ``factor`` (>= 0); the outlier
+        rate, the latency and whether a pose is given unchanged."""
+        names = (
+            "bias_m",
+            "walk_m_per_sqrt_s",
+            "noise_m",
+            "heading_bias_deg",
+            "heading_noise_deg",
+            "outlier_m",
+            "stated_sigma_m",
+        )
+        return replace(self, **{name: getattr(self, name) * float(factor) for name in names})
 
 
 PRESETS: dict[str, GnssErrorModel] = {
@@ -94,9 +117,14 @@ PRESETS: dict[str, GnssErrorModel] = {
         outlier_rate=0.05,
         outlier_m=10.0,
         stated_sigma_m=3.2,
+        latency_ms=100.0,
     ),
-    "denied": GnssErrorModel(given=False),
+    "denied": GnssErrorModel(latency_ms=100.0, given=False),
 }
+
+_SPEC = re.compile(
+    r"^(?P<name>[a-z-]+)(\*(?P<scale>[0-9]+(\.[0-9]+)?))?(\+(?P<latency>[0-9]+(\.[0-9]+)?)ms)?$"
+)
 
 
 def preset(name: str) -> GnssErrorModel:
@@ -104,6 +132,27 @@ def preset(name: str) -> GnssErrorModel:
     if name not in PRESETS:
         raise ValueError(f"preset: expected one of {', '.join(PRESETS)}, got {name!r}")
     return PRESETS[name]
+
+
+def parse_spec(spec: str) -> tuple[str, float, float | None]:
+    """(preset name, error scale, latency in ms or None for the preset's own) of a preset spec
+    such as ``gnss-urban``, ``gnss-urban*2``, ``gnss-urban+300ms`` or ``gnss-urban*2+300ms``;
+    ValueError naming the accepted forms otherwise."""
+    match = _SPEC.match(str(spec))
+    if match is None or match["name"] not in PRESETS:
+        raise ValueError(
+            f"preset: expected one of {', '.join(PRESETS)}, optionally followed by *SCALE and/or "
+            f"+LATENCYms (e.g. gnss-urban*2+300ms), got {spec!r}"
+        )
+    latency = None if match["latency"] is None else float(match["latency"])
+    return match["name"], float(match["scale"] or 1.0), latency
+
+
+def model_of(spec: str) -> GnssErrorModel:
+    """The error model a preset spec (:func:`parse_spec`) describes."""
+    name, scale, latency = parse_spec(spec)
+    model = PRESETS[name] if scale == 1.0 else PRESETS[name].scaled(scale)
+    return model if latency is None else replace(model, latency_ms=latency)
 
 
 def vehicle_key(vehicle: str) -> int:

@@ -22,7 +22,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 
 from cadsim.config_tables import check_number, config_from_table
-from cadsim.sensing.gnss_error import PRESETS
+from cadsim.sensing.gnss_error import model_of, parse_spec
 
 MIN_STATED_SIGMA_M = 0.5
 """Floor of the prior's stated uncertainty (``Problem.world_sigma``), metres. With an exact pose
@@ -39,8 +39,9 @@ class LocalisationConfig:
     metres (DMGM's CAD data: 1.2). yaw_sigma_deg: standard deviation of its heading error, degrees
     (DMGM: 0.2). Both 0: exact poses (the prior is still given, error-free). preset: a
     GNSS-like error model of :mod:`cadsim.sensing.gnss_error` (``exact``, ``rtk``,
-    ``gnss-open-sky``, ``gnss-urban``, ``denied``) used instead of the two sigmas; None (the
-    default): the i.i.d. model above.
+    ``gnss-open-sky``, ``gnss-urban``, ``denied``, optionally scaled or with another latency:
+    a preset spec such as ``gnss-urban*2+300ms``) used instead of the two sigmas; None (the
+    default): the i.i.d. model above, with no latency.
     """
 
     position_sigma_m: float = 1.2
@@ -51,11 +52,10 @@ class LocalisationConfig:
         check_number("[localisation]", "position_sigma_m", self.position_sigma_m, minimum=0.0)
         check_number("[localisation]", "yaw_sigma_deg", self.yaw_sigma_deg, minimum=0.0)
         if self.preset is not None:
-            if self.preset not in PRESETS:
-                raise ValueError(
-                    f"[localisation] preset must be one of {', '.join(PRESETS)}, got "
-                    f"{self.preset!r}"
-                )
+            try:
+                parse_spec(self.preset)
+            except ValueError as exc:
+                raise ValueError(f"[localisation] {exc}") from None
 
     @classmethod
     def from_table(cls, table: Mapping, where: str = "[localisation]") -> LocalisationConfig:
@@ -68,8 +68,13 @@ class LocalisationConfig:
         a preset, the uncertainty its receiver reports — at least :data:`MIN_STATED_SIGMA_M`."""
         stated = float(self.position_sigma_m)
         if self.preset is not None:
-            stated = PRESETS[self.preset].stated_sigma_m
+            stated = model_of(self.preset).stated_sigma_m
         return max(stated, MIN_STATED_SIGMA_M)
+
+    @property
+    def latency_s(self) -> float:
+        """Age of the other vehicle's message, seconds (the preset's; 0 without a preset)."""
+        return 0.0 if self.preset is None else model_of(self.preset).latency_ms / 1000.0
 
     def as_record(self) -> dict:
         """The ``prior`` fields a record stores (``preset`` only when one is set, so records of

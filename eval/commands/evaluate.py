@@ -91,18 +91,31 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def add_localisation_argument(parser: argparse.ArgumentParser) -> None:
-    """``--localisation PRESET``: every record's prior re-drawn by a GNSS-like preset."""
+    """``--localisation PRESET``: every record's prior re-drawn by a GNSS-like preset (a preset
+    spec: a name, optionally ``*SCALE`` and ``+LATENCYms``)."""
     from cadsim.sensing.gnss_error import PRESETS
 
     parser.add_argument(
         "--localisation",
-        choices=list(PRESETS),
+        type=_preset_spec,
         default=None,
         metavar="PRESET",
         help="re-draw every record's localisation prior with a GNSS-like preset: "
         + ", ".join(PRESETS)
-        + " (denied: no prior; docs/localisation.md). Default: the records' own",
+        + " (denied: no prior), optionally scaled and with another message latency, e.g. "
+        "gnss-urban*2+300ms (docs/localisation.md). Default: the records' own",
     )
+
+
+def _preset_spec(text: str) -> str:
+    """argparse type of ``--localisation``: the spec itself, once it parses."""
+    from cadsim.sensing.gnss_error import parse_spec
+
+    try:
+        parse_spec(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
 
 
 def run(args: argparse.Namespace) -> int:

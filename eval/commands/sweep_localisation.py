@@ -95,14 +95,14 @@ def _runs(
     dataset: tuple[str, str],
     named: dict[str, MatcherSpec],
     seeds: Sequence[int],
-    sigma: float,
+    level: float | str,
     limit: int | None,
     desc: str,
 ) -> dict[str, list[RunResult]]:
+    """Runs of every matcher at one level: a position sigma (metres) or a preset spec."""
     specs = list(dict.fromkeys(named.values()))
-    requests = requests_for(
-        [dataset], specs, seeds, limit=limit, localisation=localisation_of(sigma)
-    )
+    localisation = level if isinstance(level, str) else localisation_of(level)
+    requests = requests_for([dataset], specs, seeds, limit=limit, localisation=localisation)
     by_spec: dict[MatcherSpec, list[RunResult]] = {}
     for run in runner.run(requests, desc=desc):
         by_spec.setdefault(run.spec.matcher, []).append(run)
@@ -136,44 +136,118 @@ def sweep_localisation(
             )
             named = {label: chosen[label].spec for label in base}
             params = {label: chosen[label].params for label in base}
-        val_runs = _runs(
-            runner,
-            (entry.val_dir, entry.val_checksum),
-            named,
-            seeds,
-            sigma,
-            val_limit,
-            f"{entry.label} localisation σ={sigma:g} m validation",
+        level = {"position_sigma_m": position, "yaw_sigma_deg": yaw}
+        rows += _level_rows(
+            entry, named, params, seeds, sigma, level, runner, limit, val_limit, f"σ={sigma:g} m"
         )
-        taus = {label: fit.tau for label, fit in calibrate_named(val_runs).items()}
-        test_runs = _runs(
-            runner,
-            (entry.test_dir, entry.test_checksum),
-            named,
-            seeds,
-            sigma,
-            limit,
-            f"{entry.label} localisation σ={sigma:g} m",
-        )
-        per_pair = score_runs(test_runs, taus, dataset=entry.label)
-        per_run = per_pair.groupby(["matcher", "seed"], sort=False)["f1"].mean()
-        stats = per_run.groupby(level=0, sort=False).agg(["mean", "std", "min", "max", "size"])
-        for label, row in stats.iterrows():
-            same = row["min"] == row["max"]  # every run the same: nothing to report as spread
-            rows.append(
-                {
-                    "dataset": entry.label,
-                    "position_sigma_m": position,
-                    "yaw_sigma_deg": yaw,
-                    "matcher": label,
-                    "f1_mean": float(row["mean"]),
-                    "f1_std": float("nan") if same else float(row["std"]),
-                    "runs": int(row["size"]),
-                    "deterministic": bool(same),
-                    "params": tuning.params_json(params[label]),
-                }
-            )
     return pd.DataFrame(rows, columns=COLUMNS)
+
+
+def _level_rows(
+    entry: DatasetEntry,
+    named: dict[str, MatcherSpec],
+    params: dict[str, dict],
+    seeds: Sequence[int],
+    level: float | str,
+    columns: dict,
+    runner: Runner,
+    limit: int | None,
+    val_limit: int | None,
+    desc: str,
+) -> list[dict]:
+    """One row per matcher at one level (a sigma or a preset spec): τ calibrated on the
+    validation dataset at that level, F1 over the runs on the test dataset; ``columns`` are
+    the level's own columns."""
+    runs = [
+        _runs(runner, (d, c), named, seeds, level, lim, f"{entry.label} localisation {desc}{tag}")
+        for d, c, lim, tag in (
+            (entry.val_dir, entry.val_checksum, val_limit, " validation"),
+            (entry.test_dir, entry.test_checksum, limit, ""),
+        )
+    ]
+    taus = {label: fit.tau for label, fit in calibrate_named(runs[0]).items()}
+    per_pair = score_runs(runs[1], taus, dataset=entry.label)
+    per_run = per_pair.groupby(["matcher", "seed"], sort=False)["f1"].mean()
+    stats = per_run.groupby(level=0, sort=False).agg(["mean", "std", "min", "max", "size"])
+    rows = []
+    for label, row in stats.iterrows():
+        same = row["min"] == row["max"]  # every run the same: nothing to report as spread
+        rows.append(
+            {"dataset": entry.label, **columns, "matcher": label}
+            | {
+                "f1_mean": float(row["mean"]),
+                "f1_std": float("nan") if same else float(row["std"]),
+                "runs": int(row["size"]),
+                "deterministic": bool(same),
+                "params": tuning.params_json(params[label]),
+            }
+        )
+    return rows
+
+
+PRESET_COLUMNS = [
+    "dataset",
+    "axis",
+    "preset",
+    "scale",
+    "latency_ms",
+    "matcher",
+    "f1_mean",
+    "f1_std",
+    "runs",
+    "deterministic",
+    "params",
+]
+DEFAULT_PRESET = "gnss-urban"
+DEFAULT_SCALES = (0.0, 1.0, 2.0, 3.0)
+DEFAULT_LATENCIES_MS = (0.0, 100.0, 300.0)
+
+
+def preset_levels(
+    preset: str, scales: Sequence[float], latencies_ms: Sequence[float]
+) -> list[tuple[str, str, float, float]]:
+    """(axis, spec, scale, latency ms) of the preset sweep: the scales at the preset's own
+    latency ("scale" axis), then the latencies at scale 1 ("latency" axis); a level on both axes
+    is listed once per axis (its runs are shared through the cache)."""
+    from cadsim.sensing.gnss_error import model_of
+
+    own = model_of(preset).latency_ms
+    levels = [("scale", f"{preset}*{s:g}", float(s), own) for s in scales]
+    levels += [("latency", f"{preset}+{t:g}ms", 1.0, float(t)) for t in latencies_ms]
+    return levels
+
+
+def sweep_presets(
+    entry: DatasetEntry,
+    matchers: Sequence[MatcherSpec] | dict[str, MatcherSpec],
+    seeds: Sequence[int],
+    levels: Sequence[tuple[str, str, float, float]],
+    runner: Runner,
+    limit: int | None = None,
+    val_limit: int | None = None,
+) -> pd.DataFrame:
+    """F1 against a GNSS-like preset's error scale and message latency (:func:`preset_levels`):
+    one row per (level, matcher) with :data:`PRESET_COLUMNS`; the matchers' parameters fixed
+    (``matchers``), τ calibrated at every level on the validation dataset at that level."""
+    if entry.val_dir is None:
+        raise ValueError(f"{entry.test_dir}: the localisation sweep needs a validation dataset")
+    named = as_named(matchers)
+    params = {label: dict(spec.options) for label, spec in named.items()}
+    rows = []
+    for axis, spec, scale, latency in levels:
+        columns = {"axis": axis, "preset": spec, "scale": scale, "latency_ms": latency}
+        rows += _level_rows(
+            entry, named, params, seeds, spec, columns, runner, limit, val_limit, spec
+        )
+    return pd.DataFrame(rows, columns=PRESET_COLUMNS)
+
+
+def write_preset_sweep(out_dir: str | Path, rows: pd.DataFrame) -> Path:
+    """Write ``localisation_presets.csv`` (the preset axes of the localisation sweep)."""
+    path = Path(out_dir) / "localisation_presets.csv"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    write_csv(rows.round(6), path)
+    return path
 
 
 def write_sweep(out_dir: str | Path, rows: pd.DataFrame) -> Path:
@@ -197,6 +271,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=",".join(f"{s:g}" for s in DEFAULT_SIGMAS),
         help="comma-separated position sigmas, metres (yaw sigma = 0.2° per 1.2 m)",
     )
+    parser.add_argument(
+        "--preset",
+        default=None,
+        metavar="PRESET",
+        help="sweep a GNSS-like preset's error scale and message latency instead of the i.i.d. "
+        "sigmas (e.g. gnss-urban; writes localisation_presets.csv)",
+    )
+    parser.add_argument(
+        "--scales",
+        default=",".join(f"{s:g}" for s in DEFAULT_SCALES),
+        help="with --preset: comma-separated error scales",
+    )
+    parser.add_argument(
+        "--latencies",
+        default=",".join(f"{t:g}" for t in DEFAULT_LATENCIES_MS),
+        help="with --preset: comma-separated message latencies, milliseconds",
+    )
     parser.add_argument("--pairs", type=int, default=None, help="only the first N test pairs")
     parser.add_argument(
         "--no-tune",
@@ -216,6 +307,8 @@ def run(args: argparse.Namespace) -> int:
     (val,) = val_dirs([args.dataset], [args.val] if args.val else None)
     entry = open_entry(args.dataset, val)
     matchers = parse_matchers(args.matchers)
+    if args.preset is not None:
+        return _run_presets(args, entry, matchers)
     sigmas = parse_sigmas(args.sigmas)
     with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(ResultCache(args.cache), executor, progress=not args.no_progress)
@@ -227,5 +320,25 @@ def run(args: argparse.Namespace) -> int:
     from eval.report.figures import write_fig_localisation
 
     for path in write_fig_localisation(args.out):
+        print(path)
+    return 0
+
+
+def _run_presets(args: argparse.Namespace, entry: DatasetEntry, matchers) -> int:
+    """``--preset``: the preset's scale and latency axes, parameters as ``--no-tune`` runs them."""
+    from cadsim.sensing.gnss_error import parse_spec
+
+    parse_spec(args.preset)  # ValueError naming the presets
+    levels = preset_levels(args.preset, parse_sigmas(args.scales), parse_sigmas(args.latencies))
+    for _, spec, _, _ in levels:
+        open_entry(args.dataset, None, localisation=spec)  # refuses a dataset without velocities
+    with make_executor(args.workers, args.scheduler) as executor:
+        runner = Runner(ResultCache(args.cache), executor, progress=not args.no_progress)
+        named = sweep_specs(args.out, entry, matchers)
+        rows = sweep_presets(entry, named, range(args.runs), levels, runner, args.pairs)
+    write_preset_sweep(args.out, rows)
+    from eval.report.figures import write_fig_localisation_presets
+
+    for path in write_fig_localisation_presets(args.out):
         print(path)
     return 0

@@ -211,6 +211,46 @@ def write_fig_localisation(out_dir: str | Path) -> list[Path]:
     return _save(fig, out_dir / "fig_localisation")
 
 
+def write_fig_localisation_presets(out_dir: str | Path) -> list[Path]:
+    """F1 against a GNSS-like preset's error scale and its message latency, from
+    ``localisation_presets.csv`` (one panel per axis); none without the CSV."""
+    out_dir = Path(out_dir)
+    path = out_dir / "localisation_presets.csv"
+    if not path.is_file():
+        return []
+    sweep = pd.read_csv(path)
+    if sweep.empty:
+        return []
+    matchers = sorted(sweep["matcher"].unique(), key=matcher_order)
+    colors = _colors(matchers)
+    axes_info = (
+        ("scale", "scale", "error scale (× the preset's bias, drift, noise, heading, outliers)"),
+        ("latency", "latency_ms", "message latency (ms)"),
+    )
+    fig, axes = _figure(12.8, 4.2, ncols=2)
+    preset = str(sweep["preset"].iloc[0]).split("*")[0].split("+")[0]
+    for col, (axis, x_col, x_label) in enumerate(axes_info):
+        ax = axes[0, col]
+        rows = sweep[sweep["axis"] == axis]
+        for matcher in matchers:
+            c = rows[rows["matcher"] == matcher].sort_values(x_col)
+            if c.empty:
+                continue
+            x, m = c[x_col], 100 * c["f1_mean"]
+            s = 100 * c["f1_std"].fillna(0.0)
+            ax.plot(x, m, marker=_marker(matcher), ms=4, color=colors[matcher], label=method_name(matcher))  # fmt: skip
+            ax.fill_between(x, m - s, m + s, color=colors[matcher], alpha=0.15, lw=0)
+        ax.set_xlabel(x_label)
+        ax.set_ylabel("F1 (%)")
+        title = "error scale" if axis == "scale" else "latency"
+        ax.set_title(f"{', '.join(sorted(rows['dataset'].unique()))}: F1 against {preset} {title}")
+        ax.set_ylim(-2, 102)
+        ax.grid(alpha=0.3)
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 4), fontsize=8)
+    return _save(fig, out_dir / "fig_localisation_presets")
+
+
 def write_pr_curves(out_dir: str | Path) -> list[Path]:
     """Precision–recall curves from ``pr_curves.csv`` (one panel per dataset)."""
     out_dir = Path(out_dir)
@@ -374,6 +414,7 @@ def render_all(out_dir: str | Path) -> list[Path]:
         + write_pr_curves(out_dir)
         + write_fig_regime(out_dir)
         + write_fig_localisation(out_dir)
+        + write_fig_localisation_presets(out_dir)
         + write_qualitative(out_dir)
         + write_fig_prior_sensitivity(out_dir)
     )

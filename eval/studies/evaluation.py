@@ -100,9 +100,18 @@ def open_entry(
             f"{test_dir}'s {test.scenario_name!r}"
         )
     if localisation is not None:
-        from cadsim.sensing.gnss_error import preset
+        from cadsim.sensing.gnss_error import model_of
+        from cadsim.sensing.latency import MIN_VELOCITY_FORMAT
 
-        preset(localisation)  # ValueError naming the presets
+        latency = model_of(localisation).latency_ms  # ValueError naming the presets
+        for dataset, where in ((test, test_dir), (val, val_dir)):
+            version = None if dataset is None else dataset.manifest["format_version"]
+            if latency and version is not None and version < MIN_VELOCITY_FORMAT:
+                raise ValueError(
+                    f"{where}: localisation {localisation!r} has a message latency of "
+                    f"{latency:g} ms, which needs object velocities (dataset format version "
+                    f"{MIN_VELOCITY_FORMAT}); this dataset is version {version} — regenerate it"
+                )
     return DatasetEntry(
         label=label or dataset_label(test.scenario_name),
         scenario=test.scenario_name,

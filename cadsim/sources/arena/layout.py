@@ -37,8 +37,10 @@ class Body:
         """Radius (m) of the disc that holds the length × width footprint."""
         return 0.5 * float(np.hypot(self.size[0], self.size[1]))
 
-    def at(self, xy: np.ndarray, yaw: float) -> WorldObject:
-        """The body standing on the floor at ``xy`` (m) with heading ``yaw`` (rad)."""
+    def at(self, xy: np.ndarray, yaw: float, velocity: np.ndarray | None = None) -> WorldObject:
+        """The body standing on the floor at ``xy`` (m) with heading ``yaw`` (rad), moving at
+        ``velocity`` ((2,) m/s in the floor plane; None: standing still)."""
+        vx, vy = (0.0, 0.0) if velocity is None else (float(velocity[0]), float(velocity[1]))
         return WorldObject(
             id=self.id,
             cls=self.cls,
@@ -48,6 +50,7 @@ class Body:
             size=self.size,
             color=self.color,
             variant=self.variant,
+            velocity=(vx, vy, 0.0),
         )
 
 

@@ -116,6 +116,7 @@ class ArenaMotion:
         self.static_radius = np.asarray(static_radius, float)
         n = len(self.pos)
         self.blocked = np.zeros(n, int)
+        self.velocity = np.zeros((n, 2))  # m/s over the last step (a backward difference)
         self.waypoint = self.pos.copy()
         self.time = 0.0
         # Ring movers: parameter angle on the ellipse, direction of travel, look offset.
@@ -200,7 +201,9 @@ class ArenaMotion:
         proposal[self.ring] = self._ring_point(new_phase)[self.ring]
 
         moved = self._accept(proposal)
+        before = self.pos
         self.pos = np.where(moved[:, None], proposal, self.pos)
+        self.velocity = (self.pos - before) / dt
         self.yaw = new_yaw
         self.ring_phase = np.where(self.ring & moved, new_phase, self.ring_phase)
         redraw = self.rng.random(len(self.pos)) < dt / p.look_hold

@@ -73,7 +73,10 @@ class ArenaSource(TrafficSource):
             if k:
                 motion.advance(sched.interval)
             moving: list[WorldObject] = [
-                b.at(xy, yaw) for b, xy, yaw in zip(movers, motion.pos, motion.yaw, strict=True)
+                b.at(xy, yaw, v)
+                for b, xy, yaw, v in zip(
+                    movers, motion.pos, motion.yaw, motion.velocity, strict=True
+                )
             ]
             yield Snapshot(
                 time=round(motion.time, 6),

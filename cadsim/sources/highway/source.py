@@ -34,7 +34,7 @@ from cadsim.sources.highway.config import (
     highway_config,
     steps_for,
 )
-from cadsim.sources.highway.frames import highway_to_world
+from cadsim.sources.highway.frames import highway_direction_to_world, highway_to_world
 from cadsim.sources.highway.geometry import JunctionLayout, incoming_arm, read_layout
 from cadsim.sources.highway.static_scene import static_scene
 from cadsim.sources.highway.tracker import VehicleTracker
@@ -196,7 +196,8 @@ class HighwaySource(TrafficSource):
             xy, yaw = highway_to_world(
                 np.array([v.position for v in vehicles]), np.array([v.heading for v in vehicles])
             )
-            for vid, v, p, a in zip(update.ids, vehicles, xy, yaw, strict=True):
+            velocity = highway_direction_to_world(np.array([v.velocity for v in vehicles]))
+            for vid, v, p, a, u in zip(update.ids, vehicles, xy, yaw, velocity, strict=True):
                 look = self._looks[vid]
                 length, width, height = look.kind.size
                 objects.append(
@@ -208,6 +209,7 @@ class HighwaySource(TrafficSource):
                         yaw=float(a),
                         size=(length, width, height),
                         color=look.color,
+                        velocity=(float(u[0]), float(u[1]), 0.0),
                     )
                 )
                 arm = incoming_arm(v.lane_index)

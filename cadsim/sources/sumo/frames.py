@@ -7,6 +7,8 @@ WorldObject's position is its bounding-box CENTRE. So
 
     yaw    = radians(90 - angle)                     (wrapped to (-pi, pi])
     centre = front - (length / 2) * (cos yaw, sin yaw),   z_centre = z_ground + height / 2
+
+and SUMO's speed (m/s along the heading) is the world-frame velocity speed * (cos yaw, sin yaw, 0).
 """
 
 from __future__ import annotations
@@ -62,3 +64,11 @@ def sumo_color(rgba: tuple[int, int, int, int] | np.ndarray) -> tuple[float, flo
     """SUMO colour (0-255 RGBA) -> RGB in [0, 1] (alpha dropped)."""
     c = np.asarray(rgba, float).reshape(-1)[:3] / 255.0
     return tuple(float(v) for v in np.clip(c, 0.0, 1.0))
+
+
+def speed_to_velocity(speed: np.ndarray, yaw: np.ndarray) -> np.ndarray:
+    """SUMO speeds (k,) m/s along the heading and world yaws (k,) rad -> (k, 3) world-frame
+    velocities, m/s (SUMO's vehicles and persons move along their heading; no vertical part)."""
+    speed = np.asarray(speed, float).reshape(-1)
+    yaw = np.asarray(yaw, float).reshape(-1)
+    return np.column_stack([speed * np.cos(yaw), speed * np.sin(yaw), np.zeros_like(speed)])

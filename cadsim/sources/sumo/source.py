@@ -31,7 +31,7 @@ from cadsim.sources.observer_pairs import observer_pairs
 from cadsim.sources.sumo.build import ToolFailed
 from cadsim.sources.sumo.command import sumo_run
 from cadsim.sources.sumo.confinement import ConfinementError
-from cadsim.sources.sumo.frames import front_to_center, sumo_color
+from cadsim.sources.sumo.frames import front_to_center, speed_to_velocity, sumo_color
 from cadsim.sources.sumo.network import RoadNetwork
 from cadsim.sources.sumo.options import OptionError
 from cadsim.sources.sumo.static_scene import Region, build_static_scene, hex_to_rgb
@@ -247,6 +247,7 @@ class SumoSource(TrafficSource):
         angle = np.array([v.getAngle(i) for i in ids], float)
         size = np.array([(v.getLength(i), v.getWidth(i), v.getHeight(i)) for i in ids], float)
         center, yaw = front_to_center(front, angle, size[:, 0], size[:, 2])
+        velocity = speed_to_velocity([v.getSpeed(i) for i in ids], yaw)
         inside = self.region.contains(center[:, :2])
         observer_classes = set(self.scenario.observers["classes"])
         max_distance = self.scenario.observers["max_distance"]
@@ -268,6 +269,7 @@ class SumoSource(TrafficSource):
                     size=tuple(float(s) for s in size[k]),
                     color=self._color(oid, v.getColor(sumo_id), type_color, self._vehicle_colors),
                     variant=type_id,
+                    velocity=tuple(float(c) for c in velocity[k]),
                 )
             )
             if cls in observer_classes:
@@ -292,6 +294,7 @@ class SumoSource(TrafficSource):
         angle = np.array([p.getAngle(i) for i in ids], float)
         size = np.array([(p.getLength(i), p.getWidth(i), p.getHeight(i)) for i in ids], float)
         center, yaw = front_to_center(front, angle, size[:, 0], size[:, 2])
+        velocity = speed_to_velocity([p.getSpeed(i) for i in ids], yaw)
         objects = []
         for k in np.flatnonzero(self.region.contains(center[:, :2])):
             sumo_id = ids[k]
@@ -308,6 +311,7 @@ class SumoSource(TrafficSource):
                     size=tuple(float(s) for s in size[k]),
                     color=self._color(oid, p.getColor(sumo_id), type_color, self._person_colors),
                     variant=type_id,
+                    velocity=tuple(float(c) for c in velocity[k]),
                 )
             )
         return objects
