@@ -58,7 +58,8 @@ def _reference_products(tensor, x, y, z):
     slots = np.stack([ia, ib, ic], axis=1).reshape(-1)
     v = np.repeat(tensor.values, 3)
     sums = np.bincount(
-        slots, np.stack([x[ib] * x[ic], x[ia] * x[ic], x[ia] * x[ib]], axis=1).reshape(-1) * v,
+        slots,
+        np.stack([x[ib] * x[ic], x[ia] * x[ic], x[ia] * x[ib]], axis=1).reshape(-1) * v,
         tensor.size,
     )
     w = np.stack(
