@@ -27,6 +27,7 @@ DISPATCH = str(ROOT / "tests" / "cpu_dispatch.py")
 SCENARIOS = (
     "cad-intersection",
     "cad-dense",
+    "cad-v2x",  # detector errors, per-episode light, per-camera exposure
     "mrc-arena",
     "highway-intersection",
     "sumo-game-cross",
@@ -134,6 +135,7 @@ def test_a_small_reproduce_gives_the_same_tables_on_every_dispatch_level(tmp_pat
     done = _run_all(args, tmp_path)
     plain = _tables(tmp_path / "plain" / "out")
     assert {"table1.csv", "regime_sweep.csv", "crossovers.csv", "noise_runs.csv"} <= set(plain)
+    assert "localisation_presets.csv" in plain  # cad-v2x: GNSS draws, latency, detector errors
     record = json.loads((tmp_path / "plain" / "out" / "run_record.json").read_text())
     for name in done:
         if name == "plain":
