@@ -17,6 +17,8 @@ measured peak wherever the peak is above 10 MB):
   calibrated on the process's resident memory at 100-300 objects);
 - consistency: 24 bytes per pair of candidate matches (its dense (nm)², differences, weights);
 - pose_refine: 50 bytes per candidate match and translation hypothesis (≤ 256 hypotheses);
+- the local-context baselines (CBM, FreeAlign, optimal transport): 9 bytes per candidate match
+  and pair of neighbours (the (n, m, k, k) distance comparison), plus a few (n, m) arrays;
 - the unary matchers: a few (n, m) float arrays.
 
 An option the matcher will refuse (a negative count, a string) gives an estimate of 0 here, so
@@ -43,6 +45,8 @@ TENSOR_CAPPED_BYTES = 92.0
 TENSOR_STORED_BYTES = 32.0  # a built tensor's three indices and value, while MOS walks
 TRIANGLE_BYTES = (200.0, 350.0, 2e6)  # per triangle: 200 rising to 350 at 2 million triangles
 CONSISTENCY_BYTES = 25.0
+CONTEXT_BYTES = 9.0  # per candidate match and neighbour pair: float64 difference + bool test
+CONTEXT_MATCH_BYTES = 160.0  # per candidate match: similarity, priorities, residuals, plan
 HYPOTHESIS_BYTES = 50.0
 HYPOTHESES = 256
 UNARY_BYTES = 48.0
@@ -156,6 +160,22 @@ def pose_refine_memory(problem: Problem, **options) -> float:
         )
         hypotheses = min(HYPOTHESES, int(np.count_nonzero(likelihood)))
     return HYPOTHESIS_BYTES * hypotheses * float(nm) + _unary(problem)
+
+
+def context_memory(problem: Problem, neighbours=6, **options) -> float:
+    """The local-context baselines (:mod:`matchers.blocks.local_context`): the neighbour-pair
+    comparison of every candidate match, a few (n, m) arrays and the within-view distances."""
+    k = _count(neighbours, 6)
+    if k is None:
+        return 0.0
+    n, m = problem.n1, problem.n2
+    pairs = float(n * m)
+    return (
+        CONTEXT_BYTES * pairs * k * k
+        + CONTEXT_MATCH_BYTES * pairs
+        + 24.0 * (n * n + m * m)
+        + _unary(problem)
+    )
 
 
 def unary_memory(problem: Problem, **options) -> float:

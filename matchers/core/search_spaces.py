@@ -33,6 +33,24 @@ def _hypergraph() -> list[dict]:
     return [{}] + [{"sigma": s} for s in _TENSOR_WIDTHS]
 
 
+def _context() -> list[dict]:
+    """CBM / FreeAlign: the tolerance around its default 0.1, and the context size."""
+    return (
+        [{}]
+        + [{"tolerance_scale": s} for s in (0.03, 0.05, 0.2, 0.3, 0.5)]
+        + [{"neighbours": 4}, {"neighbours": 10}]
+    )
+
+
+def _context_pose() -> list[dict]:
+    """The prior variants: the tolerance, and the prior's width (spread 3, gate 8 by default)."""
+    return (
+        [{}]
+        + [{"tolerance_scale": s} for s in (0.05, 0.2, 0.3)]
+        + [{"spread": 1.0}, {"spread": 2.0}, {"gate": 4.0}, {"gate": 12.0}]
+    )
+
+
 def _pairwise() -> list[dict]:
     """SM / RRWM: the default absolute sigma2 = 0.5, then relative kernel widths."""
     return [{}] + [{"sigma_scale": s} for s in _PAIRWISE_WIDTHS]
@@ -63,6 +81,17 @@ BUILTIN_SEARCH_SPACES: dict[str, list[dict]] = {
     "consistency": [{}] + [{"tolerance_scale": s} for s in _TOLERANCES],
     "maximin_pose": [{}, {"refine": False}, {"spread": 1.0}, {"spread": 4.0}]  # refined, 2, 12
     + [{"gate": 4.0}, {"gate": 8.0}, {"sigma": 0.2}, {"sigma": 1.0}],
+    # The V2X association baselines: their distance tolerance (0.1 x the median within-view
+    # distance by default) and the size of a local context; their prior variants also the
+    # prior's width. Eight configurations each, the equal budget.
+    "cbm": _context(),
+    "freealign": _context(),
+    "optimal_transport": [{}]
+    + [{"tolerance_scale": s} for s in (0.05, 0.2, 0.3)]
+    + [{"epsilon": 0.03}, {"epsilon": 0.3}, {"dustbin": 0.1}, {"dustbin": 0.5}],
+    "cbm_pose": _context_pose(),
+    "freealign_pose": _context_pose(),
+    "optimal_transport_pose": _context_pose(),
 }
 
 

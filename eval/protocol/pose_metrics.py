@@ -1,0 +1,109 @@
+"""Pose metrics: the relative pose between the two vehicles that a matcher's declared matches
+recover, scored against the true one (V2X-Reg++'s success@λ, FreeAlign's and CoAlign's pose
+errors). One implementation for every matcher, table and sweep.
+
+From the declared matches (i, j) — view 1 detection i is view 2 detection j — the least-squares
+rigid transform T (rotation R, translation t; no scale) with p1_i ≈ R p2_j + t is fitted by the
+Kabsch/Umeyama SVD on the detections' 3-D positions (metres, each view's camera frame). Fewer
+than 3 matches, or matches whose view-2 points are (nearly) collinear, leave the rotation
+undetermined: the fit *fails*. Against the true transform (view 2's camera at the time its
+message was made, into view 1's camera: ``FramePair.true_relative_pose``):
+
+    RTE = ||t − t_true||  (m)        RRE = angle of R R_trueᵀ  (degrees)
+
+success@(1 m, 2°) and success@(2 m, 5°): RTE and RRE both within the bounds. A failed fit
+counts as unsuccessful, is left out of the medians and is counted in ``pose_failure_rate``.
+The localisation prior's own error (what a vehicle has with no matching) is the same two numbers
+for the transform its two noisy poses imply (:func:`prior_transform`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+MIN_MATCHES = 3
+COLLINEAR = 1e-3
+"""A fit fails when the second singular value of the centred view-2 points is below this
+fraction of the first (the points lie on a line: the rotation about it is free)."""
+SUCCESS_BOUNDS: tuple[tuple[float, float], ...] = ((1.0, 2.0), (2.0, 5.0))
+"""(RTE m, RRE degrees) of the success rates reported."""
+COLUMNS = (
+    "rte_m_median",
+    "rre_deg_median",
+    "success_1m_2deg",
+    "success_2m_5deg",
+    "pose_failure_rate",
+)
+
+
+def rigid_fit(src: np.ndarray, dst: np.ndarray) -> np.ndarray | None:
+    """4x4 rigid transform T with dst ≈ R src + t in least squares (Kabsch; a proper rotation),
+    or None with fewer than :data:`MIN_MATCHES` points or collinear ``src``. src, dst: (k, 3)."""
+    src = np.asarray(src, dtype=float).reshape(-1, 3)
+    dst = np.asarray(dst, dtype=float).reshape(-1, 3)
+    if len(src) < MIN_MATCHES or len(src) != len(dst):
+        return None
+    mu_s, mu_d = src.mean(axis=0), dst.mean(axis=0)
+    a, b = src - mu_s, dst - mu_d
+    spread = np.linalg.svd(a, compute_uv=False)
+    if not spread[0] > 0 or spread[1] < COLLINEAR * spread[0]:
+        return None
+    u, _, vt = np.linalg.svd(b.T @ a)
+    d = np.sign(np.linalg.det(u @ vt)) or 1.0
+    rotation = u @ np.diag([1.0, 1.0, d]) @ vt
+    out = np.eye(4)
+    out[:3, :3] = rotation
+    out[:3, 3] = mu_d - rotation @ mu_s
+    return out
+
+
+def pose_error(estimate: np.ndarray | None, truth: np.ndarray) -> tuple[float, float]:
+    """(RTE metres, RRE degrees) of a 4x4 estimate against the 4x4 truth; (nan, nan) when the
+    estimate is None (a failed fit)."""
+    if estimate is None:
+        return float("nan"), float("nan")
+    estimate, truth = np.asarray(estimate, dtype=float), np.asarray(truth, dtype=float)
+    rte = float(np.linalg.norm(estimate[:3, 3] - truth[:3, 3]))
+    cos = (np.trace(estimate[:3, :3] @ truth[:3, :3].T) - 1.0) / 2.0
+    return rte, float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+
+
+def matched_pose_error(
+    points1: np.ndarray, points2: np.ndarray, pairs: np.ndarray, truth: np.ndarray
+) -> tuple[float, float]:
+    """(RTE, RRE) of the transform fitted to the declared matches ``pairs`` ((k, 2) int (i, j))
+    between view 2's ``points2`` and view 1's ``points1``; (nan, nan) for a failed fit."""
+    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    fit = rigid_fit(np.asarray(points2)[pairs[:, 1]], np.asarray(points1)[pairs[:, 0]])
+    return pose_error(fit, truth)
+
+
+def prior_transform(
+    points1: np.ndarray, world1: np.ndarray, points2: np.ndarray, world2: np.ndarray
+) -> np.ndarray | None:
+    """The view-2-to-view-1 transform the localisation prior implies: each view's positions are
+    taken to the world through that vehicle's own noisy pose (a rigid map, recovered exactly by
+    a fit of its own detections); None when a view has too few non-collinear detections."""
+    to_world1, to_world2 = rigid_fit(points1, world1), rigid_fit(points2, world2)
+    if to_world1 is None or to_world2 is None:
+        return None
+    return np.linalg.inv(to_world1) @ to_world2
+
+
+def summarise(rte: Sequence[float], rre: Sequence[float]) -> dict[str, float]:
+    """The :data:`COLUMNS` of per-pair errors (nan: a failed fit): medians over successful fits
+    (nan when every fit failed), success rates and the failure rate over all pairs."""
+    rte, rre = np.asarray(rte, dtype=float), np.asarray(rre, dtype=float)
+    if not rte.size:
+        return dict.fromkeys(COLUMNS, float("nan"))
+    ok = np.isfinite(rte) & np.isfinite(rre)
+    out = {
+        "rte_m_median": float(np.median(rte[ok])) if ok.any() else float("nan"),
+        "rre_deg_median": float(np.median(rre[ok])) if ok.any() else float("nan"),
+    }
+    for (metres, degrees), key in zip(SUCCESS_BOUNDS, COLUMNS[2:4], strict=True):
+        out[key] = float(np.mean(ok & (rte <= metres) & (rre <= degrees)))
+    out["pose_failure_rate"] = float(np.mean(~ok))
+    return out

@@ -1,0 +1,166 @@
+"""``freealign``: FreeAlign (Lei et al., collaborative perception without external localisation
+and clock devices, ICRA 2024), implemented from the paper's description: the largest common
+subgraph of the two views' object graphs, found by anchor-based greedy search, pose-free.
+
+Each view is a complete graph: nodes are objects, edge weights the distances between them (a
+rigid motion keeps them; the paper also compares relative headings, which our problems do not
+carry — positions only). From each of the ``anchors`` node pairs of most similar local context
+(:func:`~matchers.blocks.local_context.context_similarity`), a common subgraph is grown greedily:
+a candidate pair (k, l) may join while every edge it closes agrees with its counterpart within
+eps (|d1_kp − d2_lq| ≤ eps for every member (p, q)); among those, the one of most similar local
+context joins (ties: index order), and the members' rows and columns leave the candidates. The
+largest subgraph wins (ties: the smaller mean edge disagreement). The relative pose is fitted to
+it (Kabsch), as FreeAlign then does.
+
+Scores: exp(−r² / (2 eps²)) of the residual r under that pose (members of a subgraph of fewer
+than 3 pairs: 1, others 0); then the shared Hungarian + threshold.
+
+Variant ``freealign_pose``: anchors and growth ranked by context similarity times the prior
+likelihood, so the search starts where the vehicles' poses say the common objects are.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+from scipy.spatial.distance import cdist
+
+from matchers.blocks.local_context import (
+    NEIGHBOURS,
+    alignment_scores,
+    context_similarity,
+    rigid_fit,
+    tolerance_of,
+    top_candidates,
+)
+from matchers.blocks.memory_models import context_memory
+from matchers.blocks.prior import PRIOR_FIELDS, check_prior_options, prior_likelihood, require_prior
+from matchers.core.matching import Matching
+from matchers.core.memory_budget import budgeted
+from matchers.core.options import check_count, check_problem, rng_from_seed
+from matchers.core.problem import Problem
+from matchers.core.result import finish
+
+
+def grow_subgraph(
+    d1: np.ndarray, d2: np.ndarray, priority: np.ndarray, anchor: tuple[int, int], eps: float
+) -> tuple[list[tuple[int, int]], float]:
+    """(member pairs, mean edge disagreement) of the common subgraph grown from ``anchor``."""
+    a, b = anchor
+    members = [(a, b)]
+    disagreement = np.abs(d1[:, a][:, None] - d2[:, b][None, :])
+    allowed = disagreement <= eps
+    total = disagreement.copy()
+    allowed[a, :] = False
+    allowed[:, b] = False
+    edges, error = 0, 0.0
+    while True:
+        ranked = np.where(allowed, priority, -np.inf)
+        best = int(np.argmax(ranked))
+        if not np.isfinite(ranked.flat[best]):
+            break
+        row, col = divmod(best, priority.shape[1])
+        edges += len(members)
+        error += float(total[row, col])
+        members.append((row, col))
+        step = np.abs(d1[:, row][:, None] - d2[:, col][None, :])
+        allowed &= step <= eps
+        total += step
+        allowed[row, :] = False
+        allowed[:, col] = False
+    return members, (error / edges if edges else 0.0)
+
+
+def _run(name, problem, threshold, started, eps, neighbours, anchors, likelihood=None) -> Matching:
+    n, m = problem.n1, problem.n2
+    if n == 0 or m == 0:
+        return finish(name, np.zeros((n, m)), threshold, started, 0, {"tolerance": eps})
+    p1, p2 = np.asarray(problem.points1, float), np.asarray(problem.points2, float)
+    similarity = context_similarity(p1, p2, neighbours, eps)
+    priority = similarity if likelihood is None else similarity * likelihood
+    d1, d2 = cdist(p1, p1), cdist(p2, p2)
+    best, best_key = [], None
+    for anchor in top_candidates(priority, anchors):
+        members, error = grow_subgraph(d1, d2, priority, anchor, eps)
+        key = (-len(members), error)
+        if best_key is None or key < best_key:
+            best, best_key = members, key
+    motion = None
+    if len(best) >= 3:
+        rows, cols = np.array(best).T
+        motion = rigid_fit(p2[cols], p1[rows])
+    if motion is not None:
+        scores = alignment_scores(p1, p2, motion, eps)
+    else:
+        scores = np.zeros((n, m))
+        for i, j in best:
+            scores[i, j] = 1.0
+    info = {"tolerance": float(eps), "subgraph": len(best)}
+    return finish(name, np.clip(scores, 0.0, 1.0), threshold, started, len(best), info)
+
+
+@budgeted(context_memory, "the number of objects or neighbours")
+def freealign(
+    problem: Problem,
+    seed: int | None = 0,
+    threshold: float | None = None,
+    *,
+    tolerance_scale: float = 0.1,
+    tolerance: float | None = None,
+    neighbours: int = NEIGHBOURS,
+    anchors: int = 16,
+) -> Matching:
+    """FreeAlign's anchor-based common-subgraph search (module docstring): eps from
+    ``tolerance_scale`` (0.1 × the median within-view distance) or ``tolerance`` (metres);
+    ``neighbours`` (6) per local context; ``anchors`` (16) growths. Needs no features and no
+    prior. Deterministic.
+
+    >>> rng = np.random.default_rng(1)
+    >>> pts = rng.uniform(0, 30, (7, 3))
+    >>> other = np.vstack([pts[:5] @ np.diag([-1.0, -1.0, 1.0]) + 4.0, rng.uniform(0, 30, (2, 3))])
+    >>> freealign(Problem(pts, other), threshold=0.5).pairs.tolist()
+    [[0, 0], [1, 1], [2, 2], [3, 3], [4, 4]]
+    """
+    started = time.perf_counter()
+    check_problem(problem)
+    rng_from_seed(seed)
+    check_count("neighbours", neighbours)
+    check_count("anchors", anchors)
+    eps = tolerance_of(problem, tolerance_scale, tolerance)
+    return _run("freealign", problem, threshold, started, eps, neighbours, anchors)
+
+
+freealign.deterministic = True
+
+
+@budgeted(context_memory, "the number of objects or neighbours")
+def freealign_pose(
+    problem: Problem,
+    seed: int | None = 0,
+    threshold: float | None = None,
+    *,
+    tolerance_scale: float = 0.1,
+    tolerance: float | None = None,
+    neighbours: int = NEIGHBOURS,
+    anchors: int = 16,
+    spread: float = 3.0,
+    gate: float = 8.0,
+) -> Matching:
+    """:func:`freealign` with anchors and growth ranked by context similarity times the prior
+    likelihood (``spread``, ``gate`` as for :func:`matchers.pose.pose`). Needs
+    ``problem.world1/world2/world_sigma``."""
+    started = time.perf_counter()
+    check_problem(problem)
+    rng_from_seed(seed)
+    check_count("neighbours", neighbours)
+    check_count("anchors", anchors)
+    spread, gate = check_prior_options(spread, gate)
+    xy1, xy2, sigma = require_prior(problem, "freealign_pose")
+    eps = tolerance_of(problem, tolerance_scale, tolerance)
+    likelihood = prior_likelihood(xy1, xy2, sigma, spread, gate)
+    return _run("freealign_pose", problem, threshold, started, eps, neighbours, anchors, likelihood)
+
+
+freealign_pose.requires = PRIOR_FIELDS
+freealign_pose.deterministic = True
