@@ -24,6 +24,7 @@ from eval.report.tables import PAPER_COLUMN, PAPER_NAMES, dataset_order, method_
 from eval.studies.agreement import readme_part as agreement_readme
 from eval.studies.external import readme_part as external_readme
 from eval.studies.prior_defaults import readme_part as prior_sensitivity_readme
+from eval.studies.v2x_table import readme_part as v2x_readme
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
 RIVALS = ("mos", "rrwhm")
@@ -406,6 +407,7 @@ def results_section(results: Path, readme_dir: Path) -> str:
         ]
     out += external_readme(results, rel)
     out += prior_sensitivity_readme(results, rel)
+    out += v2x_readme(results, rel)
     if (results / "fig_localisation.png").is_file():
         loc = record.get("localisation_sweep", {})
         out += [

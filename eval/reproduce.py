@@ -73,6 +73,8 @@ from eval.studies.external import (
 )
 from eval.studies.prior_defaults import SENSITIVITY, write_sensitivity
 from eval.studies.spread import spread_rows
+from eval.studies.v2x_table import PRESETS as V2X_PRESETS
+from eval.studies.v2x_table import evaluate_v2x
 
 log = logging.getLogger("eval.reproduce")
 
@@ -485,6 +487,29 @@ def main(argv: list[str] | None = None) -> int:
                 v2x_record |= {"preset": DEFAULT_PRESET, "levels": [lv[1] for lv in levels]}
                 v2x_record |= {"seeds": v2x_seeds, "matchers": list(v2x_named)}
         count("v2x_sweep", before)
+        with timer.stage("v2x_table"):
+            before = asdict(runner.totals)
+            if v2x_entry is not None:
+                v2x_matchers = external_matchers(args.matchers)
+                log.info(
+                    "[v2x table] %s: %d matchers × %d presets × %d runs",
+                    V2X_LABEL,
+                    len(v2x_matchers),
+                    len(V2X_PRESETS),
+                    len(v2x_seeds),
+                )
+                evaluate_v2x(
+                    v2x_entry.test_dir,
+                    v2x_entry.val_dir,
+                    V2X_LABEL,
+                    v2x_matchers,
+                    v2x_seeds,
+                    runner,
+                    out,
+                    tune=args.tune,
+                )
+                v2x_record |= {"table_presets": list(V2X_PRESETS)}
+        count("v2x_table", before)
         external_seeds = list(range(args.external_runs))
         with timer.stage("external"):
             before = asdict(runner.totals)

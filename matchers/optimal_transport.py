@@ -7,8 +7,8 @@ distances agree within eps, :func:`~matchers.blocks.local_context.context_simila
 measure of how much of their surroundings overlaps. Transport: cost C = 1 − S with a *dustbin*
 row and column (cost 1 − ``dustbin``) for objects the other view does not see; every real object
 carries mass 1, each dustbin the other view's count; the entropic plan
-P = diag(u) exp(−C / ``epsilon``) diag(v) is found by log-domain Sinkhorn (``iterations``
-sweeps). Scores: the real block of P (each row's and column's mass is at most 1), in [0, 1];
+P = diag(u) exp(−C / ``epsilon``) diag(v) is found by Sinkhorn's scaling iterations
+(``iterations`` sweeps). Scores: the real block of P (each row's and column's mass is at most 1), in [0, 1];
 then the shared Hungarian + threshold.
 
 Variant ``optimal_transport_pose``: the affinity times the prior likelihood
@@ -20,7 +20,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from scipy.special import logsumexp
 
 from matchers.blocks.local_context import NEIGHBOURS, context_similarity, tolerance_of
 from matchers.blocks.memory_models import context_memory
@@ -35,18 +34,21 @@ from matchers.core.result import finish
 def transport_plan(
     affinity: np.ndarray, epsilon: float, dustbin: float, iterations: int
 ) -> np.ndarray:
-    """(n, m) real block of the entropic transport plan with dustbins (module docstring)."""
+    """(n, m) real block of the entropic transport plan with dustbins (module docstring). The
+    costs lie in [0, 1] and ``epsilon`` ≥ 0.01, so the kernel exp(−C / epsilon) stays above
+    1e-44 and the scaling form of Sinkhorn (u = a / K v, v = b / Kᵀ u) needs no logarithms."""
     n, m = affinity.shape
     cost = np.full((n + 1, m + 1), 1.0 - dustbin)
     cost[:n, :m] = 1.0 - affinity
-    log_k = -cost / epsilon
-    log_a = np.log(np.append(np.ones(n), float(m)))
-    log_b = np.log(np.append(np.ones(m), float(n)))
-    log_u, log_v = np.zeros(n + 1), np.zeros(m + 1)
+    kernel = np.exp(-cost / epsilon)
+    a = np.append(np.ones(n), float(m))
+    b = np.append(np.ones(m), float(n))
+    v = np.ones(m + 1)
     for _ in range(iterations):
-        log_u = log_a - logsumexp(log_k + log_v[None, :], axis=1)
-        log_v = log_b - logsumexp(log_k + log_u[:, None], axis=0)
-    return np.exp(log_k + log_u[:, None] + log_v[None, :])[:n, :m]
+        u = a / (kernel @ v)
+        v = b / (kernel.T @ u)
+    u = a / (kernel @ v)
+    return (u[:, None] * kernel * v[None, :])[:n, :m]
 
 
 def _run(name, problem, threshold, started, eps, neighbours, epsilon, dustbin, iterations, likelihood=None):  # fmt: skip
@@ -64,7 +66,7 @@ def _run(name, problem, threshold, started, eps, neighbours, epsilon, dustbin, i
 def _options(problem, tolerance_scale, tolerance, neighbours, epsilon, dustbin, iterations):
     check_count("neighbours", neighbours)
     check_count("iterations", iterations)
-    epsilon = check_range("epsilon", epsilon, 0.0, 10.0, open_low=True)
+    epsilon = check_range("epsilon", epsilon, 0.01, 10.0)
     dustbin = check_range("dustbin", dustbin, 0.0, 1.0)
     return tolerance_of(problem, tolerance_scale, tolerance), epsilon, dustbin
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from eval.protocol.pose_metrics import (
+from eval.core.pose_metrics import (
     matched_pose_error,
     pose_error,
     prior_transform,
@@ -108,3 +108,114 @@ def test_each_prior_variant_uses_the_prior_when_geometry_cannot_tell(name):
     result = get(f"{name}_pose")(problem, threshold=0.2)
     assert sorted(map(tuple, result.pairs.tolist())) == [(k, k) for k in range(6)]
     assert get(f"{name}_pose").requires and get(name).deterministic
+
+
+# -- the pose columns and the V2X table ----------------------------------------------------------
+
+
+def test_evaluate_with_a_preset_writes_the_pose_columns(tmp_path):
+    import pandas as pd
+    from test_gnss_error import _generated
+
+    from cadsim.cli import main
+    from eval.core.pose_metrics import COLUMNS
+
+    data = _generated(tmp_path / "t", {})
+    val = _generated(tmp_path / "v", {}, seed=1011)
+    out = tmp_path / "urban"
+    args = ["evaluate", str(data.path), "--val", str(val.path), "--matchers", "pose,sm,freealign"]
+    args += ["--runs", "2", "--workers", "1", "--cache", str(tmp_path / "cache"), "--no-progress"]
+    assert main([*args, "--localisation", "gnss-urban", "--out", str(out)]) == 0
+    table = pd.read_csv(out / "table1.csv").set_index("matcher")
+    assert set(COLUMNS) <= set(table.columns)
+    assert table[list(COLUMNS[2:])].apply(lambda c: c.between(0, 1)).all().all()
+    per_pair = pd.read_csv(out / "metrics_per_pair.csv")
+    assert per_pair["pose_scored"].all()  # simulated records: the true pose is known
+    assert per_pair.loc[per_pair["matcher"] == "pose", "prior_scored"].all()
+
+
+def test_a_no_prior_matcher_runs_once_per_latency_whatever_the_preset(tmp_path):
+    from test_gnss_error import _generated
+
+    from eval.core.cache import ResultCache
+    from eval.core.executor import SerialExecutor
+    from eval.core.runner import Runner, requests_for
+    from eval.core.tasks import MatcherSpec
+
+    data = _generated(tmp_path, {})
+    runner = Runner(ResultCache(tmp_path / "cache"), SerialExecutor(), progress=False)
+    dataset = [(str(data.path), data.checksum)]
+    specs = [MatcherSpec("sm"), MatcherSpec("pose")]
+    first = runner.run(requests_for(dataset, specs, [0], localisation="gnss-urban"))
+    runner.run(requests_for(dataset, specs, [0], localisation="gnss-urban*3"))
+    assert runner.stats.cached == 1 and runner.stats.computed == 1  # sm shared; pose re-drawn
+    runner.run(requests_for(dataset, specs, [0], localisation="gnss-urban+300ms"))
+    assert runner.stats.computed == 2  # another latency: both again
+    again = runner.run(requests_for(dataset, specs, [0], localisation="gnss-urban"))
+    sm = [r for r in (first, again) for r in r if r.spec.matcher.name == "sm"]
+    assert sm[0].spec.localisation == "gnss-urban"  # results come back under the asked spec
+    assert np.array_equal(sm[0].outcomes[0].true_pose, sm[1].outcomes[0].true_pose)
+
+
+def test_the_cache_keeps_the_pose_fields(tmp_path):
+    from test_gnss_error import _generated
+
+    from eval.core.cache import ResultCache
+    from eval.core.executor import SerialExecutor
+    from eval.core.runner import Runner, requests_for
+    from eval.core.tasks import MatcherSpec
+
+    data = _generated(tmp_path, {"preset": "gnss-open-sky"})
+    cache = ResultCache(tmp_path / "cache")
+    runner = Runner(cache, SerialExecutor(), progress=False)
+    (run,) = runner.run(requests_for([(str(data.path), data.checksum)], [MatcherSpec("pose")], [0]))
+    loaded = cache.load(run.spec)
+    for a, b in zip(run.outcomes, loaded.outcomes, strict=True):
+        np.testing.assert_array_equal(a.points1, b.points1)
+        np.testing.assert_array_equal(a.points2, b.points2)
+        np.testing.assert_array_equal(a.true_pose, b.true_pose)
+        assert a.prior_error == b.prior_error and a.prior_error is not None
+
+
+def test_the_v2x_table_has_its_columns_a_prior_row_and_an_interval():
+    import pandas as pd
+
+    from eval.studies.v2x_table import COLUMNS, PRIOR_ROW, best_against_runner_up, v2x_table
+
+    rng = np.random.default_rng(0)
+    rows = []
+    for preset in ("exact", "denied"):
+        for matcher, level in (("pose", 0.9), ("freealign", 0.6), ("sm", 0.4)):
+            given = preset != "denied" or matcher != "pose"
+            for seed in range(2):
+                for pair in range(12):
+                    tp = int(rng.random() < level) * 5 if given else 0
+                    rows.append(
+                        {"preset": preset, "matcher": matcher, "seed": seed, "pair": pair}
+                        | {
+                            "episode": pair // 3,
+                            "f1": tp / 5,
+                            "tp": tp,
+                            "n_pred": 5 if given else 0,
+                        }
+                        | {"n_gt": 5, "time_s": 0.001, "pose_scored": True}
+                        | {"rte_m": 0.5 if tp else np.nan, "rre_deg": 1.0 if tp else np.nan}
+                        | {"prior_scored": preset != "denied", "prior_rte_m": 3.0}
+                        | {"prior_rre_deg": 1.5}
+                    )
+    per_pair = pd.DataFrame(rows)
+    table = v2x_table(per_pair)
+    assert list(table.columns) == list(COLUMNS)
+    prior = table[table["matcher"] == PRIOR_ROW].set_index("preset")
+    assert prior.loc["exact", "rte_m_median"] == 3.0 and prior.loc["exact", "success_1m_2deg"] == 0
+    assert prior.loc["denied", "pose_failure_rate"] == 1.0
+    intervals = best_against_runner_up(per_pair).set_index("preset")
+    assert (
+        intervals.loc["exact", "best"] == "pose" and intervals.loc["denied", "best"] == "freealign"
+    )
+    assert (
+        intervals.loc["exact", "ci_low"]
+        <= intervals.loc["exact", "f1_diff"]
+        <= intervals.loc["exact", "ci_high"]
+    )
+    assert intervals.loc["exact", "episodes"] == 4

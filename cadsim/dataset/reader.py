@@ -324,6 +324,22 @@ class FramePair:
         positions = delayed_positions(self.view2.positions, velocities, sender, rotation, latency)
         return positions, sender_offset(sender, latency)
 
+    def true_relative_pose(self) -> np.ndarray | None:
+        """4x4 rigid transform from view 2's camera frame — as the other vehicle's message
+        reports it, at the snapshot time minus the prior's latency (:meth:`_sent_view2`) — into
+        view 1's camera frame (OpenCV axes, metres): what matching can recover. None for a
+        record without camera poses (imported data)."""
+        if self.cameras is None:
+            return None
+        _, offset = self._sent_view2()
+        to_world = []
+        for k, camera in enumerate(self.cameras):
+            pose = np.eye(4)
+            pose[:3, :3] = camera.rotation_cam_to_world()
+            pose[:3, 3] = np.asarray(camera.position, dtype=float) + (offset if k else 0.0)
+            to_world.append(pose)
+        return np.linalg.inv(to_world[0]) @ to_world[1]
+
     def localise(self, position_sigma_m: float, yaw_sigma_deg: float, seed: int) -> FramePair:
         """This pair with its localisation prior re-drawn: each observer's pose error has
         standard deviations ``position_sigma_m`` (metres per ground axis) and ``yaw_sigma_deg``,

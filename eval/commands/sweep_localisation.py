@@ -31,6 +31,8 @@ import pandas as pd
 from eval.commands.evaluate import add_runner_arguments
 from eval.core.cache import ResultCache
 from eval.core.executor import make_executor
+from eval.core.pose_metrics import COLUMNS as POSE_COLUMNS
+from eval.core.pose_metrics import summarise_pose
 from eval.core.result_files import write_csv
 from eval.core.runner import Runner, requests_for
 from eval.core.tasks import MatcherSpec, RunResult
@@ -154,10 +156,12 @@ def _level_rows(
     limit: int | None,
     val_limit: int | None,
     desc: str,
+    pose_columns: bool = False,
 ) -> list[dict]:
     """One row per matcher at one level (a sigma or a preset spec): τ calibrated on the
     validation dataset at that level, F1 over the runs on the test dataset; ``columns`` are
-    the level's own columns."""
+    the level's own columns; with ``pose_columns``, the pose metrics of
+    :mod:`eval.core.pose_metrics` too."""
     runs = [
         _runs(runner, (d, c), named, seeds, level, lim, f"{entry.label} localisation {desc}{tag}")
         for d, c, lim, tag in (
@@ -169,6 +173,7 @@ def _level_rows(
     per_pair = score_runs(runs[1], taus, dataset=entry.label)
     per_run = per_pair.groupby(["matcher", "seed"], sort=False)["f1"].mean()
     stats = per_run.groupby(level=0, sort=False).agg(["mean", "std", "min", "max", "size"])
+    pose = summarise_pose(per_pair, ["matcher"]).set_index("matcher") if pose_columns else None
     rows = []
     for label, row in stats.iterrows():
         same = row["min"] == row["max"]  # every run the same: nothing to report as spread
@@ -181,6 +186,7 @@ def _level_rows(
                 "deterministic": bool(same),
                 "params": tuning.params_json(params[label]),
             }
+            | ({} if pose is None or label not in pose.index else pose.loc[label].to_dict())
         )
     return rows
 
@@ -197,6 +203,7 @@ PRESET_COLUMNS = [
     "runs",
     "deterministic",
     "params",
+    *POSE_COLUMNS,
 ]
 DEFAULT_PRESET = "gnss-urban"
 DEFAULT_SCALES = (0.0, 1.0, 2.0, 3.0)
@@ -237,7 +244,7 @@ def sweep_presets(
     for axis, spec, scale, latency in levels:
         columns = {"axis": axis, "preset": spec, "scale": scale, "latency_ms": latency}
         rows += _level_rows(
-            entry, named, params, seeds, spec, columns, runner, limit, val_limit, spec
+            entry, named, params, seeds, spec, columns, runner, limit, val_limit, spec, True
         )
     return pd.DataFrame(rows, columns=PRESET_COLUMNS)
 

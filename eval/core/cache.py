@@ -26,7 +26,7 @@ import numpy as np
 
 from eval.core.tasks import MatcherSpec, PairOutcome, RunResult, RunSpec
 
-_FORMAT = 1
+_FORMAT = 2  # 2: the positions, true pose and prior error of every pair (pose metrics)
 
 # Sources that cannot change a run's result (how tasks are dispatched, the CLI, drawing, benches):
 # left out of the code version so editing them does not invalidate the cache. Everything else
@@ -136,6 +136,9 @@ class ResultCache:
             **_ragged([o.gt_pairs for o in outcomes], "gt_pairs", np.int64),
             **_ragged([o.assigned for o in outcomes], "assigned", np.int64),
             **_ragged([o.scores for o in outcomes], "scores", np.float64),
+            **_ragged([_points(o.points1, o.n1) for o in outcomes], "points1", np.float64),
+            **_ragged([_points(o.points2, o.n2) for o in outcomes], "points2", np.float64),
+            "pose": np.array([_pose_row(o) for o in outcomes], dtype=np.float64).reshape(-1, 19),
         }
         fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=path.parent)
         try:
@@ -158,6 +161,9 @@ class ResultCache:
                 gts = _unragged(data, "gt_pairs")
                 assigned = _unragged(data, "assigned")
                 scores = _unragged(data, "scores")
+                points1 = _unragged(data, "points1")
+                points2 = _unragged(data, "points2")
+                pose = data["pose"]
         except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
             raise ValueError(
                 f"{path}: unreadable cache entry ({exc}); delete it to recompute"
@@ -175,10 +181,47 @@ class ResultCache:
                 scores=s.reshape(p["n1"], p["n2"]),
                 time_s=float(p["time_s"]),
                 iterations=int(p["iterations"]),
+                **_pose_fields(q1, p["n1"], q2, p["n2"], row),
             )
-            for p, g, a, s in zip(meta["pairs"], gts, assigned, scores, strict=True)
+            for p, g, a, s, q1, q2, row in zip(
+                meta["pairs"], gts, assigned, scores, points1, points2, pose, strict=True
+            )
         ]
         return RunResult(spec, meta["dataset_dir"], outcomes, float(meta["wall_s"]))
+
+
+def _points(points: np.ndarray | None, n: int) -> np.ndarray:
+    """A pair's positions for storage: (n, D) as given, or an empty array when not kept."""
+    return np.zeros(0) if points is None else np.asarray(points, dtype=np.float64).reshape(-1)
+
+
+def _pose_row(outcome: PairOutcome) -> np.ndarray:
+    """(19,) true pose (16, NaN when unknown), whether there is a prior error (1/0) and that
+    error (RTE, RRE; NaN for a failed fit)."""
+    row = np.full(19, np.nan)
+    if outcome.true_pose is not None:
+        row[:16] = np.asarray(outcome.true_pose, dtype=np.float64).reshape(16)
+    row[16] = outcome.prior_error is not None
+    if outcome.prior_error is not None:
+        row[17:] = outcome.prior_error
+    return row
+
+
+def _pose_fields(q1: np.ndarray, n1: int, q2: np.ndarray, n2: int, row: np.ndarray) -> dict:
+    """The pose fields of a stored pair (:func:`_points`, :func:`_pose_row` reversed)."""
+    return {
+        "points1": _shaped(q1, n1),
+        "points2": _shaped(q2, n2),
+        "true_pose": None if np.isnan(row[0]) else row[:16].reshape(4, 4),
+        "prior_error": (float(row[17]), float(row[18])) if row[16] == 1 else None,
+    }
+
+
+def _shaped(flat: np.ndarray, n: int) -> np.ndarray | None:
+    """(n, D) positions from their stored flat form; None when they were not kept."""
+    if n == 0:
+        return np.zeros((0, 3))
+    return flat.reshape(n, -1) if flat.size else None
 
 
 def _localisation(value) -> tuple[float, float] | str | None:

@@ -124,6 +124,26 @@ def _seed_free(req: RunRequest) -> RunRequest:
     return dataclasses.replace(req, seed=0) if free else req
 
 
+def _latency_only(req: RunRequest) -> RunRequest:
+    """`req` with a localisation preset spec replaced by ``exact+<latency>ms`` when its matcher
+    does not read the prior: such a matcher sees only the message latency of a preset (view 2's
+    positions as sent), never its pose errors, so every preset and error scale with one latency
+    shares one run (a preset sweep runs the no-prior matchers once per latency)."""
+    if not isinstance(req.localisation, str):
+        return req
+    from cadsim.sensing.gnss_error import model_of
+    from matchers.blocks.prior import PRIOR_FIELDS
+    from matchers.core.registry import requires
+
+    try:
+        if requires(req.matcher.name) & PRIOR_FIELDS:
+            return req
+        latency = model_of(req.localisation).latency_ms
+    except ValueError:  # unknown matcher or spec: let the task report it
+        return req
+    return dataclasses.replace(req, localisation=f"exact+{latency:g}ms")
+
+
 def _group(missing: Sequence[RunRequest], version: str, workers: int = 1) -> list[RunTask]:
     """Tasks for the missing runs: one per (dataset, seed, pairs, keep, localisation), holding its
     matchers × its noise rates (rates with the same missing matchers together, so that every run
@@ -282,7 +302,7 @@ class Runner:
 
     def _run(self, requests: Sequence[RunRequest], desc: str) -> list[RunResult]:
         wanted = [req.spec(self.version) for req in requests]
-        requests = [_seed_free(req) for req in requests]
+        requests = [_seed_free(_latency_only(req)) for req in requests]
         specs = [req.spec(self.version) for req in requests]
         missing = list(
             {s: r for s, r in zip(specs, requests, strict=True) if self._source(s) is None}.values()

@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from eval.core.pose_metrics import pose_error, prior_transform
 from eval.core.thinning import thin_pair
 
 
@@ -129,6 +130,11 @@ class PairOutcome:
     objects per view. gt_pairs (g, 2) and assigned (k, 2): int (i, j) pairs — ground truth and the
     matcher's full Hungarian assignment (threshold None). scores: (n1, n2) soft scores in [0, 1].
     time_s: the matcher's wall time on this pair, seconds; iterations: as the matcher reports.
+    points1 (n1, D), points2 (n2, D): the positions the matcher saw (metres, each camera's frame;
+    view 2's as its message reports them), true_pose: the 4x4 transform from view 2's frame into
+    view 1's (None when unknown: imported data), prior_error: (RTE m, RRE degrees) of the
+    transform the localisation prior implies (None without a prior) — for the pose metrics of
+    :mod:`eval.core.pose_metrics`.
     """
 
     index: int
@@ -143,6 +149,10 @@ class PairOutcome:
     scores: np.ndarray
     time_s: float
     iterations: int
+    points1: np.ndarray | None = None
+    points2: np.ndarray | None = None
+    true_pose: np.ndarray | None = None
+    prior_error: tuple[float, float] | None = None
 
     @property
     def assigned_scores(self) -> np.ndarray:
@@ -206,6 +216,11 @@ def _pair_outcomes(pair, task: RunTask, functions: list) -> list[PairOutcome]:
         pair = pair.localise(*task.localisation, seed=task.seed)
     problem = pair.problem()
     gt = np.asarray(pair.gt_pairs, dtype=np.int64).reshape(-1, 2)
+    true_pose = pair.true_relative_pose() if hasattr(pair, "true_relative_pose") else None
+    prior_error = None
+    if true_pose is not None and problem.world1 is not None:
+        implied = prior_transform(problem.points1, problem.world1, problem.points2, problem.world2)
+        prior_error = pose_error(implied, true_pose)
     with shared_tensors():  # the hypergraph matchers of a pair share its k-NN search
         matchings = [
             fn(problem, seed=task.seed, threshold=None, **dict(spec.options))
@@ -234,6 +249,10 @@ def _pair_outcomes(pair, task: RunTask, functions: list) -> list[PairOutcome]:
                 scores=scores,
                 time_s=float(matching.time_s),
                 iterations=int(matching.iterations),
+                points1=np.asarray(problem.points1, dtype=float),
+                points2=np.asarray(problem.points2, dtype=float),
+                true_pose=true_pose,
+                prior_error=prior_error,
             )
         )
     return outcomes

@@ -227,25 +227,31 @@ def write_fig_localisation_presets(out_dir: str | Path) -> list[Path]:
         ("scale", "scale", "error scale (× the preset's bias, drift, noise, heading, outliers)"),
         ("latency", "latency_ms", "message latency (ms)"),
     )
-    fig, axes = _figure(12.8, 4.2, ncols=2)
+    panels = [("f1_mean", "F1 (%)")]
+    if "success_1m_2deg" in sweep.columns:
+        panels.append(("success_1m_2deg", "success@(1 m, 2°) (%)"))
+    fig, axes = _figure(12.8, 3.6 * len(panels), nrows=len(panels), ncols=2)
     preset = str(sweep["preset"].iloc[0]).split("*")[0].split("+")[0]
-    for col, (axis, x_col, x_label) in enumerate(axes_info):
-        ax = axes[0, col]
-        rows = sweep[sweep["axis"] == axis]
-        for matcher in matchers:
-            c = rows[rows["matcher"] == matcher].sort_values(x_col)
-            if c.empty:
-                continue
-            x, m = c[x_col], 100 * c["f1_mean"]
-            s = 100 * c["f1_std"].fillna(0.0)
-            ax.plot(x, m, marker=_marker(matcher), ms=4, color=colors[matcher], label=method_name(matcher))  # fmt: skip
-            ax.fill_between(x, m - s, m + s, color=colors[matcher], alpha=0.15, lw=0)
-        ax.set_xlabel(x_label)
-        ax.set_ylabel("F1 (%)")
-        title = "error scale" if axis == "scale" else "latency"
-        ax.set_title(f"{', '.join(sorted(rows['dataset'].unique()))}: F1 against {preset} {title}")
-        ax.set_ylim(-2, 102)
-        ax.grid(alpha=0.3)
+    for r, (metric, y_label) in enumerate(panels):
+        for col, (axis, x_col, x_label) in enumerate(axes_info):
+            ax = axes[r, col]
+            rows = sweep[sweep["axis"] == axis]
+            for matcher in matchers:
+                c = rows[rows["matcher"] == matcher].sort_values(x_col)
+                if c.empty:
+                    continue
+                x, m = c[x_col], 100 * c[metric]
+                ax.plot(x, m, marker=_marker(matcher), ms=4, color=colors[matcher], label=method_name(matcher))  # fmt: skip
+                if metric == "f1_mean":
+                    s = 100 * c["f1_std"].fillna(0.0)
+                    ax.fill_between(x, m - s, m + s, color=colors[matcher], alpha=0.15, lw=0)
+            ax.set_xlabel(x_label)
+            ax.set_ylabel(y_label)
+            title = "error scale" if axis == "scale" else "latency"
+            where = ", ".join(sorted(rows["dataset"].unique()))
+            ax.set_title(f"{where}: {y_label.split(' (')[0]} against {preset} {title}")
+            ax.set_ylim(-2, 102)
+            ax.grid(alpha=0.3)
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 4), fontsize=8)
     return _save(fig, out_dir / "fig_localisation_presets")

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from eval.core.pose_metrics import summarise_pose
 from eval.core.result_files import write_csv, write_text
 from eval.protocol.metrics import METRICS, POOLED, summarise_pooled, summarise_runs
 from eval.protocol.variants import MAIN, VARIANTS, variant_path
@@ -99,6 +100,9 @@ def build_table(
         frames=("pair", "nunique"), time_median_ms=("time_s", lambda t: 1000 * float(np.median(t)))
     )
     table = summary.merge(sizes.reset_index(), on=["dataset", "matcher"])
+    pose = summarise_pose(per_pair, ["dataset", "matcher"])
+    if not pose.empty:  # the relative pose the matches recover (records with camera poses)
+        table = table.merge(pose, on=["dataset", "matcher"], how="left")
     if "params" in per_pair.columns:
         params = per_pair.groupby(["dataset", "matcher"])["params"].first().reset_index()
         table = table.merge(params, on=["dataset", "matcher"], how="left")

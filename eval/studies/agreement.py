@@ -137,9 +137,13 @@ def paper_f1(path: str | Path = PAPER_CSV) -> dict[str, pd.Series]:
 
 
 def write_agreement(out_dir: str | Path, paper_csv: str | Path = PAPER_CSV) -> pd.DataFrame:
-    """Write ``out_dir/agreement.csv`` from ``out_dir/metrics_per_pair.csv`` and
-    ``out_dir/external/metrics_per_pair.csv``; an empty table when either is missing."""
+    """Write ``out_dir/agreement.csv`` from ``out_dir/metrics_per_pair.csv`` (and the V2X task's
+    ``out_dir/v2x/metrics_per_pair.csv`` under its own preset, when there) and
+    ``out_dir/external/metrics_per_pair.csv``; an empty table when either of the first and the
+    last is missing."""
     from eval.studies.external import SUBDIR, prior_matchers
+    from eval.studies.v2x_table import SUBDIR as V2X_SUBDIR
+    from eval.studies.v2x_table import TUNE_PRESET as V2X_PRESET
 
     out_dir = Path(out_dir)
     ours_path = out_dir / "metrics_per_pair.csv"
@@ -152,6 +156,10 @@ def write_agreement(out_dir: str | Path, paper_csv: str | Path = PAPER_CSV) -> p
         reference = pair_f1(external)
         blocks = pair_clusters(external, EXTERNAL_BLOCK)
         per_pair = pd.read_csv(ours_path, keep_default_na=False, na_values=[""])
+        v2x_path = out_dir / V2X_SUBDIR / "metrics_per_pair.csv"
+        if v2x_path.is_file():  # the V2X task, under its scenario's own preset
+            v2x = pd.read_csv(v2x_path, keep_default_na=False, na_values=[""])
+            per_pair = pd.concat([per_pair, v2x[v2x["preset"] == V2X_PRESET]], ignore_index=True)
         for dataset in sorted(per_pair["dataset"].unique(), key=dataset_order):
             mine = per_pair[per_pair["dataset"] == dataset]
             found = agreement(pair_f1(mine), reference, None, pair_clusters(mine), blocks)

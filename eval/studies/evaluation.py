@@ -17,6 +17,7 @@ import numpy as np
 import pandas as pd
 
 from eval.core import tasks
+from eval.core.pose_metrics import outcome_pose
 from eval.core.result_files import write_csv, write_text
 from eval.core.runner import Runner, requests_for
 from eval.core.tasks import MatcherSpec, RunResult
@@ -206,7 +207,8 @@ def score_runs(
         for run in label_runs:
             params = tuning.params_json(dict(run.spec.matcher.options))
             for o in run.outcomes:
-                m = pair_metrics(calibration.predictions(o, tau), o.gt_pairs, o.n1, o.n2)
+                predicted = calibration.predictions(o, tau)
+                m = pair_metrics(predicted, o.gt_pairs, o.n1, o.n2)
                 rows.append(
                     columns
                     | {
@@ -230,6 +232,7 @@ def score_runs(
                         "f1": m.f1,
                         "time_s": o.time_s,
                     }
+                    | outcome_pose(o, predicted)
                 )
     return pd.DataFrame(rows)
 

@@ -107,3 +107,43 @@ def summarise(rte: Sequence[float], rre: Sequence[float]) -> dict[str, float]:
         out[key] = float(np.mean(ok & (rte <= metres) & (rre <= degrees)))
     out["pose_failure_rate"] = float(np.mean(~ok))
     return out
+
+
+def outcome_pose(outcome, pairs: np.ndarray) -> dict[str, float | bool]:
+    """Per-pair pose columns of one outcome (``eval.core.tasks.PairOutcome``) with its declared
+    matches ``pairs``: ``pose_scored`` (a true pose is known), ``rte_m``/``rre_deg`` (NaN for a
+    failed fit or none scored), and the prior's own ``prior_rte_m``/``prior_rre_deg`` with
+    ``prior_scored`` (the run had a prior)."""
+    scored = outcome.true_pose is not None and outcome.points1 is not None
+    rte, rre = (
+        matched_pose_error(outcome.points1, outcome.points2, pairs, outcome.true_pose)
+        if scored
+        else (float("nan"), float("nan"))
+    )
+    prior = outcome.prior_error
+    return {
+        "pose_scored": bool(scored),
+        "rte_m": rte,
+        "rre_deg": rre,
+        "prior_scored": prior is not None,
+        "prior_rte_m": float("nan") if prior is None else prior[0],
+        "prior_rre_deg": float("nan") if prior is None else prior[1],
+    }
+
+
+def summarise_pose(per_pair, by: Sequence[str], prefix: str = ""):
+    """One row per ``by`` group of a per-pair table (columns of :func:`outcome_pose`) with the
+    :data:`COLUMNS` over its scored pairs and runs pooled (``prefix`` "prior_": the prior's own
+    error); groups with nothing scored are left out."""
+    import pandas as pd
+
+    flag = "prior_scored" if prefix else "pose_scored"
+    if flag not in per_pair.columns:
+        return pd.DataFrame(columns=[*by, *COLUMNS])
+    scored = per_pair[per_pair[flag].astype(bool)]
+    rows = []
+    for key, group in scored.groupby(list(by), sort=False):
+        key = key if isinstance(key, tuple) else (key,)
+        summary = summarise(group[f"{prefix}rte_m"], group[f"{prefix}rre_deg"])
+        rows.append(dict(zip(by, key, strict=True)) | summary)
+    return pd.DataFrame(rows, columns=[*by, *COLUMNS])
