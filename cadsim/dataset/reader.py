@@ -328,8 +328,8 @@ class FramePair:
         """4x4 rigid transform from view 2's camera frame — as the other vehicle's message
         reports it, at the snapshot time minus the prior's latency (:meth:`_sent_view2`) — into
         view 1's camera frame (OpenCV axes, metres): what matching can recover. None for a
-        record without camera poses (imported data)."""
-        if self.cameras is None:
+        record without camera poses (imported data) and for a pair built in memory."""
+        if not (self.path / layout.RECORD_JSON).is_file() or self.cameras is None:
             return None
         _, offset = self._sent_view2()
         to_world = []

@@ -26,7 +26,7 @@ import numpy as np
 
 from eval.core.tasks import MatcherSpec, PairOutcome, RunResult, RunSpec
 
-_FORMAT = 2  # 2: the positions, true pose and prior error of every pair (pose metrics)
+_FORMAT = 3  # 3: the positions, true pose and prior error of every pair (pose metrics)
 
 # Sources that cannot change a run's result (how tasks are dispatched, the CLI, drawing, benches):
 # left out of the code version so editing them does not invalidate the cache. Everything else
@@ -55,15 +55,16 @@ def _source_files() -> list[tuple[str, Path]]:
             name = p.relative_to(root.parent).as_posix()
             if not name.startswith(_NOT_RESULT_SHAPING):
                 files.append((name, p))
-    for name in ("tasks.py", "thinning.py"):
+    for name in ("tasks.py", "thinning.py", "pose_metrics.py"):
         files.append((f"eval/core/{name}", Path(__file__).with_name(name)))
     return files
 
 
 @cache
 def code_version() -> str:
-    """Hex SHA-256 (first 16 digits) over the names and contents of the result-shaping sources."""
-    h = hashlib.sha256()
+    """Hex SHA-256 (first 16 digits) over the cache's format and the names and contents of the
+    result-shaping sources (a new format never meets an entry of an older one)."""
+    h = hashlib.sha256(f"cache format {_FORMAT}\0".encode())
     for name, path in _source_files():
         h.update(name.encode() + b"\0")
         h.update(hashlib.sha256(path.read_bytes()).digest())
@@ -138,7 +139,7 @@ class ResultCache:
             **_ragged([o.scores for o in outcomes], "scores", np.float64),
             **_ragged([_points(o.points1, o.n1) for o in outcomes], "points1", np.float64),
             **_ragged([_points(o.points2, o.n2) for o in outcomes], "points2", np.float64),
-            "pose": np.array([_pose_row(o) for o in outcomes], dtype=np.float64).reshape(-1, 19),
+            "pose": np.array([_pose_row(o) for o in outcomes], dtype=np.float64).reshape(-1, 20),
         }
         fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=path.parent)
         try:
@@ -196,32 +197,32 @@ def _points(points: np.ndarray | None, n: int) -> np.ndarray:
 
 
 def _pose_row(outcome: PairOutcome) -> np.ndarray:
-    """(19,) true pose (16, NaN when unknown), whether there is a prior error (1/0) and that
-    error (RTE, RRE; NaN for a failed fit)."""
-    row = np.full(19, np.nan)
+    """(20,) true pose (16, NaN when unknown), whether there is a prior error (1/0) and that
+    error (RTE, RRE; NaN for a failed fit), whether the positions were kept (1/0)."""
+    row = np.full(20, np.nan)
     if outcome.true_pose is not None:
         row[:16] = np.asarray(outcome.true_pose, dtype=np.float64).reshape(16)
     row[16] = outcome.prior_error is not None
     if outcome.prior_error is not None:
-        row[17:] = outcome.prior_error
+        row[17:19] = outcome.prior_error
+    row[19] = outcome.points1 is not None and outcome.points2 is not None
     return row
 
 
 def _pose_fields(q1: np.ndarray, n1: int, q2: np.ndarray, n2: int, row: np.ndarray) -> dict:
     """The pose fields of a stored pair (:func:`_points`, :func:`_pose_row` reversed)."""
+    kept = row[19] == 1
     return {
-        "points1": _shaped(q1, n1),
-        "points2": _shaped(q2, n2),
+        "points1": _shaped(q1, n1) if kept else None,
+        "points2": _shaped(q2, n2) if kept else None,
         "true_pose": None if np.isnan(row[0]) else row[:16].reshape(4, 4),
         "prior_error": (float(row[17]), float(row[18])) if row[16] == 1 else None,
     }
 
 
-def _shaped(flat: np.ndarray, n: int) -> np.ndarray | None:
-    """(n, D) positions from their stored flat form; None when they were not kept."""
-    if n == 0:
-        return np.zeros((0, 3))
-    return flat.reshape(n, -1) if flat.size else None
+def _shaped(flat: np.ndarray, n: int) -> np.ndarray:
+    """(n, D) positions from their stored flat form (an empty view: (0, 3))."""
+    return flat.reshape(n, -1) if n else np.zeros((0, 3))
 
 
 def _localisation(value) -> tuple[float, float] | str | None:

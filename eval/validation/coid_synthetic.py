@@ -52,6 +52,9 @@ ALL_MATCHERS = (
     "mos",
     "maximin",
     "consistency",
+    "cbm",
+    "freealign",
+    "optimal_transport",
 )
 
 
