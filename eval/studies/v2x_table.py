@@ -219,6 +219,34 @@ def to_markdown(table: pd.DataFrame, intervals: pd.DataFrame, label: str) -> str
     return "\n".join(lines)
 
 
+TOP = 4
+
+
+def compact(table: pd.DataFrame, top: int = TOP) -> pd.DataFrame:
+    """Per preset: the `top` matchers by F1, the best one that reads no prior (if not among
+    them) and the ``prior`` row, in table order."""
+    from matchers.core.registry import requires
+
+    def no_prior(name: str) -> bool:
+        try:
+            return name != PRIOR_ROW and "world1" not in requires(name)
+        except ValueError:
+            return False
+
+    keep = []
+    for _, group in table.groupby("preset", sort=False):
+        ranked = group[group["matcher"] != PRIOR_ROW].sort_values(
+            "f1_mean", ascending=False, kind="stable"
+        )
+        chosen = list(ranked.index[:top])
+        free = ranked[ranked["matcher"].map(no_prior)]
+        if len(free) and free.index[0] not in chosen:
+            chosen.append(free.index[0])
+        chosen += list(group.index[group["matcher"] == PRIOR_ROW])
+        keep += chosen
+    return table.loc[keep].reset_index(drop=True)
+
+
 def findings(table: pd.DataFrame) -> list[str]:
     """Plain statements read off the table: per preset the best matcher by F1 and by
     success@(1 m, 2°), and which family (with a prior or without) wins."""
@@ -275,6 +303,21 @@ def readme_part(results: Path, rel: str) -> list[str]:
         goals.append(
             f"`denied` goal (F1 ≥ 80): {'met' if top >= 0.8 else 'not met'} — best {100 * top:.1f}"
         )
+    intervals_path = results / "table_v2x_intervals.csv"
+    intervals = (
+        pd.read_csv(intervals_path)
+        if intervals_path.is_file()
+        else pd.DataFrame(columns=list(INTERVAL_COLUMNS))
+    )
+    separated = [
+        row.preset
+        for row in intervals.itertuples(index=False)
+        if np.isfinite(row.ci_low) and (row.ci_low > 0 or row.ci_high < 0)
+    ]
+    goals.append(
+        "the best matcher is ahead of the runner-up beyond the episode-level interval in "
+        + (", ".join(f"`{p}`" for p in separated) if separated else "no preset")
+    )
     return [
         "### The V2X task",
         "",
@@ -283,9 +326,11 @@ def readme_part(results: Path, rel: str) -> list[str]:
         "(docs/localisation.md, docs/detection.md). Every matcher under every localisation "
         "preset, tuned once (equal budget) under `gnss-urban`, τ per preset; pose metrics from "
         "the least-squares rigid fit of the declared matches against the true relative pose "
-        "(latency included); the `prior` row is the error of the vehicles' own poses.",
+        "(latency included); the `prior` row is the error of the vehicles' own poses. Per preset "
+        f"the {TOP} best by F1, the best without a prior and the prior itself; every matcher: "
+        f"[{rel}/table_v2x.md]({rel}/table_v2x.md).",
         "",
-        path.read_text().strip(),
+        to_markdown(compact(table), intervals, "CAD-V2X"),
         "",
         *[f"- {line}." for line in findings(table) + goals],
         "",
