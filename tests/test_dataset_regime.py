@@ -86,3 +86,21 @@ def test_info_json_reports_the_regime(tmp_path, capsys):
     assert set(REGIME_KEYS) <= set(reported) and reported["position_error_median_m"] is not None
     assert main(["info", str(out)]) == 0
     assert "non-covisible share" in capsys.readouterr().out
+
+
+def test_the_image_auc_leaves_out_the_detectors_class_and_size():
+    from cadsim.dataset.regime import image_similarity
+    from cadsim.sensing.features import FEATURE_DIM, FEATURE_LAYOUT
+
+    rng = np.random.default_rng(0)
+    f1, f2 = rng.random((4, FEATURE_DIM)), rng.random((5, FEATURE_DIM))
+    before = image_similarity(f1, f2)
+    f2[:, FEATURE_LAYOUT["attributes"]] = rng.random((5, 15))  # other classes and sizes
+    np.testing.assert_array_equal(image_similarity(f1, f2), before)
+    f2[:, FEATURE_LAYOUT["hog"]] = 0.0
+    assert not np.allclose(image_similarity(f1, f2), before)
+    # a descriptor of another width (imported data) is an image descriptor as a whole
+    g1, g2 = rng.random((3, 900)), rng.random((2, 900))
+    from cadsim.dataset.regime import cosine_similarity
+
+    np.testing.assert_array_equal(image_similarity(g1, g2), cosine_similarity(g1, g2))

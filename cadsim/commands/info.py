@@ -95,7 +95,8 @@ def _regime_text(regime: dict) -> str:
     return (
         f"non-covisible share {num('noncovisible_share', '.2f')}, covisible share of the smaller "
         f"view {num('covisible_share_of_smaller', '.2f')}, appearance AUC "
-        f"{num('appearance_auc', '.3f')}, position error median "
+        f"{num('appearance_auc', '.3f')} (image alone {num('image_auc', '.3f')}), "
+        "position error median "
         + (
             "– (needs a localisation prior and the true poses)"
             if regime.get("position_error_median_m") is None

@@ -22,8 +22,11 @@ REGIME_KEYS = (
     "noncovisible_share",
     "covisible_share_of_smaller",
     "appearance_auc",
+    "image_auc",
     "position_error_median_m",
 )
+IMAGE_BLOCKS = ("hog", "color")
+"""The blocks of our feature layout that describe the image alone (no class, no size)."""
 
 
 def cosine_similarity(f1: np.ndarray, f2: np.ndarray) -> np.ndarray:
@@ -66,6 +69,21 @@ def _position_errors(pair, gt: np.ndarray) -> np.ndarray | None:
     return np.linalg.norm(p1 - p2, axis=1)
 
 
+def image_similarity(f1: np.ndarray, f2: np.ndarray) -> np.ndarray:
+    """(n, m) similarity of the image part of two views' features: for our layout
+    (``cadsim.sensing.features``) the mean of the HOG and colour blocks' cosines — what an
+    external image descriptor such as the DMGM pairs' HOG-like one measures, without the
+    detector's class and size; for any other width (imported descriptors carry no attribute
+    block) the cosine of the whole vector."""
+    from cadsim.sensing.features import FEATURE_DIM, FEATURE_LAYOUT
+
+    f1, f2 = np.asarray(f1, float), np.asarray(f2, float)
+    if f1.ndim != 2 or f1.shape[1] != FEATURE_DIM or f2.shape[1:] != (FEATURE_DIM,):
+        return cosine_similarity(f1, f2)
+    blocks = [FEATURE_LAYOUT[name] for name in IMAGE_BLOCKS]
+    return np.mean([cosine_similarity(f1[:, b], f2[:, b]) for b in blocks], axis=0)
+
+
 def dataset_regime(dataset: Iterable) -> dict:
     """The regime card of ``dataset`` (a ``cadsim.dataset.Dataset`` or any iterable of frame
     pairs), a dict with the keys of ``REGIME_KEYS`` plus ``pairs``:
@@ -76,6 +94,8 @@ def dataset_regime(dataset: Iterable) -> dict:
     - ``covisible_share_of_smaller``: mean over pairs of covisible / min(n1, n2);
     - ``appearance_auc``: ROC AUC of the features' cosine similarity for true vs false candidate
       pairs (every (i, j) of every pair, pooled; 0.5 = appearance carries no information);
+    - ``image_auc``: the same for the image part alone (:func:`image_similarity`: HOG and colour,
+      without the detector's class and size — comparable with an external image descriptor);
     - ``position_error_median_m``: median 3-D distance (metres) between the two views' positions
       of a covisible object after both are taken to the world frame with the true camera poses;
       None when a pair has no true poses.
@@ -87,6 +107,7 @@ def dataset_regime(dataset: Iterable) -> dict:
         dataset_regime(Dataset("data/cad"))["covisible_share_of_smaller"]
     """
     sizes, covisible, shares, true_sim, false_sim, errors = [], [], [], [], [], []
+    true_image, false_image = [], []
     poses_known = True
     for pair in dataset:
         gt = np.asarray(pair.gt_pairs, dtype=np.int64).reshape(-1, 2)
@@ -100,6 +121,9 @@ def dataset_regime(dataset: Iterable) -> dict:
         is_true[gt[:, 0], gt[:, 1]] = True
         true_sim.append(sim[is_true])
         false_sim.append(sim[~is_true])
+        image = image_similarity(pair.view1.features, pair.view2.features)
+        true_image.append(image[is_true])
+        false_image.append(image[~is_true])
         if poses_known:
             err = _position_errors(pair, gt)
             poses_known = err is not None
@@ -116,8 +140,9 @@ def dataset_regime(dataset: Iterable) -> dict:
         "noncovisible_share": (total - 2.0 * sum(covisible)) / total if total else None,
         "covisible_share_of_smaller": float(np.mean(shares)) if shares else None,
         "appearance_auc": roc_auc(np.concatenate(true_sim), np.concatenate(false_sim)),
+        "image_auc": roc_auc(np.concatenate(true_image), np.concatenate(false_image)),
         "position_error_median_m": float(np.median(all_errors)) if all_errors.size else None,
     }
 
 
-__all__ = ["REGIME_KEYS", "cosine_similarity", "dataset_regime", "roc_auc"]
+__all__ = ["REGIME_KEYS", "cosine_similarity", "dataset_regime", "image_similarity", "roc_auc"]

@@ -40,6 +40,7 @@ _NOT_RESULT_SHAPING = (
     "cadsim/cli.py",
     "cadsim/commands/",
     "cadsim/pair_drawing.py",
+    "cadsim/dataset/regime.py",  # a dataset's summary card, never read by a run
 )
 
 

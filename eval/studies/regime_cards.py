@@ -23,6 +23,7 @@ COLUMNS = (
     "noncovisible_share",
     "covisible_share_of_smaller",
     "appearance_auc",
+    "image_auc",
     "position_error_median_m",
 )
 TITLES = {
@@ -31,6 +32,7 @@ TITLES = {
     "noncovisible_share": "non-covisible share",
     "covisible_share_of_smaller": "covisible / smaller view",
     "appearance_auc": "appearance AUC",
+    "image_auc": "image-only AUC",
     "position_error_median_m": "position error (m, median)",
 }
 
@@ -70,7 +72,7 @@ def regime_markdown(path: str | Path) -> str:
                 cells.append("–")
             elif c in ("noncovisible_share", "covisible_share_of_smaller"):
                 cells.append(f"{100 * v:.0f} %")
-            elif c in ("appearance_auc", "position_error_median_m"):
+            elif c in ("appearance_auc", "image_auc", "position_error_median_m"):
                 cells.append(f"{v:.2f}")  # MRC's 0.06 m would read "0.1" at one decimal
             else:
                 cells.append(f"{v:.1f}")
