@@ -32,16 +32,17 @@ from scipy.spatial.distance import cdist
 from matchers.blocks.local_context import (
     NEIGHBOURS,
     alignment_scores,
+    checked_tolerance,
     context_similarity,
+    prior_motion,
+    prior_weights,
     rigid_fit,
-    tolerance_of,
     top_candidates,
 )
 from matchers.blocks.memory_models import context_memory
-from matchers.blocks.prior import PRIOR_FIELDS, check_prior_options, prior_likelihood, require_prior
+from matchers.blocks.prior import PRIOR_FIELDS
 from matchers.core.matching import Matching
 from matchers.core.memory_budget import budgeted
-from matchers.core.options import check_count, check_problem, rng_from_seed
 from matchers.core.problem import Problem
 from matchers.core.result import finish
 
@@ -125,26 +126,13 @@ def cbm(
     [[0, 0], [1, 1], [2, 2], [3, 3], [4, 4]]
     """
     started = time.perf_counter()
-    check_problem(problem)
-    rng_from_seed(seed)
-    check_count("neighbours", neighbours)
-    check_count("anchors", anchors)
-    eps = tolerance_of(problem, tolerance_scale, tolerance)
+    eps = checked_tolerance(
+        problem, seed, tolerance_scale, tolerance, neighbours=neighbours, anchors=anchors
+    )
     return _run("cbm", problem, threshold, started, eps, neighbours, anchors)
 
 
 cbm.deterministic = True
-
-
-def prior_motion(problem: Problem):
-    """The view-2-to-view-1 motion the two noisy poses imply: each view's detections fitted to
-    its own prior world positions (a rigid map per view); None when a view is degenerate."""
-    to_world1 = rigid_fit(problem.points1, problem.world1)
-    to_world2 = rigid_fit(problem.points2, problem.world2)
-    if to_world1 is None or to_world2 is None:
-        return None
-    (r1, t1), (r2, t2) = to_world1, to_world2
-    return r1.T @ r2, r1.T @ (t2 - t1)
 
 
 @budgeted(context_memory, "the number of objects or neighbours")
@@ -164,15 +152,11 @@ def cbm_pose(
     prior likelihood (``spread``, ``gate`` as for :func:`matchers.pose.pose`) and the poses'
     own motion as one more hypothesis. Needs ``problem.world1/world2/world_sigma``."""
     started = time.perf_counter()
-    check_problem(problem)
-    rng_from_seed(seed)
-    check_count("neighbours", neighbours)
-    check_count("anchors", anchors)
-    spread, gate = check_prior_options(spread, gate)
-    xy1, xy2, sigma = require_prior(problem, "cbm_pose")
-    eps = tolerance_of(problem, tolerance_scale, tolerance)
-    likelihood = prior_likelihood(xy1, xy2, sigma, spread, gate)
-    extra = (prior_motion(problem),)
+    eps = checked_tolerance(
+        problem, seed, tolerance_scale, tolerance, neighbours=neighbours, anchors=anchors
+    )
+    likelihood = prior_weights(problem, "cbm_pose", spread, gate)
+    extra = (prior_motion(problem.points1, problem.world1, problem.points2, problem.world2),)
     return _run(
         "cbm_pose", problem, threshold, started, eps, neighbours, anchors, likelihood, extra
     )

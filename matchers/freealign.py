@@ -29,16 +29,16 @@ from scipy.spatial.distance import cdist
 from matchers.blocks.local_context import (
     NEIGHBOURS,
     alignment_scores,
+    checked_tolerance,
     context_similarity,
+    prior_weights,
     rigid_fit,
-    tolerance_of,
     top_candidates,
 )
 from matchers.blocks.memory_models import context_memory
-from matchers.blocks.prior import PRIOR_FIELDS, check_prior_options, prior_likelihood, require_prior
+from matchers.blocks.prior import PRIOR_FIELDS
 from matchers.core.matching import Matching
 from matchers.core.memory_budget import budgeted
-from matchers.core.options import check_count, check_problem, rng_from_seed
 from matchers.core.problem import Problem
 from matchers.core.result import finish
 
@@ -123,11 +123,9 @@ def freealign(
     [[0, 0], [1, 1], [2, 2], [3, 3], [4, 4]]
     """
     started = time.perf_counter()
-    check_problem(problem)
-    rng_from_seed(seed)
-    check_count("neighbours", neighbours)
-    check_count("anchors", anchors)
-    eps = tolerance_of(problem, tolerance_scale, tolerance)
+    eps = checked_tolerance(
+        problem, seed, tolerance_scale, tolerance, neighbours=neighbours, anchors=anchors
+    )
     return _run("freealign", problem, threshold, started, eps, neighbours, anchors)
 
 
@@ -151,14 +149,10 @@ def freealign_pose(
     likelihood (``spread``, ``gate`` as for :func:`matchers.pose.pose`). Needs
     ``problem.world1/world2/world_sigma``."""
     started = time.perf_counter()
-    check_problem(problem)
-    rng_from_seed(seed)
-    check_count("neighbours", neighbours)
-    check_count("anchors", anchors)
-    spread, gate = check_prior_options(spread, gate)
-    xy1, xy2, sigma = require_prior(problem, "freealign_pose")
-    eps = tolerance_of(problem, tolerance_scale, tolerance)
-    likelihood = prior_likelihood(xy1, xy2, sigma, spread, gate)
+    eps = checked_tolerance(
+        problem, seed, tolerance_scale, tolerance, neighbours=neighbours, anchors=anchors
+    )
+    likelihood = prior_weights(problem, "freealign_pose", spread, gate)
     return _run("freealign_pose", problem, threshold, started, eps, neighbours, anchors, likelihood)
 
 

@@ -21,12 +21,17 @@ import time
 
 import numpy as np
 
-from matchers.blocks.local_context import NEIGHBOURS, context_similarity, tolerance_of
+from matchers.blocks.local_context import (
+    NEIGHBOURS,
+    checked_tolerance,
+    context_similarity,
+    prior_weights,
+)
 from matchers.blocks.memory_models import context_memory
-from matchers.blocks.prior import PRIOR_FIELDS, check_prior_options, prior_likelihood, require_prior
+from matchers.blocks.prior import PRIOR_FIELDS
 from matchers.core.matching import Matching
 from matchers.core.memory_budget import budgeted
-from matchers.core.options import check_count, check_problem, check_range, rng_from_seed
+from matchers.core.options import check_range
 from matchers.core.problem import Problem
 from matchers.core.result import finish
 
@@ -63,12 +68,12 @@ def _run(name, problem, threshold, started, eps, neighbours, epsilon, dustbin, i
     return finish(name, np.clip(plan, 0.0, 1.0), threshold, started, iterations, info)
 
 
-def _options(problem, tolerance_scale, tolerance, neighbours, epsilon, dustbin, iterations):
-    check_count("neighbours", neighbours)
-    check_count("iterations", iterations)
+def _options(problem, seed, tolerance_scale, tolerance, neighbours, epsilon, dustbin, iterations):
+    eps = checked_tolerance(
+        problem, seed, tolerance_scale, tolerance, neighbours=neighbours, iterations=iterations
+    )
     epsilon = check_range("epsilon", epsilon, 0.01, 10.0)
-    dustbin = check_range("dustbin", dustbin, 0.0, 1.0)
-    return tolerance_of(problem, tolerance_scale, tolerance), epsilon, dustbin
+    return eps, epsilon, check_range("dustbin", dustbin, 0.0, 1.0)
 
 
 @budgeted(context_memory, "the number of objects or neighbours")
@@ -97,10 +102,8 @@ def optimal_transport(
     [[0, 0], [1, 1], [2, 2], [3, 3], [4, 4]]
     """
     started = time.perf_counter()
-    check_problem(problem)
-    rng_from_seed(seed)
     eps, epsilon, dustbin = _options(
-        problem, tolerance_scale, tolerance, neighbours, epsilon, dustbin, iterations
+        problem, seed, tolerance_scale, tolerance, neighbours, epsilon, dustbin, iterations
     )
     return _run(
         "optimal_transport", problem, threshold, started, eps, neighbours, epsilon, dustbin,
@@ -129,14 +132,10 @@ def optimal_transport_pose(
     """:func:`optimal_transport` on the affinity times the prior likelihood (``spread``,
     ``gate`` as for :func:`matchers.pose.pose`). Needs ``problem.world1/world2/world_sigma``."""
     started = time.perf_counter()
-    check_problem(problem)
-    rng_from_seed(seed)
     eps, epsilon, dustbin = _options(
-        problem, tolerance_scale, tolerance, neighbours, epsilon, dustbin, iterations
+        problem, seed, tolerance_scale, tolerance, neighbours, epsilon, dustbin, iterations
     )
-    spread, gate = check_prior_options(spread, gate)
-    xy1, xy2, sigma = require_prior(problem, "optimal_transport_pose")
-    likelihood = prior_likelihood(xy1, xy2, sigma, spread, gate)
+    likelihood = prior_weights(problem, "optimal_transport_pose", spread, gate)
     return _run(
         "optimal_transport_pose", problem, threshold, started, eps, neighbours, epsilon,
         dustbin, iterations, likelihood,

@@ -233,7 +233,7 @@ class FramePair:
         loc = self.localisation
         return Problem(
             self.view1.positions,
-            self._sent_view2()[0],
+            self._sent_view2[0],
             self.view1.features,
             self.view2.features,
             meta={
@@ -285,7 +285,7 @@ class FramePair:
         model = None if config.preset is None else gnss_model(config.preset)
         if model is not None and not model.given:
             return None  # denied: the vehicles have no pose to share
-        sent, offset = self._sent_view2()
+        sent, offset = self._sent_view2
         latency = config.latency_s
         worlds = []
         for k, (positions, camera, pose, seed, vehicle) in enumerate(zip((self.view1.positions, sent), self.cameras, self.observer_poses, seeds[:2], self.observer_ids, strict=True)):  # fmt: skip
@@ -300,6 +300,7 @@ class FramePair:
             worlds.append(perturbed_world(world, np.asarray(pose.position) + shift, error))
         return worlds[0], worlds[1], config.stated_sigma_m
 
+    @cached_property
     def _sent_view2(self) -> tuple[np.ndarray, np.ndarray]:
         """View 2's detections as the other vehicle's message reports them under the prior's
         latency (:mod:`cadsim.sensing.latency`): ((m, 3) positions in its camera frame, metres;
@@ -331,7 +332,7 @@ class FramePair:
         record without camera poses (imported data) and for a pair built in memory."""
         if not (self.path / layout.RECORD_JSON).is_file() or self.cameras is None:
             return None
-        _, offset = self._sent_view2()
+        _, offset = self._sent_view2
         to_world = []
         for k, camera in enumerate(self.cameras):
             pose = np.eye(4)

@@ -48,6 +48,18 @@ _EPISODE_STREAM = 5
 WALK_STEP_S = 1.0
 
 
+MAGNITUDES = (
+    "bias_m",
+    "walk_m_per_sqrt_s",
+    "noise_m",
+    "heading_bias_deg",
+    "heading_noise_deg",
+    "outlier_m",
+    "stated_sigma_m",
+)
+"""The error magnitudes of a model (each >= 0; what a preset spec's ``*SCALE`` multiplies)."""
+
+
 @dataclass(frozen=True)
 class GnssErrorModel:
     """One preset's parameters (metres per ground axis, degrees, seconds; module docstring)."""
@@ -64,16 +76,7 @@ class GnssErrorModel:
     given: bool = True  # False: the vehicle has no pose to share (denied)
 
     def __post_init__(self) -> None:
-        for name in (
-            "bias_m",
-            "walk_m_per_sqrt_s",
-            "noise_m",
-            "heading_bias_deg",
-            "heading_noise_deg",
-            "outlier_m",
-            "stated_sigma_m",
-            "latency_ms",
-        ):
+        for name in (*MAGNITUDES, "latency_ms"):
             value = getattr(self, name)
             if not (isinstance(value, int | float) and np.isfinite(value) and value >= 0):
                 raise ValueError(f"{name}: expected a finite number >= 0, got {value!r}")
@@ -83,16 +86,7 @@ class GnssErrorModel:
     def scaled(self, factor: float) -> GnssErrorModel:
         """Every error magnitude and the stated uncertainty times ``factor`` (>= 0); the outlier
         rate, the latency and whether a pose is given unchanged."""
-        names = (
-            "bias_m",
-            "walk_m_per_sqrt_s",
-            "noise_m",
-            "heading_bias_deg",
-            "heading_noise_deg",
-            "outlier_m",
-            "stated_sigma_m",
-        )
-        return replace(self, **{name: getattr(self, name) * float(factor) for name in names})
+        return replace(self, **{name: getattr(self, name) * float(factor) for name in MAGNITUDES})
 
 
 PRESETS: dict[str, GnssErrorModel] = {

@@ -23,10 +23,10 @@ from collections.abc import Sequence
 
 import numpy as np
 
-MIN_MATCHES = 3
-COLLINEAR = 1e-3
-"""A fit fails when the second singular value of the centred view-2 points is below this
-fraction of the first (the points lie on a line: the rotation about it is free)."""
+from matchers.blocks.local_context import prior_motion
+from matchers.blocks.local_context import rigid_fit as fit_motion
+
+MIN_MATCHES = 3  # fewer matches, or collinear ones (the rotation about the line is free): a failure
 SUCCESS_BOUNDS: tuple[tuple[float, float], ...] = ((1.0, 2.0), (2.0, 5.0))
 """(RTE m, RRE degrees) of the success rates reported."""
 COLUMNS = (
@@ -39,23 +39,19 @@ COLUMNS = (
 
 
 def rigid_fit(src: np.ndarray, dst: np.ndarray) -> np.ndarray | None:
-    """4x4 rigid transform T with dst ≈ R src + t in least squares (Kabsch; a proper rotation),
-    or None with fewer than :data:`MIN_MATCHES` points or collinear ``src``. src, dst: (k, 3)."""
+    """4x4 rigid transform T with dst ≈ R src + t in least squares (Kabsch; a proper rotation,
+    :func:`matchers.blocks.local_context.rigid_fit`), or None with fewer than
+    :data:`MIN_MATCHES` points or collinear ``src``. src, dst: (k, 3)."""
     src = np.asarray(src, dtype=float).reshape(-1, 3)
-    dst = np.asarray(dst, dtype=float).reshape(-1, 3)
-    if len(src) < MIN_MATCHES or len(src) != len(dst):
+    return _homogeneous(fit_motion(src, np.asarray(dst, dtype=float).reshape(-1, 3)))
+
+
+def _homogeneous(motion: tuple[np.ndarray, np.ndarray] | None) -> np.ndarray | None:
+    """A (R (3, 3), t (3,)) motion as a 4x4 transform; None stays None."""
+    if motion is None:
         return None
-    mu_s, mu_d = src.mean(axis=0), dst.mean(axis=0)
-    a, b = src - mu_s, dst - mu_d
-    spread = np.linalg.svd(a, compute_uv=False)
-    if not spread[0] > 0 or spread[1] < COLLINEAR * spread[0]:
-        return None
-    u, _, vt = np.linalg.svd(b.T @ a)
-    d = np.sign(np.linalg.det(u @ vt)) or 1.0
-    rotation = u @ np.diag([1.0, 1.0, d]) @ vt
     out = np.eye(4)
-    out[:3, :3] = rotation
-    out[:3, 3] = mu_d - rotation @ mu_s
+    out[:3, :3], out[:3, 3] = motion
     return out
 
 
@@ -83,13 +79,10 @@ def matched_pose_error(
 def prior_transform(
     points1: np.ndarray, world1: np.ndarray, points2: np.ndarray, world2: np.ndarray
 ) -> np.ndarray | None:
-    """The view-2-to-view-1 transform the localisation prior implies: each view's positions are
-    taken to the world through that vehicle's own noisy pose (a rigid map, recovered exactly by
-    a fit of its own detections); None when a view has too few non-collinear detections."""
-    to_world1, to_world2 = rigid_fit(points1, world1), rigid_fit(points2, world2)
-    if to_world1 is None or to_world2 is None:
-        return None
-    return np.linalg.inv(to_world1) @ to_world2
+    """The 4x4 view-2-to-view-1 transform the localisation prior implies
+    (:func:`matchers.blocks.local_context.prior_motion`: each view's positions against its own
+    noisy world positions); None when a view has too few non-collinear detections."""
+    return _homogeneous(prior_motion(points1, world1, points2, world2))
 
 
 def summarise(rte: Sequence[float], rre: Sequence[float]) -> dict[str, float]:

@@ -168,6 +168,20 @@ def write_fig_regime(out_dir: str | Path) -> list[Path]:
     return _save(fig, out_dir / "fig_regime")
 
 
+def _curves(ax, rows: pd.DataFrame, x_col: str, metric: str, matchers, colors) -> None:
+    """One line per matcher of ``metric`` (a fraction, drawn in percent) against ``x_col``; for
+    ``f1_mean`` a band of ± ``f1_std`` (none where every run gave the same F1)."""
+    for matcher in matchers:
+        c = rows[rows["matcher"] == matcher].sort_values(x_col)
+        if c.empty:
+            continue
+        x, m = c[x_col], 100 * c[metric]
+        ax.plot(x, m, marker=_marker(matcher), ms=4, color=colors[matcher], label=method_name(matcher))  # fmt: skip
+        if metric == "f1_mean":
+            s = 100 * c["f1_std"].fillna(0.0)
+            ax.fill_between(x, m - s, m + s, color=colors[matcher], alpha=0.15, lw=0)
+
+
 def write_fig_localisation(out_dir: str | Path) -> list[Path]:
     """F1 against localisation error from ``localisation_sweep.csv``; none without the CSV."""
     out_dir = Path(out_dir)
@@ -184,21 +198,7 @@ def write_fig_localisation(out_dir: str | Path) -> list[Path]:
     for col, dataset in enumerate(datasets):
         ax = axes[0, col]
         rows = sweep[sweep["dataset"] == dataset]
-        for matcher in matchers:
-            c = rows[rows["matcher"] == matcher].sort_values("position_sigma_m")
-            if c.empty:
-                continue
-            x, m = c["position_sigma_m"], 100 * c["f1_mean"]
-            s = 100 * c["f1_std"].fillna(0.0)  # deterministic: every run the same, no band
-            ax.plot(
-                x,
-                m,
-                marker=_marker(matcher),
-                ms=4,
-                color=colors[matcher],
-                label=method_name(matcher),
-            )
-            ax.fill_between(x, m - s, m + s, color=colors[matcher], alpha=0.15, lw=0)
+        _curves(ax, rows, "position_sigma_m", "f1_mean", matchers, colors)
         ax.axvline(1.2, color="grey", ls=":", lw=1)
         ax.text(1.2, 1, " GPS σ of the DMGM data", color="grey", fontsize=7, va="bottom")
         ax.set_xlabel("position error σ per axis (m); heading σ = 0.2° per 1.2 m")
@@ -236,15 +236,7 @@ def write_fig_localisation_presets(out_dir: str | Path) -> list[Path]:
         for col, (axis, x_col, x_label) in enumerate(axes_info):
             ax = axes[r, col]
             rows = sweep[sweep["axis"] == axis]
-            for matcher in matchers:
-                c = rows[rows["matcher"] == matcher].sort_values(x_col)
-                if c.empty:
-                    continue
-                x, m = c[x_col], 100 * c[metric]
-                ax.plot(x, m, marker=_marker(matcher), ms=4, color=colors[matcher], label=method_name(matcher))  # fmt: skip
-                if metric == "f1_mean":
-                    s = 100 * c["f1_std"].fillna(0.0)
-                    ax.fill_between(x, m - s, m + s, color=colors[matcher], alpha=0.15, lw=0)
+            _curves(ax, rows, x_col, metric, matchers, colors)
             ax.set_xlabel(x_label)
             ax.set_ylabel(y_label)
             title = "error scale" if axis == "scale" else "latency"

@@ -10,7 +10,8 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.distance import cdist
 
-from matchers.core.options import check_range
+from matchers.blocks.prior import check_prior_options, prior_likelihood, require_prior
+from matchers.core.options import check_count, check_problem, check_range, rng_from_seed
 from matchers.core.scale import median_spacing
 
 NEIGHBOURS = 6
@@ -104,3 +105,36 @@ def tolerance_of(problem, tolerance_scale: float, tolerance: float | None) -> fl
         return check_range("tolerance", tolerance, 0.0, np.inf, open_low=True)
     scale = check_range("tolerance_scale", tolerance_scale, 0.0, np.inf, open_low=True)
     return max(scale * median_spacing(problem.points1, problem.points2), 1e-9)
+
+
+def checked_tolerance(
+    problem, seed, tolerance_scale: float, tolerance: float | None, **counts: int
+) -> float:
+    """The checks every local-context matcher starts with (problem, seed, its positive
+    ``counts`` by name); returns eps (:func:`tolerance_of`)."""
+    check_problem(problem)
+    rng_from_seed(seed)
+    for name, value in counts.items():
+        check_count(name, value)
+    return tolerance_of(problem, tolerance_scale, tolerance)
+
+
+def prior_weights(problem, matcher: str, spread: float, gate: float) -> np.ndarray:
+    """(n, m) prior likelihood a ``_pose`` variant multiplies its ranking by
+    (:func:`~matchers.blocks.prior.prior_likelihood`); ValueError naming a missing prior field."""
+    spread, gate = check_prior_options(spread, gate)
+    xy1, xy2, sigma = require_prior(problem, matcher)
+    return prior_likelihood(xy1, xy2, sigma, spread, gate)
+
+
+def prior_motion(
+    points1: np.ndarray, world1: np.ndarray, points2: np.ndarray, world2: np.ndarray
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """The view-2-to-view-1 motion (R, t) two noisy poses imply: each view's detections fitted
+    to its own prior world positions (a rigid map per view, recovered exactly); None when a view
+    has too few non-collinear detections."""
+    to_world1, to_world2 = rigid_fit(points1, world1), rigid_fit(points2, world2)
+    if to_world1 is None or to_world2 is None:
+        return None
+    (r1, t1), (r2, t2) = to_world1, to_world2
+    return r1.T @ r2, r1.T @ (t2 - t1)
