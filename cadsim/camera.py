@@ -57,19 +57,19 @@ class Camera:
     def pose_gl(self) -> np.ndarray:
         """4x4 camera-to-world pose in OpenGL camera axes (what pyrender expects)."""
         T = np.eye(4)
-        T[:3, :3] = self.rotation_cam_to_world() @ _CV_TO_GL
+        T[:3, :3] = pm.matmul(self.rotation_cam_to_world(), _CV_TO_GL)
         T[:3, 3] = self.position
         return T
 
     def world_to_camera(self, points: np.ndarray) -> np.ndarray:
         """(k, 3) world points -> (k, 3) camera-frame points."""
         R = self.rotation_cam_to_world()
-        return (np.asarray(points, float) - np.asarray(self.position)) @ R
+        return pm.matmul(np.asarray(points, float) - np.asarray(self.position), R)
 
     def camera_to_world(self, points: np.ndarray) -> np.ndarray:
         """(k, 3) camera-frame points -> (k, 3) world points."""
         R = self.rotation_cam_to_world()
-        return np.asarray(points, float) @ R.T + np.asarray(self.position)
+        return pm.matmul(np.asarray(points, float), R.T) + np.asarray(self.position)
 
     def project(self, points_cam: np.ndarray) -> np.ndarray:
         """(k, 3) camera-frame points (z > 0) -> (k, 2) pixel coordinates (u, v)."""

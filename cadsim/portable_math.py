@@ -125,3 +125,22 @@ def use_portable_math_in(package: str) -> int:
             module.np = namespace
             changed += 1
     return changed
+
+
+def matmul(a, b) -> np.ndarray:
+    """``a @ b`` (float64; 1-D and batched operands as for ``@``) without BLAS: each product's
+    terms are summed in index order by numpy's own reduction. ``@`` hands float matrices to BLAS,
+    and OpenBLAS picks its kernel — and with it the summation order and the use of fused
+    multiply-adds — by CPU model, so ``@`` may differ in the last bit between two machines
+    (measured: a detection's position on an AVX-512 CPU against an AVX2 one). For the small
+    products (3 x 3 rotations, a few hundred points) of what reaches a dataset file or a
+    result."""
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    if a.ndim == 1 and b.ndim == 1:
+        return np.sum(a * b)
+    if b.ndim == 1:
+        return np.sum(a * b, axis=-1)
+    if a.ndim == 1:
+        return np.sum(a[:, None] * b, axis=-2)
+    return np.sum(a[..., :, :, None] * b[..., None, :, :], axis=-2)

@@ -31,6 +31,7 @@ from typing import Any
 from cadsim.limits import MAX_IMAGE_SIDE, MAX_PAIRS
 from cadsim.limits import MAX_PAIRS_PER_EPISODE as MAX_PER_EPISODE
 from cadsim.limits import MAX_SIMULATED_SECONDS as MAX_SIM_S
+from cadsim.scenario_views import view_count
 
 log = logging.getLogger(__name__)
 
@@ -220,6 +221,7 @@ def _wheel_sumo_home() -> str | None:
 # Schemas of the tables every scenario has.
 
 MAX_DISTANCE_M = 10_000.0  # distances of observers from a junction and from each other
+MAX_VEHICLE_OBSERVERS = 8  # OPV2V-style scenes hold up to 7 connected vehicles
 
 
 def _check_observers(t: dict, ctx: ScenarioContext, prefix: str) -> None:
@@ -308,6 +310,40 @@ OBSERVERS = Table(
         ),
         "overlap_range_m": Field(
             float, 50.0, "range of a camera's ground footprint for min_shared_area_m2, metres", gt=0
+        ),
+        "count": Field(
+            int,
+            2,
+            "vehicles carrying a camera per snapshot (2: frame pairs; more: N-view snapshot "
+            "records, SUMO source only; docs/multi-agent.md)",
+            ge=2,
+            le=MAX_VEHICLE_OBSERVERS,
+        ),
+        "roadside_units": Field(
+            int,
+            0,
+            "pole-mounted cameras at the junction's corners with exactly known poses, per "
+            "snapshot (SUMO source only; any makes the records N-view)",
+            ge=0,
+            le=4,
+        ),
+        "roadside_height_m": Field(
+            float, 6.0, "a roadside unit's camera height above the ground, metres", gt=0, le=30
+        ),
+        "roadside_offset_m": Field(
+            float,
+            12.0,
+            "a roadside unit's distance from the junction centre along the corner's diagonal, "
+            "metres",
+            gt=0,
+            le=200,
+        ),
+        "roadside_pitch_deg": Field(
+            float,
+            -15.0,
+            "a roadside unit's camera tilt, degrees, negative looks down",
+            ge=-60,
+            le=0,
         ),
     },
     check=lambda t, ctx, prefix: _check_observers(t, ctx, prefix),
@@ -438,6 +474,14 @@ def load_scenario(path: str | Path) -> Scenario:
     traffic = _validate_traffic(raw.get("traffic"), ctx)
     camera = CameraConfig(**validate_table(raw.get("camera", {}), CAMERA, ctx, "camera"))
     observers = validate_table(raw.get("observers", {}), OBSERVERS, ctx, "observers")
+    if view_count(observers) != 2 and traffic["source"] != "sumo":
+        key = "count" if observers["count"] != 2 else "roadside_units"
+        raise ctx.error(
+            f"observers.{key}",
+            f"asks for {view_count(observers)} views per snapshot with source "
+            f"{traffic['source']!r}",
+            'count = 2 and roadside_units = 0 (N-view snapshots need source = "sumo")',
+        )
     sampling = validate_table(raw.get("sampling", {}), SAMPLING, ctx, "sampling")
     noise = dict(raw.get("noise", {}))
     detection = dict(raw.get("detection", {}))

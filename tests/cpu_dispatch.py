@@ -1,5 +1,6 @@
-"""Run a command as it would run on another CPU: numpy without its AVX-512 code paths, or numpy
-whose transcendental functions move a seeded share of their results by one ulp.
+"""Run a command as it would run on another CPU: numpy without its AVX-512 code paths, numpy
+whose transcendental functions move a seeded share of their results by one ulp, or (through the
+environment, :func:`other_blas_env`) OpenBLAS with another CPU's kernels.
 
     python tests/cpu_dispatch.py [--ulp-faults] MODULE ARG...   # runs ``python -m MODULE ARG...``
     python tests/cpu_dispatch.py [--ulp-faults] --path SCRIPT ARG...
@@ -14,6 +15,7 @@ needs the command to run in this process (``--workers 1``).
 from __future__ import annotations
 
 import os
+import platform
 import runpy
 import sys
 
@@ -48,6 +50,18 @@ def avx512_env() -> dict[str, str]:
     if features:
         env["NPY_DISABLE_CPU_FEATURES"] = " ".join(features)
     return env
+
+
+OTHER_BLAS_KERNEL = "Nehalem"  # OpenBLAS's SSE kernels: run on every x86-64 CPU
+
+
+def other_blas_env() -> dict[str, str] | None:
+    """This process's environment with OpenBLAS forced to another kernel than the one it picks
+    for this CPU (its summation order and use of fused multiply-adds differ by kernel, which is
+    how BLAS results differ between machines); None off x86-64, where the kernel names differ."""
+    if platform.machine().lower() not in ("x86_64", "amd64"):
+        return None
+    return dict(os.environ) | {"OPENBLAS_CORETYPE": OTHER_BLAS_KERNEL}
 
 
 def inject_ulp_faults(share: float = 0.3, seed: int = 0) -> None:

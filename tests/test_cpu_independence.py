@@ -15,7 +15,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from cpu_dispatch import SAME_EVERYWHERE, TRANSCENDENTAL, avx512_env, avx512_features
+from cpu_dispatch import (
+    SAME_EVERYWHERE,
+    TRANSCENDENTAL,
+    avx512_env,
+    avx512_features,
+    other_blas_env,
+)
 
 from cadsim import portable_math
 
@@ -40,6 +46,8 @@ def _variants() -> dict[str, tuple[list[str], dict[str, str] | None]]:
     variants = {"plain": ([], None), "ulp_faults": (["--ulp-faults"], None)}
     if avx512_features():
         variants["no_avx512"] = ([], avx512_env())
+    if other_blas_env() is not None:
+        variants["other_blas"] = ([], other_blas_env())
     return variants
 
 

@@ -1,5 +1,6 @@
 """`cadsim info DIR [--json]`: objects per view, covisible and non-covisible counts, class mix,
-object depth ranges and the regime card (``cadsim.dataset.regime``) of a frame-pair dataset."""
+object depth ranges and the regime card (``cadsim.dataset.regime``) of a frame-pair dataset; for
+an N-view dataset also per view and per pair of views (``multi_view``)."""
 
 from __future__ import annotations
 
@@ -78,7 +79,38 @@ def summarise(ds) -> dict:
         },
         "regime": dataset_regime(frame_pairs),
         "pairs": pairs,
-    }
+    } | ({"multi_view": multi_view_summary(ds)} if getattr(ds, "n_views", 2) > 2 else {})
+
+
+def multi_view_summary(ds) -> dict:
+    """Per view (1-based, with its kind) the detections per snapshot, and per pair of views
+    (i < j) the covisible objects and the regime card of those two views over all snapshots
+    (``cadsim.dataset.regime``) — where a roadside unit's view differs from a vehicle's."""
+    snapshots = [ds.snapshot(k) for k in range(len(ds))]
+    views = []
+    for v in range(1, ds.n_views + 1):
+        found = [snap.view(v) for snap in snapshots]
+        depths = np.concatenate([d.positions[:, 2] for d in found]) if found else np.zeros(0)
+        views.append(
+            {
+                "view": v,
+                "kind": snapshots[0].kinds[v - 1] if snapshots else None,
+                "detections": _stats([len(d) for d in found]),
+                "depth_median": float(np.median(depths)) if depths.size else None,
+            }
+        )
+    view_pairs = []
+    for i, j in snapshots[0].pairs() if snapshots else []:
+        pairs = [snap.pair(i, j) for snap in snapshots]
+        view_pairs.append(
+            {
+                "views": f"{i}-{j}",
+                "kinds": f"{snapshots[0].kinds[i - 1]}-{snapshots[0].kinds[j - 1]}",
+                "covisible": _stats([len(p.gt_pairs) for p in pairs]),
+                "regime": dataset_regime(pairs),
+            }
+        )
+    return {"n_views": ds.n_views, "views": views, "view_pairs": view_pairs}
 
 
 def _fmt(stats: dict) -> str:
@@ -133,6 +165,8 @@ def _text(s: dict) -> str:
         "",
         f"  {'pair':>4}  {'name':<12} {'n1':>3} {'n2':>3} {'cov':>3}  {'depth1 (m)':>12}  {'depth2 (m)':>12}",
     ]
+    if "multi_view" in s:  # before the per-pair table (of views 1 and 2)
+        lines[-2:-2] = ["", *_multi_view_text(s["multi_view"])[:-1]]
     for p in s["pairs"]:
         r1 = "-" if p["depth1"] is None else f"{p['depth1'][0]:.1f}-{p['depth1'][1]:.1f}"
         r2 = "-" if p["depth2"] is None else f"{p['depth2'][0]:.1f}-{p['depth2'][1]:.1f}"
@@ -141,6 +175,28 @@ def _text(s: dict) -> str:
             f"{r1:>12}  {r2:>12}"
         )
     return "\n".join(lines)
+
+
+def _multi_view_text(m: dict) -> list[str]:
+    def num(value, fmt: str) -> str:
+        return "-" if value is None else format(value, fmt)
+
+    lines = [f"  {m['n_views']} views per snapshot (pairs below: views 1-2)", ""]
+    lines.append(f"  {'view':>4}  {'kind':<9} {'detections':<30} {'depth median (m)':>16}")
+    for v in m["views"]:
+        lines.append(
+            f"  {v['view']:>4}  {v['kind'] or '-':<9} {_fmt(v['detections']):<30} "
+            f"{num(v['depth_median'], '.1f'):>16}"
+        )
+    lines += ["", f"  {'view pair':<9} {'kinds':<18} {'covisible mean':>14} {'cov. share':>10} {'app. AUC':>8}"]  # fmt: skip
+    for p in m["view_pairs"]:
+        r = p["regime"]
+        lines.append(
+            f"  {p['views']:<9} {p['kinds']:<18} {num(p['covisible']['mean'], '.1f'):>14} "
+            f"{num(r.get('covisible_share_of_smaller'), '.2f'):>10} "
+            f"{num(r.get('appearance_auc'), '.3f'):>8}"
+        )
+    return [*lines, ""]
 
 
 def run(args: argparse.Namespace) -> int:

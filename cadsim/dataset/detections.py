@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.sparse.csgraph import connected_components
 
 _FIELDS = ("positions", "boxes", "features", "object_ids", "classes", "pixels")
 
@@ -154,3 +155,20 @@ def is_acceptable_pair(
         and len(view1) - covisible >= min_exclusive
         and len(view2) - covisible >= min_exclusive
     )
+
+
+def is_acceptable_set(views: list[ViewDetections], min_covisible: int = 3) -> bool:
+    """DESIGN §12's acceptance of an N-view snapshot: link two views when they detect at least
+    ``min_covisible`` objects in common; every view must be linked to another and the links
+    must join all views into one group (so each view shares objects with the rest and no
+    subset of views sees a scene apart)."""
+    count = len(views)
+    if count < 2:
+        return False
+    ids = [set(v.object_ids) for v in views]
+    linked = np.array(
+        [[len(ids[i] & ids[j]) >= min_covisible for j in range(count)] for i in range(count)]
+    )
+    np.fill_diagonal(linked, False)
+    groups, _ = connected_components(linked, directed=False)
+    return groups == 1 and bool(linked.any(axis=1).all())

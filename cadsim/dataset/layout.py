@@ -2,7 +2,7 @@
 
 ```
 DIR/manifest.json                  the dataset's manifest (written last; "complete": true when done)
-DIR/pairs/e00003_s01/              one frame-pair record: episode 3, slot 1
+DIR/pairs/e00003_s01/              one record: episode 3, slot 1 (a frame pair, or an N-view snapshot)
 DIR/episodes/e00003.json           per-episode summary (resume bookkeeping, generation statistics)
 DIR/.tmp-*                         records being written (removed on the next run if left over)
 DIR/.work/                         the sources' cache (networks, routes) while generating; removed at the end
@@ -32,6 +32,18 @@ INSTANCE_NPZ = "instance.npz"
 DETECTIONS_NPZ = "detections.npz"
 RECORD_JSON = "record.json"
 RECORD_FILES = (VIEW1_PNG, VIEW2_PNG, DEPTH_NPZ, INSTANCE_NPZ, DETECTIONS_NPZ, RECORD_JSON)
+MAX_VIEWS = 12  # vehicles (<= 8) + roadside units (<= 4)
+
+
+def view_png(view: int) -> str:
+    """Colour image of view ``view`` (1-based), e.g. ``view3.png``."""
+    return f"view{int(view)}.png"
+
+
+def record_files(views: int) -> tuple[str, ...]:
+    """The files of a record with ``views`` views (2: :data:`RECORD_FILES`)."""
+    return (*(view_png(v) for v in range(1, views + 1)), *RECORD_FILES[2:])
+
 
 _RECORD_NAME = re.compile(r"^e(\d{5,})_s(\d{2,})$")
 

@@ -18,8 +18,14 @@ from cadsim.dataset import layout
 from cadsim.dataset.atomic_writer import write_file_atomic
 from cadsim.dataset.checksum import dataset_checksum
 from cadsim.dataset.encoding import json_bytes
-from cadsim.dataset.record_format import FORMAT_VERSION, READABLE_VERSIONS, jsonable
+from cadsim.dataset.record_format import (
+    FORMAT_VERSION,
+    MULTI_VIEW_FORMAT,
+    READABLE_VERSIONS,
+    jsonable,
+)
 from cadsim.provenance import git_state, package_versions
+from cadsim.scenario_views import MULTI_VIEW_KEYS, view_count
 
 FORMAT_NAME = "cadsim-frame-pairs"
 SEED_DERIVATION = (
@@ -64,15 +70,19 @@ def _portable_paths(value, base: Path):
 def generation_config(scenario, seed: int, pairs_per_episode: int, criteria: dict) -> dict:
     """What determines the records: the scenario (contents and tables), the root seed, the
     episode size and the acceptance criteria. A resumed run must match it exactly."""
+    observers = _plain(scenario.observers)
+    views = view_count(observers)
+    if views == 2:  # frame pairs: the configuration (and so resuming) exactly as before N views
+        observers = {k: v for k, v in observers.items() if k not in MULTI_VIEW_KEYS}
     return {
-        "format_version": FORMAT_VERSION,
+        "format_version": FORMAT_VERSION if views == 2 else MULTI_VIEW_FORMAT,
         "scenario_sha256": hashlib.sha256(scenario.text.encode("utf-8")).hexdigest(),
         "seed": int(seed),
         "pairs_per_episode": int(pairs_per_episode),
         "acceptance": dict(criteria),
         "traffic": _portable_paths(_plain(scenario.traffic), Path(scenario.path).parent),
         "camera": _plain(scenario.camera),
-        "observers": _plain(scenario.observers),
+        "observers": observers,
         "noise": _plain(scenario.noise),
         "detection": _plain(scenario.detection),
         "sampling": _plain(scenario.sampling),
@@ -91,9 +101,11 @@ def build_manifest(
 ) -> dict:
     """The manifest. records: [{"name", "episode", "slot", "sim_seed", "checksum"}] in dataset
     order; episodes: {episode: simulation seed} of every episode run."""
+    views = view_count(config["observers"])
+    extra = {} if views == 2 else {"views": views, "record_files": list(layout.record_files(views))}
     return {
         "format": FORMAT_NAME,
-        "format_version": FORMAT_VERSION,
+        "format_version": config["format_version"],
         "complete": bool(complete),
         "scenario": {"path": str(scenario.path), "name": scenario.name, "text": scenario.text},
         "seeds": {
@@ -108,7 +120,7 @@ def build_manifest(
         "pairs": len(records),
         "records": records,
         "checksum": dataset_checksum(r["checksum"] for r in records),
-    }
+    } | extra
 
 
 def write_manifest(dataset_dir: Path, manifest: dict) -> None:

@@ -40,6 +40,7 @@ from cadsim.sensing.pose_error import PoseError, perturbed_world
 from cadsim.world import WorldObject
 
 if TYPE_CHECKING:  # imported where used: reading a dataset needs neither
+    from cadsim.dataset.multi_view import SnapshotViews
     from cadsim.sensing.depth_noise import NoiseConfig
     from cadsim.sensing.detection import DetectionPlan
 
@@ -70,10 +71,13 @@ class FramePair:
         *,
         record_files: tuple[str, ...] = layout.RECORD_FILES,
         localisation: tuple[LocalisationConfig, tuple[int, int]] | None | str = "record",
+        view_numbers: tuple[int, int] = (1, 2),
     ) -> None:
         self.path = Path(path)
         self.index = int(index)
-        self.name: str = entry["name"]
+        self.view_numbers = (int(view_numbers[0]), int(view_numbers[1]))
+        a, b = self.view_numbers
+        self.name: str = entry["name"] if (a, b) == (1, 2) else f"{entry['name']}:{a}-{b}"
         self.episode = int(entry["episode"])
         self.slot = int(entry["slot"])
         self.sim_seed = int(entry["sim_seed"])
@@ -87,8 +91,8 @@ class FramePair:
             what = self.path / layout.DETECTIONS_NPZ
             arrays = load_npz(str(self._file(layout.DETECTIONS_NPZ)), str(what))
             views = (
-                ViewDetections.from_arrays(arrays, "view1", str(what)),
-                ViewDetections.from_arrays(arrays, "view2", str(what)),
+                ViewDetections.from_arrays(arrays, f"view{a}", str(what)),
+                ViewDetections.from_arrays(arrays, f"view{b}", str(what)),
             )
         self.view1, self.view2 = views
         self.noise_rate = float(
@@ -125,22 +129,39 @@ class FramePair:
     @property
     def has_images(self) -> bool:
         """Whether the record has colour, depth and instance images (imported records do not)."""
-        return layout.VIEW1_PNG in self._record_files
+        return layout.view_png(self.view_numbers[0]) in self._record_files
 
     @cached_property
     def cameras(self) -> tuple[Camera, Camera] | None:
         """The two observers' cameras (world poses, intrinsics), or None when the record has none."""
-        obs = self.record["observers"]
+        obs = self._observers
         if any(o.get("camera") is None for o in obs):
             return None
         return Camera.from_dict(obs[0]["camera"]), Camera.from_dict(obs[1]["camera"])
+
+    @property
+    def _observers(self) -> tuple[dict, dict]:
+        """The record's observer entries of this pair's two views."""
+        obs = self.record["observers"]
+        a, b = self.view_numbers
+        if not (isinstance(obs, list) and max(a, b) <= len(obs)):
+            raise DatasetError(
+                f"{self.path / layout.RECORD_JSON}: observers: expected at least {max(a, b)} "
+                "entries"
+            )
+        return obs[a - 1], obs[b - 1]
+
+    @property
+    def observer_kinds(self) -> tuple[str, str]:
+        """Per view "vehicle" or "roadside" (a pole-mounted camera with an exactly known pose)."""
+        return tuple(o.get("kind", "vehicle") for o in self._observers)
 
     @cached_property
     def observer_poses(self) -> tuple[ObserverPose, ObserverPose] | None:
         """The two observers' true world poses: the carrying object's bounding-box centre (world
         metres) and heading (radians CCW from +x); a camera on no object: its own. None for
         imported records, which carry no true poses."""
-        obs = self.record["observers"]
+        obs = self._observers
         if any(o.get("pose") is None for o in obs):
             return None
         return ObserverPose.from_dict(obs[0]["pose"]), ObserverPose.from_dict(obs[1]["pose"])
@@ -168,7 +189,7 @@ class FramePair:
 
     @property
     def observer_ids(self) -> tuple[str, str]:
-        obs = self.record["observers"]
+        obs = self._observers
         return obs[0]["id"], obs[1]["id"]
 
     @cached_property
@@ -188,12 +209,12 @@ class FramePair:
 
     @cached_property
     def color1(self) -> np.ndarray:
-        """(H, W, 3) uint8 RGB of view 1."""
-        return self._png(layout.VIEW1_PNG)
+        """(H, W, 3) uint8 RGB of view 1 (of the record's view ``view_numbers[0]``)."""
+        return self._png(layout.view_png(self.view_numbers[0]))
 
     @cached_property
     def color2(self) -> np.ndarray:
-        return self._png(layout.VIEW2_PNG)
+        return self._png(layout.view_png(self.view_numbers[1]))
 
     @cached_property
     def _depth(self) -> dict[str, np.ndarray]:
@@ -202,11 +223,11 @@ class FramePair:
     @property
     def depth1(self) -> np.ndarray:
         """(H, W) float32 clean depth of view 1, metres along the optical axis, 0 = no hit."""
-        return self._depth["depth1"]
+        return self._depth[f"depth{self.view_numbers[0]}"]
 
     @property
     def depth2(self) -> np.ndarray:
-        return self._depth["depth2"]
+        return self._depth[f"depth{self.view_numbers[1]}"]
 
     @cached_property
     def _instance(self) -> dict[str, np.ndarray]:
@@ -215,11 +236,11 @@ class FramePair:
     @property
     def instance1(self) -> np.ndarray:
         """(H, W) int32 index into ``objects`` of view 1, -1 = none."""
-        return self._instance["instance1"]
+        return self._instance[f"instance{self.view_numbers[0]}"]
 
     @property
     def instance2(self) -> np.ndarray:
-        return self._instance["instance2"]
+        return self._instance[f"instance{self.view_numbers[1]}"]
 
     def problem(self):
         """The matching problem as ``matchers.Problem``: positions (metres, each camera's frame)
@@ -265,7 +286,7 @@ class FramePair:
         config = LocalisationConfig(
             **{k: prior[k] for k in ("position_sigma_m", "yaw_sigma_deg", "preset") if k in prior}
         )
-        obs = self.record["observers"]
+        obs = self._observers
         return config, (int(obs[0]["localisation_seed"]), int(obs[1]["localisation_seed"]))
 
     def prior(self) -> tuple[np.ndarray, np.ndarray, float] | None:
@@ -288,9 +309,11 @@ class FramePair:
         sent, offset = self._sent_view2
         latency = config.latency_s
         worlds = []
-        for k, (positions, camera, pose, seed, vehicle) in enumerate(zip((self.view1.positions, sent), self.cameras, self.observer_poses, seeds[:2], self.observer_ids, strict=True)):  # fmt: skip
+        for k, (positions, camera, pose, seed, vehicle, kind) in enumerate(zip((self.view1.positions, sent), self.cameras, self.observer_poses, seeds[:2], self.observer_ids, self.observer_kinds, strict=True)):  # fmt: skip
             shift = offset if k else np.zeros(3)  # the sender's pose when it sent (latency)
-            if model is None:
+            if kind == "roadside":  # a surveyed pole: its pose is exact
+                error = PoseError(0.0, 0.0, 0.0)
+            elif model is None:
                 error = PoseError.draw(config, np.random.default_rng(seed))
             else:
                 episode_seed = seeds[2] if len(seeds) > 2 else self.sim_seed
@@ -368,7 +391,7 @@ class FramePair:
 
     def _view_seeds(self, seed: int) -> tuple[int, int]:
         """The two views' localisation seeds under root ``seed`` (stream 4)."""
-        return tuple(localisation_seed(seed, self.episode, self.slot, v) for v in (1, 2))
+        return tuple(localisation_seed(seed, self.episode, self.slot, v) for v in self.view_numbers)
 
     def _redrawn(self, config: LocalisationConfig, seeds: tuple[int, ...]) -> FramePair:
         """This pair with its prior drawn from ``config`` and ``seeds``; ValueError for a stored
@@ -381,6 +404,17 @@ class FramePair:
         if self.cameras is None:
             raise ValueError(f"{self.path}: record has no camera poses to localise from")
         return self._derived((self.view1, self.view2), self.noise_rate, (config, seeds))
+
+    def of_views(self, i: int, j: int) -> FramePair:
+        """The pair of views ``i`` and ``j`` (1-based) of this pair's record (an N-view
+        snapshot), with the record's own detections and prior; the parsed record is shared."""
+        pair = FramePair(
+            self.path, self.index, self._entry, self._noise, self._detection,
+            record_files=self._record_files, view_numbers=(i, j),
+        )  # fmt: skip
+        if "record" in self.__dict__:
+            pair.__dict__["record"] = self.__dict__["record"]
+        return pair
 
     def select(self, rows1, rows2) -> FramePair:
         """This pair with only the detections at `rows1` of view 1 and `rows2` of view 2 (integer
@@ -402,6 +436,7 @@ class FramePair:
             noise_rate,
             record_files=self._record_files,
             localisation=localisation,
+            view_numbers=self.view_numbers,
         )
         shared = ("record", "color1", "color2", "_depth", "_instance", "objects", "cameras")
         shared += ("observer_poses", "camera_extrinsics", "camera_to_world")
@@ -433,7 +468,9 @@ class FramePair:
                 raise ValueError(f"noise_rate: expected a finite value >= 0, got {rate!r}")
         noise_cfg, plans = self._detection_plans
         per_view = []
-        for v, depth, plan in ((1, self.depth1, plans[0]), (2, self.depth2, plans[1])):
+        for v, depth, plan in zip(
+            self.view_numbers, (self.depth1, self.depth2), plans, strict=True
+        ):
             clean = np.asarray(depth, dtype=np.float64).ravel()[plan.pixels]
             unit = None
             if any(rate > 0 for rate in rates):
@@ -471,13 +508,27 @@ class FramePair:
                 f"{manifest}: generation.noise / generation.detection rejected ({exc})"
             ) from None
         plans = []
-        for v, color, depth, instance, camera, stored in (
-            (1, "color1", self.depth1, self.instance1, self.cameras[0], self.view1),
-            (2, "color2", self.depth2, self.instance2, self.cameras[1], self.view2),
+        for observer, color, depth, instance, camera, stored in (
+            (
+                self._observers[0],
+                "color1",
+                self.depth1,
+                self.instance1,
+                self.cameras[0],
+                self.view1,
+            ),
+            (
+                self._observers[1],
+                "color2",
+                self.depth2,
+                self.instance2,
+                self.cameras[1],
+                self.view2,
+            ),
         ):
             check_depth(depth)
             # The attribute errors are the record's own, whatever the noise seed.
-            attributes = np.random.default_rng(self.record["observers"][v - 1]["attribute_seed"])
+            attributes = np.random.default_rng(observer["attribute_seed"])
             plans.append(
                 plan_detections(
                     instance,
@@ -533,15 +584,27 @@ class Dataset(Sequence[FramePair]):
                 f"got {str(files)[:60]}"
             )
         self.record_files: tuple[str, ...] = tuple(files)
+        views = self.manifest.get("views", 2)
+        if (
+            isinstance(views, bool)
+            or not isinstance(views, int)
+            or not 2 <= views <= layout.MAX_VIEWS
+        ):
+            raise DatasetError(
+                f"{self.path / layout.MANIFEST}: views: expected an integer in "
+                f"2..{layout.MAX_VIEWS}, got {str(views)[:60]}"
+            )
+        self.n_views: int = views
         if not self._records:
             raise DatasetError(
                 f"{self.path / layout.MANIFEST}: records: a finished dataset with no record"
             )
-        unknown = sorted(set(self.record_files) - set(layout.RECORD_FILES))
+        allowed = layout.record_files(self.n_views)
+        unknown = sorted(set(self.record_files) - set(allowed))
         if unknown or layout.DETECTIONS_NPZ not in self.record_files:
             raise DatasetError(
                 f"{self.path / layout.MANIFEST}: record_files {list(self.record_files)} must "
-                f"include {layout.DETECTIONS_NPZ} and name only files of {list(layout.RECORD_FILES)}"
+                f"include {layout.DETECTIONS_NPZ} and name only files of {list(allowed)}"
             )
         if verify:
             self.verify_once()
@@ -582,6 +645,15 @@ class Dataset(Sequence[FramePair]):
         for k in range(len(self)):
             yield self[k]
 
+    def snapshot(self, k: int) -> SnapshotViews:
+        """Record ``k`` as its ``n_views`` views (:class:`cadsim.dataset.multi_view.SnapshotViews`:
+        ``pair(i, j)`` is the two-view ``FramePair`` of views i and j). ``ds[k]`` is
+        ``ds.snapshot(k).pair(1, 2)``: every two-view tool reads an N-view dataset as the pairs
+        of its first two views."""
+        from cadsim.dataset.multi_view import SnapshotViews
+
+        return SnapshotViews(self[k], self.n_views)
+
     def _file_signature(self) -> str:
         """A digest of (size, mtime, inode) of the manifest and every record file: any rewrite
         changes it (except one that restores size and mtime on the same inode)."""
@@ -591,7 +663,7 @@ class Dataset(Sequence[FramePair]):
             *(
                 self.path / layout.PAIRS_DIR / entry["name"] / name
                 for entry in self._records
-                for name in layout.RECORD_FILES
+                for name in self.record_files
             ),
         ]:
             try:

@@ -16,7 +16,12 @@ Format versions: 1, the first; 2 adds ``observers[].pose``, ``observers[].attrib
 (features carry detector-like attributes from then on), the localisation prior (``prior``,
 ``observers[].localisation_seed``) and image-less imported records; 3 adds each object's
 ``velocity`` (m/s, world frame), which message latency needs (``cadsim.sensing.latency``).
-A change of the record layout bumps ``FORMAT_VERSION``; the reader reads
+Version 4 is the N-view snapshot record (:class:`SnapshotRecord`, DESIGN §12): ``view1.png …
+viewN.png``, ``depth1 … depthN``, ``instance1 … instanceN``, ``view{k}_…`` detections, one
+observer entry per view with its ``kind`` ("vehicle" or "roadside": a roadside unit's pose is
+known exactly), per-view detection counts and per-pair covisible counts; frame-pair datasets are
+still written as version 3, byte for byte as before. A change of the record layout bumps
+``FORMAT_VERSION``; the reader reads
 :data:`READABLE_VERSIONS` and refuses others with a message naming them (a version-2 dataset is
 read with every velocity 0, and the latency presets refuse it).
 """
@@ -37,7 +42,8 @@ from cadsim.sensing.localisation import LocalisationConfig
 from cadsim.world import WorldObject
 
 FORMAT_VERSION = 3
-READABLE_VERSIONS = (2, 3)
+MULTI_VIEW_FORMAT = 4
+READABLE_VERSIONS = (2, 3, 4)
 
 
 @dataclass(frozen=True, eq=False)
@@ -99,33 +105,72 @@ def _check_image(name: str, arr: np.ndarray, shape: tuple[int, int], dtype) -> n
     return arr
 
 
-def encode_record(rec: PairRecord) -> dict[str, bytes]:
-    """{file name: bytes} of a record; deterministic (same record ⇒ same bytes)."""
-    views = (rec.view1, rec.view2)
-    for k, v in enumerate(views, start=1):
+@dataclass(frozen=True, eq=False)
+class SnapshotRecord:
+    """One accepted N-view snapshot (format version 4): the views of every observer of the
+    snapshot, in observer order (vehicles first, then roadside units). kinds: per view
+    "vehicle" or "roadside". Other fields as :class:`PairRecord`."""
+
+    episode: int
+    slot: int
+    sim_seed: int
+    time: float
+    objects: list[WorldObject]
+    views: tuple[ViewCapture, ...]
+    kinds: tuple[str, ...]
+    meta: dict = field(default_factory=dict)
+    localisation: dict = field(default_factory=dict)
+
+
+def _observer_entry(view: ViewCapture) -> dict:
+    return {
+        "id": view.observer_id,
+        "camera": view.camera.as_dict(),
+        "pose": view.pose.as_dict(),
+        "noise_seed": int(view.noise_seed),
+        "attribute_seed": int(view.attribute_seed),
+        "localisation_seed": int(view.localisation_seed),
+    }
+
+
+def _files(views: tuple[ViewCapture, ...], record: dict) -> dict[str, bytes]:
+    """The record's files: colour, depth, instance maps and detections of ``views`` (numbered
+    from 1) and ``record.json``, after checking every image's shape and type."""
+    numbered = list(enumerate(views, start=1))
+    for k, v in numbered:
         hw = (v.camera.height, v.camera.width)
         _check_image(f"view{k} colour", v.color, hw, np.uint8)
         _check_image(f"view{k} depth", v.depth, hw, np.float32)
         _check_image(f"view{k} instance", v.instance, hw, np.int32)
-    gt = ground_truth_pairs(rec.view1.detections, rec.view2.detections)
-    ids1 = rec.view1.detections.object_ids
-    record = {
-        "format_version": FORMAT_VERSION,
+    detections = {}
+    for k, v in numbered:
+        detections |= v.detections.to_arrays(f"view{k}")
+    return {
+        **{layout.view_png(k): png_bytes(v.color) for k, v in numbered},
+        layout.DEPTH_NPZ: npz_bytes({f"depth{k}": v.depth for k, v in numbered}),
+        layout.INSTANCE_NPZ: npz_bytes({f"instance{k}": v.instance for k, v in numbered}),
+        layout.DETECTIONS_NPZ: npz_bytes(detections),
+        layout.RECORD_JSON: json_bytes(record),
+    }
+
+
+def _head(rec: PairRecord | SnapshotRecord, version: int) -> dict:
+    return {
+        "format_version": version,
         "episode": int(rec.episode),
         "slot": int(rec.slot),
         "sim_seed": int(rec.sim_seed),
         "time": float(rec.time),
-        "observers": [
-            {
-                "id": v.observer_id,
-                "camera": v.camera.as_dict(),
-                "pose": v.pose.as_dict(),
-                "noise_seed": int(v.noise_seed),
-                "attribute_seed": int(v.attribute_seed),
-                "localisation_seed": int(v.localisation_seed),
-            }
-            for v in views
-        ],
+    }
+
+
+def encode_record(rec: PairRecord) -> dict[str, bytes]:
+    """{file name: bytes} of a frame-pair record; deterministic (same record ⇒ same bytes)."""
+    views = (rec.view1, rec.view2)
+    gt = ground_truth_pairs(rec.view1.detections, rec.view2.detections)
+    ids1 = rec.view1.detections.object_ids
+    record = _head(rec, FORMAT_VERSION) | {
+        "observers": [_observer_entry(v) for v in views],
         "prior": {"kind": "pose_error", **LocalisationConfig(**rec.localisation).as_record()},
         "objects": [o.as_dict() for o in rec.objects],
         "ground_truth": [{"object_id": ids1[i], "i": int(i), "j": int(j)} for i, j in gt],
@@ -136,14 +181,29 @@ def encode_record(rec: PairRecord) -> dict[str, bytes]:
         },
         "meta": jsonable(rec.meta),
     }
-    detections = rec.view1.detections.to_arrays("view1") | rec.view2.detections.to_arrays("view2")
-    return {
-        layout.VIEW1_PNG: png_bytes(rec.view1.color),
-        layout.VIEW2_PNG: png_bytes(rec.view2.color),
-        layout.DEPTH_NPZ: npz_bytes({"depth1": rec.view1.depth, "depth2": rec.view2.depth}),
-        layout.INSTANCE_NPZ: npz_bytes(
-            {"instance1": rec.view1.instance, "instance2": rec.view2.instance}
-        ),
-        layout.DETECTIONS_NPZ: npz_bytes(detections),
-        layout.RECORD_JSON: json_bytes(record),
+    return _files(views, record)
+
+
+def encode_snapshot(rec: SnapshotRecord) -> dict[str, bytes]:
+    """{file name: bytes} of an N-view snapshot record (format version 4); deterministic. Ground
+    truth is the detections' object ids (shared across views); ``counts.covisible`` holds each
+    pair "i-j" (1-based, i < j) of views' covisible count."""
+    views = rec.views
+    if len(rec.kinds) != len(views) or len(views) > layout.MAX_VIEWS:
+        raise ValueError(f"snapshot record: {len(views)} views, {len(rec.kinds)} kinds")
+    covisible = {
+        f"{i + 1}-{j + 1}": len(ground_truth_pairs(views[i].detections, views[j].detections))
+        for i in range(len(views))
+        for j in range(i + 1, len(views))
     }
+    record = _head(rec, MULTI_VIEW_FORMAT) | {
+        "views": len(views),
+        "observers": [
+            _observer_entry(v) | {"kind": kind} for v, kind in zip(views, rec.kinds, strict=True)
+        ],
+        "prior": {"kind": "pose_error", **LocalisationConfig(**rec.localisation).as_record()},
+        "objects": [o.as_dict() for o in rec.objects],
+        "counts": {"detections": [len(v.detections) for v in views], "covisible": covisible},
+        "meta": jsonable(rec.meta),
+    }
+    return _files(views, record)

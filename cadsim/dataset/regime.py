@@ -16,6 +16,8 @@ from collections.abc import Iterable
 import numpy as np
 from scipy.stats import rankdata
 
+from cadsim import portable_math as pm
+
 REGIME_KEYS = (
     "objects_per_view",
     "covisible",
@@ -64,8 +66,8 @@ def _position_errors(pair, gt: np.ndarray) -> np.ndarray | None:
     if not len(gt):
         return np.zeros(0)
     t1, t2 = (np.asarray(t, float) for t in poses)
-    p1 = pair.view1.positions[gt[:, 0]] @ t1[:3, :3].T + t1[:3, 3]
-    p2 = pair.view2.positions[gt[:, 1]] @ t2[:3, :3].T + t2[:3, 3]
+    p1 = pm.matmul(pair.view1.positions[gt[:, 0]], t1[:3, :3].T) + t1[:3, 3]
+    p2 = pm.matmul(pair.view2.positions[gt[:, 1]], t2[:3, :3].T) + t2[:3, 3]
     return np.linalg.norm(p1 - p2, axis=1)
 
 

@@ -48,7 +48,7 @@ from cadsim.dataset.atomic_writer import (
     write_record,
 )
 from cadsim.dataset.checksum import record_dir_checksum
-from cadsim.dataset.detections import ViewDetections, is_acceptable_pair
+from cadsim.dataset.detections import ViewDetections, is_acceptable_pair, is_acceptable_set
 from cadsim.dataset.encoding import json_bytes
 from cadsim.dataset.manifest import (
     DatasetError,
@@ -58,7 +58,15 @@ from cadsim.dataset.manifest import (
     write_manifest,
 )
 from cadsim.dataset.output_folder import check_output_folder
-from cadsim.dataset.record_format import FORMAT_VERSION, PairRecord, ViewCapture, encode_record
+from cadsim.dataset.record_format import (
+    FORMAT_VERSION,
+    MULTI_VIEW_FORMAT,
+    PairRecord,
+    SnapshotRecord,
+    ViewCapture,
+    encode_record,
+    encode_snapshot,
+)
 from cadsim.dataset.seeds import attribute_seed, localisation_seed, noise_seed, simulation_seed
 from cadsim.dataset.writer_lock import exclusive_writer
 from cadsim.generation.executor import Executor, report_progress
@@ -66,6 +74,7 @@ from cadsim.generation.executors import make_executor
 from cadsim.limits import MAX_PAIRS, MAX_SEED, MAX_WORKERS
 from cadsim.observer_pose import ObserverPose
 from cadsim.render.appearance import AppearanceConfig, exposed
+from cadsim.scenario_views import view_count
 
 log = logging.getLogger(__name__)
 
@@ -219,9 +228,16 @@ def _existing_prefix(out: Path, episode: int) -> tuple[int, tuple[float, int] | 
     return count, (float(record["time"]), int(record["meta"]["candidate"]))
 
 
-def _observer_key(pair) -> frozenset:
-    """The two observers of a candidate pair, unordered (``distinct_observers``)."""
-    return frozenset((pair.observer1_id, pair.observer2_id))
+def _observer_key(candidate) -> frozenset:
+    """The observers of a candidate pair or set, unordered (``distinct_observers``)."""
+    if hasattr(candidate, "observer_ids"):
+        return frozenset(candidate.observer_ids)
+    return frozenset((candidate.observer1_id, candidate.observer2_id))
+
+
+def _views(scenario) -> int:
+    """Views per record of ``scenario`` (2: frame pairs)."""
+    return view_count(getattr(scenario, "observers", None) or {})
 
 
 def _used_observers(out: Path, episode: int, slots: int) -> set[frozenset]:
@@ -278,12 +294,16 @@ def run_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
     noise_cfg = stages["noise_config"](**(scenario.noise or {}))
     det_cfg = stages["detection_config"](**(scenario.detection or {}))
     used = _used_observers(out, e, slot) if crit.distinct_observers else set()
+    multi = _views(scenario) != 2
+    attempt, encode = (_try_set, encode_snapshot) if multi else (_try_pair, encode_record)
     # The work folder is shared by all episodes: sources cache networks there (atomically).
     with stages["source"](scenario, sim_seed, out / layout.WORK_DIR) as source:
         for snapshot in source.snapshots():
             result.snapshots += 1
             # Always asked, even when skipping, so a source's internal state evolves the same.
-            candidates = source.observer_pairs(snapshot)
+            candidates = (
+                source.observer_sets(snapshot) if multi else source.observer_pairs(snapshot)
+            )
             first, taken = 0, 0
             if resume_after is not None:  # fast-forward past what an earlier run wrote
                 if snapshot.time < resume_after[0]:
@@ -299,12 +319,12 @@ def run_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
                 if crit.distinct_observers and _observer_key(pair) in used:
                     continue
                 result.candidates += 1
-                record = _try_pair(
+                record = attempt(
                     task, stages, noise_cfg, det_cfg, snapshot, pair, index, slot, result
                 )
                 if record is None:
                     continue
-                if write_record(out, layout.record_name(e, slot), encode_record(record)):
+                if write_record(out, layout.record_name(e, slot), encode(record)):
                     result.new_records += 1
                 slot += 1
                 taken += 1
@@ -334,39 +354,46 @@ def _taken_at(out: Path, episode: int, slots: int, time_s: float) -> int:
     return sum(t == time_s for t in times)
 
 
+def _capture(task, stages, noise_cfg, det_cfg, snapshot, camera, observer, view, slot, result):  # fmt: skip
+    """Render, noise and detect view ``view`` (1-based; its seeds are (episode, slot, view)'s)
+    of ``camera``, carried by ``observer`` ("" for none). The view's capture."""
+    renderer = _renderer(task.stages, camera.width, camera.height)
+    seed = noise_seed(task.root_seed, task.episode, slot, view)
+    attr_seed = attribute_seed(task.root_seed, task.episode, slot, view)
+    t = time.perf_counter()
+    appearance = _appearance(task.scenario)
+    if hasattr(renderer, "set_lighting"):  # the episode's light (the default without a table)
+        if appearance is None:
+            renderer.set_lighting(*renderer.default_lighting)
+        else:
+            light = appearance.lighting(simulation_seed(task.root_seed, task.episode))
+            renderer.set_lighting(*dataclasses.astuple(light))
+    rendered, det = _observe(
+        stages, noise_cfg, det_cfg, renderer, snapshot, camera, observer, seed, attr_seed,
+        appearance,
+    )  # fmt: skip
+    result.render_seconds += time.perf_counter() - t
+    result.views += 1
+    carrier = snapshot.by_id().get(observer) if observer else None
+    pose = ObserverPose.of_carrier(carrier) if carrier else ObserverPose.of_camera(camera)
+    return ViewCapture(
+        camera, observer, rendered.color, rendered.depth, rendered.instance, det, seed,
+        attr_seed, pose, localisation_seed(task.root_seed, task.episode, slot, view),
+    )  # fmt: skip
+
+
 def _try_pair(
     task, stages, noise_cfg, det_cfg, snapshot, pair, candidate, slot, result
 ) -> PairRecord | None:
     """Render, noise and detect both views of a candidate; the record if it is acceptable."""
     crit = task.criteria
     views = []
-    carriers = snapshot.by_id()
     for v, camera, observer in ((1, pair.camera1, pair.observer1_id), (2, pair.camera2, pair.observer2_id)):  # fmt: skip
-        renderer = _renderer(task.stages, camera.width, camera.height)
-        seed = noise_seed(task.root_seed, task.episode, slot, v)
-        attr_seed = attribute_seed(task.root_seed, task.episode, slot, v)
-        t = time.perf_counter()
-        appearance = _appearance(task.scenario)
-        if hasattr(renderer, "set_lighting"):  # the episode's light (the default without a table)
-            if appearance is None:
-                renderer.set_lighting(*renderer.default_lighting)
-            else:
-                light = appearance.lighting(simulation_seed(task.root_seed, task.episode))
-                renderer.set_lighting(*dataclasses.astuple(light))
-        rendered, det = _observe(
-            stages, noise_cfg, det_cfg, renderer, snapshot, camera, observer, seed, attr_seed,
-            appearance,
-        )  # fmt: skip
-        result.render_seconds += time.perf_counter() - t
-        result.views += 1
-        if len(det) < crit.min_covisible + crit.min_exclusive:
+        capture = _capture(
+            task, stages, noise_cfg, det_cfg, snapshot, camera, observer, v, slot, result
+        )
+        if len(capture.detections) < crit.min_covisible + crit.min_exclusive:
             return None  # cannot pass, whatever the other view sees
-        carrier = carriers.get(observer) if observer else None
-        pose = ObserverPose.of_carrier(carrier) if carrier else ObserverPose.of_camera(camera)
-        capture = ViewCapture(
-            camera, observer, rendered.color, rendered.depth, rendered.instance, det, seed,
-            attr_seed, pose, localisation_seed(task.root_seed, task.episode, slot, v),
-        )  # fmt: skip
         views.append(capture)
     if not is_acceptable_pair(
         views[0].detections, views[1].detections, crit.min_covisible, crit.min_exclusive
@@ -376,6 +403,30 @@ def _try_pair(
     return PairRecord(
         task.episode, slot, simulation_seed(task.root_seed, task.episode), float(snapshot.time),
         list(snapshot.objects), views[0], views[1], meta,
+        dict(getattr(task.scenario, "localisation", {})),
+    )  # fmt: skip
+
+
+def _try_set(
+    task, stages, noise_cfg, det_cfg, snapshot, observers, candidate, slot, result
+) -> SnapshotRecord | None:
+    """Render, noise and detect every view of an observer set (view k: the set's k-th camera);
+    the N-view record if it meets :func:`is_acceptable_set`."""
+    crit = task.criteria
+    views = []
+    for v, (camera, observer) in enumerate(zip(observers.cameras, observers.observer_ids, strict=True), start=1):  # fmt: skip
+        capture = _capture(
+            task, stages, noise_cfg, det_cfg, snapshot, camera, observer, v, slot, result
+        )
+        if len(capture.detections) < crit.min_covisible:
+            return None  # shares too few objects with any other view, whatever they see
+        views.append(capture)
+    if not is_acceptable_set([v.detections for v in views], crit.min_covisible):
+        return None
+    meta = {"candidate": candidate, "set": dict(observers.meta), "snapshot": dict(snapshot.meta)}
+    return SnapshotRecord(
+        task.episode, slot, simulation_seed(task.root_seed, task.episode), float(snapshot.time),
+        list(snapshot.objects), tuple(views), tuple(observers.kinds), meta,
         dict(getattr(task.scenario, "localisation", {})),
     )  # fmt: skip
 
@@ -424,7 +475,8 @@ def _check_resume(out: Path, config: dict) -> None:
             raise GenerationError(f"{out}: has frame-pair records but no manifest; use a new --out")
         return
     try:
-        previous = read_manifest(out, versions=(FORMAT_VERSION,))["generation"]
+        writes = FORMAT_VERSION if view_count(config["observers"]) == 2 else MULTI_VIEW_FORMAT
+        previous = read_manifest(out, versions=(writes,))["generation"]
     except DatasetError as exc:
         if not has_records:
             _clear_recordless(out, f"its manifest is unusable ({exc})")
@@ -635,7 +687,7 @@ def _generate(
         bar.close()
         release_renderers()  # those episodes run in this process made (one worker)
 
-    records = _finalise_records(out, n_pairs)
+    records = _finalise_records(out, n_pairs, layout.record_files(_views(scenario)))
     shutil.rmtree(out / layout.WORK_DIR, ignore_errors=True)
     # The episodes that define the dataset: 0 .. the last one contributing a record.
     episodes = {e: simulation_seed(root_seed, e) for e in range(records[-1]["episode"] + 1)}
@@ -664,7 +716,7 @@ def _raise_interrupt(signum, frame) -> None:
     raise KeyboardInterrupt(f"signal {signum}")
 
 
-def _finalise_records(out: Path, n_pairs: int) -> list[dict]:
+def _finalise_records(out: Path, n_pairs: int, files: tuple[str, ...]) -> list[dict]:
     """The first ``n_pairs`` records in (episode, slot) order, with checksums. Records beyond
     them (an episode asked for more pairs than turned out to be missing, or an earlier run with
     a larger N) are removed so that the folder holds exactly the dataset."""
@@ -684,7 +736,7 @@ def _finalise_records(out: Path, n_pairs: int) -> list[dict]:
                 "episode": episode,
                 "slot": slot,
                 "sim_seed": int(record["sim_seed"]),
-                "checksum": record_dir_checksum(path, layout.RECORD_FILES),
+                "checksum": record_dir_checksum(path, files),
             }
         )
     return entries

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from cadsim import portable_math as pm
+
 # corner k of an axis-aligned box is (x[k & 1], y[k >> 1 & 1], z[k >> 2 & 1]) of its (2, 3) bounds
 _CORNER_BITS = np.array([[k & 1, (k >> 1) & 1, (k >> 2) & 1] for k in range(8)])
 _MARGIN_PX = 2.0  # pixels added to each side: a box touching the border is always drawn
@@ -20,7 +22,7 @@ def box_corners_world(bounds: np.ndarray, matrices: np.ndarray) -> np.ndarray:
     corners = np.take_along_axis(
         bounds, np.broadcast_to(_CORNER_BITS, (len(bounds), 8, 3)), axis=1
     )  # (k, 8, 3)
-    return corners @ matrices[:, :3, :3].transpose(0, 2, 1) + matrices[:, None, :3, 3]
+    return pm.matmul(corners, matrices[:, :3, :3].transpose(0, 2, 1)) + matrices[:, None, :3, 3]
 
 
 def outside_frustum(

@@ -34,7 +34,7 @@ def sun_pose(azimuth_deg: float, elevation_deg: float) -> np.ndarray:
     towards_sun = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
     z = towards_sun
     x = np.cross([0.0, 0.0, 1.0], z)
-    x /= np.linalg.norm(x)
+    x /= np.sqrt(np.sum(x * x))  # not BLAS: its kernel depends on the CPU (portable_math.matmul)
     pose = np.eye(4)
     pose[:3, :3] = np.column_stack([x, np.cross(z, x), z])
     return pose

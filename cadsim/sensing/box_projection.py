@@ -10,6 +10,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from cadsim import portable_math as pm
 from cadsim.camera import Camera
 from cadsim.world import WorldObject
 
@@ -32,7 +33,7 @@ def box_corners(obj: WorldObject) -> np.ndarray:
     """(8, 3) corners of the object's bounding box, world frame, metres."""
     local = _CORNER_SIGNS * (np.asarray(obj.size, float) / 2.0)
     T = obj.pose()
-    return local @ T[:3, :3].T + T[:3, 3]
+    return pm.matmul(local, T[:3, :3].T) + T[:3, 3]
 
 
 def projected_box_areas(obj: WorldObject, camera: Camera) -> tuple[float, float]:

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import ndimage
 
+from cadsim import portable_math as pm
 from cadsim.camera import Camera
 from cadsim.config_tables import check_number, config_from_table
 from cadsim.render.view import RenderedView
@@ -138,7 +139,9 @@ def centre_offset_along(obj: WorldObject, ray_world: np.ndarray) -> float:
     unit viewing direction: the area-weighted mean over the visible faces, which for a box is
     volume / (2 · area projected along the ray), i.e. L·W·H / (2 (W·H|r_x| + L·H|r_y| + L·W|r_z|))
     with r in the object's axes (L/2 seen end-on, W/2 seen side-on)."""
-    r = np.abs(ray_world @ obj.pose()[:3, :3])  # |components| in the object's x, y, z axes
+    r = np.abs(
+        pm.matmul(ray_world, obj.pose()[:3, :3])
+    )  # |components| in the object's x, y, z axes
     L, W, Hh = (max(float(v), 1e-6) for v in obj.size)
     projected = W * Hh * r[0] + L * Hh * r[1] + L * W * r[2]
     return 0.5 * L * W * Hh / projected
@@ -187,8 +190,8 @@ class DetectionPlan:
             z = float(np.median(values[self.starts[i] : self.starts[i + 1]]))
             p = self.camera.back_project(self.centres[i : i + 1], np.array([z]))[0]
             if self.surface_to_center:
-                ray = p / np.linalg.norm(p)
-                p = p + centre_offset_along(obj, R @ ray) * ray
+                ray = p / np.sqrt(np.sum(p * p))  # not BLAS (see features._l2)
+                p = p + centre_offset_along(obj, pm.matmul(R, ray)) * ray
             positions.append(p)
         return Detections(
             positions=np.array(positions, dtype=float),

@@ -54,8 +54,11 @@ HOG_BINS = 9
 
 
 def _l2(v: np.ndarray) -> np.ndarray:
+    # the norm by numpy's own (pairwise, fixed-order) sum, not np.linalg.norm: that calls BLAS,
+    # whose kernel (and so the float32 summation order) OpenBLAS picks by CPU model, which gave
+    # other feature bits on an AVX-512 CPU (DESIGN §10: the same dataset on any CPU)
     v = np.maximum(np.asarray(v, dtype=np.float32).ravel(), 0.0)
-    n = float(np.linalg.norm(v))
+    n = float(np.sqrt(np.sum(v * v)))
     return v / n if n > 0 else v
 
 

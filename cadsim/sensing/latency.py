@@ -22,6 +22,8 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from cadsim import portable_math as pm
+
 MIN_VELOCITY_FORMAT = 3  # dataset format version from which records carry velocities
 
 
@@ -56,4 +58,4 @@ def delayed_positions(
         sender_velocity, dtype=float
     ).reshape(1, 3)
     rotation = np.asarray(rotation_cam_to_world, dtype=float).reshape(3, 3)
-    return positions - float(latency_s) * relative @ rotation  # rows: Rᵀ r
+    return positions - float(latency_s) * pm.matmul(relative, rotation)  # rows: Rᵀ r

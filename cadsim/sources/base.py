@@ -27,6 +27,19 @@ class ObserverPair:
     meta: dict = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class ObserverSet:
+    """N cameras of one snapshot that may see the same scene (DESIGN §12), vehicles first, then
+    roadside units. observer_ids: per camera, the carrying object's id ("" for none) or a
+    roadside unit's id; kinds: per camera "vehicle" or "roadside" (a pole-mounted camera whose
+    pose is known exactly). meta: e.g. junction id."""
+
+    cameras: tuple[Camera, ...]
+    observer_ids: tuple[str, ...]
+    kinds: tuple[str, ...]
+    meta: dict = field(default_factory=dict)
+
+
 class TrafficSource(ABC):
     """One seeded simulation. Use as a context manager: ``with source: for snap in source.snapshots()``."""
 
@@ -50,3 +63,8 @@ class TrafficSource(ABC):
     @abstractmethod
     def observer_pairs(self, snapshot: Snapshot) -> list[ObserverPair]:
         """Candidate observer pairs for this snapshot, in a deterministic order."""
+
+    def observer_sets(self, snapshot: Snapshot) -> list[ObserverSet]:
+        """Candidate N-view observer sets for this snapshot (``[observers] count`` vehicles plus
+        ``roadside_units``), in a deterministic order; sources without N-view support raise."""
+        raise NotImplementedError(f"{type(self).__name__} gives no N-view observer sets")

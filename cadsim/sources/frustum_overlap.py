@@ -39,7 +39,8 @@ def polygon_area(polygon: np.ndarray) -> float:
     if len(p) < 3:
         return 0.0
     x, y = p[:, 0], p[:, 1]
-    return float(abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))) / 2.0)
+    # sums, not np.dot: BLAS kernels differ by CPU (portable_math.matmul)
+    return float(abs(np.sum(x * np.roll(y, -1)) - np.sum(y * np.roll(x, -1))) / 2.0)
 
 
 def convex_intersection(subject: np.ndarray, clip: np.ndarray) -> np.ndarray:

@@ -29,6 +29,11 @@ from matchers.blocks.local_context import rigid_fit as fit_motion
 MIN_MATCHES = 3  # fewer matches, or collinear ones (the rotation about the line is free): a failure
 SUCCESS_BOUNDS: tuple[tuple[float, float], ...] = ((1.0, 2.0), (2.0, 5.0))
 """(RTE m, RRE degrees) of the success rates reported."""
+RTE_DECIMALS = 4  # 0.1 mm
+RRE_DECIMALS = 4  # 0.0001°
+"""Every RTE and RRE is rounded to these decimals (DESIGN §10): the fit's SVD and products run
+in BLAS/LAPACK, whose kernels differ by CPU in the last bits, and the arccos of a rotation
+within microdegrees of the truth turns those bits into differences of ~1e-6°."""
 COLUMNS = (
     "rte_m_median",
     "rre_deg_median",
@@ -63,7 +68,8 @@ def pose_error(estimate: np.ndarray | None, truth: np.ndarray) -> tuple[float, f
     estimate, truth = np.asarray(estimate, dtype=float), np.asarray(truth, dtype=float)
     rte = float(np.linalg.norm(estimate[:3, 3] - truth[:3, 3]))
     cos = (np.trace(estimate[:3, :3] @ truth[:3, :3].T) - 1.0) / 2.0
-    return rte, float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+    rre = float(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+    return round(rte, RTE_DECIMALS), round(rre, RRE_DECIMALS)
 
 
 def matched_pose_error(

@@ -26,8 +26,9 @@ import libsumo
 import numpy as np
 
 from cadsim.scenario import Scenario, ScenarioError
-from cadsim.sources.base import ObserverPair, TrafficSource
+from cadsim.sources.base import ObserverPair, ObserverSet, TrafficSource
 from cadsim.sources.observer_pairs import observer_pairs
+from cadsim.sources.observer_sets import observer_sets
 from cadsim.sources.sumo.build import ToolFailed
 from cadsim.sources.sumo.command import sumo_run
 from cadsim.sources.sumo.confinement import ConfinementError
@@ -199,6 +200,9 @@ class SumoSource(TrafficSource):
 
     def observer_pairs(self, snapshot: Snapshot) -> list[ObserverPair]:
         return observer_pairs(snapshot, self.scenario.camera, self.scenario.observers)
+
+    def observer_sets(self, snapshot: Snapshot) -> list[ObserverSet]:
+        return observer_sets(snapshot, self.scenario.camera, self.scenario.observers)
 
     # ---------------------------------------------------------------------------------------
 
