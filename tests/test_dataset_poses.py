@@ -95,11 +95,11 @@ def test_an_older_dataset_is_refused_in_one_line_naming_both_versions(fake_datas
         Dataset(old)
     message = str(info.value)
     assert "\n" not in message and str(old) in message
-    assert "format version 1 is older than the versions 2 or 3" in message
+    assert "format version 1 is older than the versions 2, 3 or 4" in message
     assert "regenerate" in message
-    manifest["format_version"] = 4
+    manifest["format_version"] = 5
     (old / "manifest.json").write_text(json.dumps(manifest))
-    with pytest.raises(DatasetError, match="version 4 is not the versions 2 or 3"):
+    with pytest.raises(DatasetError, match="version 5 is not the versions 2, 3 or 4"):
         Dataset(old)
 
 

@@ -153,8 +153,8 @@ def read_manifest(dataset_dir: Path, versions: tuple[int, ...] = READABLE_VERSIO
         raise DatasetError(
             f"{Path(dataset_dir)}: dataset format version {found!r} is "
             f"{'older than' if older else 'not'} the version{'s' if len(versions) > 1 else ''} "
-            f"{' or '.join(map(str, versions))} this cadsim {'reads' if len(versions) > 1 else 'writes'}; "
-            + remedy
+            f"{', '.join(map(str, versions[:-1])) + ' or ' if len(versions) > 1 else ''}"
+            f"{versions[-1]} this cadsim {'reads' if len(versions) > 1 else 'writes'}; " + remedy
         )
     for key in ("complete", "records", "checksum", "generation", "scenario", "seeds"):
         if key not in manifest:

@@ -13,12 +13,15 @@ from __future__ import annotations
 
 from functools import cached_property
 from itertools import combinations
+from typing import TYPE_CHECKING
 
 from cadsim.dataset import layout
 from cadsim.dataset.detections import ViewDetections
 from cadsim.dataset.encoding import load_npz
 from cadsim.dataset.manifest import DatasetError
-from cadsim.dataset.reader import FramePair  # noqa: TC001 - documented type
+
+if TYPE_CHECKING:  # the reader imports this module
+    from cadsim.dataset.reader import FramePair
 
 KINDS = ("vehicle", "roadside")
 
