@@ -59,7 +59,17 @@ def run(args: argparse.Namespace) -> int:
         )
         return 130
     print(
-        f"{result.out}: {result.pairs} frame pairs ({result.new_records} new, "
+        f"{result.out}: {result.pairs} {_records_word(result.out)} ({result.new_records} new, "
         f"{result.views} views rendered in {result.seconds:.1f} s); checksum {result.checksum}"
     )
     return 0
+
+
+def _records_word(out) -> str:
+    """ "frame pairs", or "snapshots (N views each)" for an N-view dataset."""
+    import json
+
+    from cadsim.dataset import layout
+
+    views = json.loads((out / layout.MANIFEST).read_text()).get("views", 2)
+    return "frame pairs" if views == 2 else f"snapshots ({views} views each)"
