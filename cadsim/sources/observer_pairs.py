@@ -70,6 +70,21 @@ def arm_relation(yaw1: float, yaw2: float) -> str:
     return "adjacent" if difference >= ADJACENT_DEG else "parallel"
 
 
+def eligible_by_junction(snapshot: Snapshot, observers: dict) -> dict[str, list[tuple[str, dict]]]:
+    """junction id -> [(object id, approach)] of the vehicles that may carry a camera there: of
+    an allowed class and within [min_distance, max_distance] of the junction, in id order."""
+    objects = snapshot.by_id()
+    allowed = set(observers["classes"])
+    lo, hi = observers["min_distance"], observers["max_distance"]
+    by_junction: dict[str, list[tuple[str, dict]]] = {}
+    for oid, approach in sorted(snapshot.meta.get("approaches", {}).items()):
+        obj = objects.get(oid)
+        if obj is None or obj.cls not in allowed or not lo <= approach["distance"] <= hi:
+            continue
+        by_junction.setdefault(approach["junction"], []).append((oid, approach))
+    return by_junction
+
+
 def observer_pairs(
     snapshot: Snapshot,
     camera: CameraConfig,
@@ -85,19 +100,12 @@ def observer_pairs(
     junction_centres: junction id -> (x, y) world metres, needed for ``aim = "junction"``
     (default: ``snapshot.meta["junctions"]``)."""
     objects = snapshot.by_id()
-    allowed = set(observers["classes"])
-    lo, hi = observers["min_distance"], observers["max_distance"]
     relations = set(observers.get("arm_relations") or ())
     min_area = float(observers.get("min_shared_area_m2", 0.0))
     aim = observers.get("aim", "heading")
     if junction_centres is None:
         junction_centres = snapshot.meta.get("junctions", {})
-    by_junction: dict[str, list[tuple[str, dict]]] = {}
-    for oid, approach in sorted(snapshot.meta.get("approaches", {}).items()):
-        obj = objects.get(oid)
-        if obj is None or obj.cls not in allowed or not lo <= approach["distance"] <= hi:
-            continue
-        by_junction.setdefault(approach["junction"], []).append((oid, approach))
+    by_junction = eligible_by_junction(snapshot, observers)
 
     candidates = []
     for junction in sorted(by_junction):

@@ -24,7 +24,7 @@ import numpy as np
 from cadsim.camera import Camera
 from cadsim.scenario import CameraConfig
 from cadsim.sources.base import ObserverSet
-from cadsim.sources.observer_pairs import mount_camera
+from cadsim.sources.observer_pairs import eligible_by_junction, mount_camera
 from cadsim.world import Snapshot
 
 ROADSIDE_BEARINGS_DEG = (45.0, 225.0, 135.0, 315.0)
@@ -92,16 +92,9 @@ def observer_sets(
     ``[observers] aim``), then the roadside units. junction_centres: junction id -> (x, y)
     world metres (default: ``snapshot.meta["junctions"]``)."""
     objects = snapshot.by_id()
-    allowed = set(observers["classes"])
-    lo, hi = observers["min_distance"], observers["max_distance"]
     if junction_centres is None:
         junction_centres = snapshot.meta.get("junctions", {})
-    by_junction: dict[str, list[tuple[str, dict]]] = {}
-    for oid, approach in sorted(snapshot.meta.get("approaches", {}).items()):
-        obj = objects.get(oid)
-        if obj is None or obj.cls not in allowed or not lo <= approach["distance"] <= hi:
-            continue
-        by_junction.setdefault(approach["junction"], []).append((oid, approach))
+    by_junction = eligible_by_junction(snapshot, observers)
     sets = []
     for junction in sorted(by_junction):
         if junction not in junction_centres:
