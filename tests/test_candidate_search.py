@@ -75,6 +75,19 @@ def test_distances_beyond_the_histogram_range_are_still_exact():
         assert np.array_equal(got[1], want[1])
 
 
+def test_a_misleading_sample_falls_back_to_every_candidate():
+    # the compiled search estimates its bound from every 8th distance: here those candidates are
+    # the only close ones, so the bound keeps fewer than k and the search must widen to all
+    rng = np.random.default_rng(6)
+    candidates = rng.uniform(5, 9, (800, 3))
+    candidates[::8] = rng.uniform(0, 0.1, (100, 3))
+    queries = np.zeros((4, 3))
+    for k in (150, 400):
+        got = nearest(queries, candidates, k, 1)
+        want = _reference(queries, candidates, k, 1)
+        assert np.array_equal(got[1], want[1]) and np.array_equal(got[0], want[0])
+
+
 def test_bad_arguments_are_refused():
     q = np.zeros((2, 3))
     with pytest.raises(ValueError, match="p: expected 1 or 2"):

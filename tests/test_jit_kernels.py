@@ -1,11 +1,9 @@
 """The compiled kernels (matchers.core.jit) agree with the numpy code they replace, and the matchers give
 the same matchings with and without them.
 
-Kernels that only add and multiply follow numpy's summation order and are compared bit for bit.
-Where a kernel calls a transcendental function (``exp`` in the tensor values), numba calls the C
-library while numpy may dispatch to AVX-512 code that differs in the last bit
-(``../shared/DESIGN.md`` §10), so values are compared with ``RTOL`` and matchings exactly, on
-problems whose solution is not a near-tie."""
+Kernels follow numpy's summation order and are compared bit for bit; the tensor values' ``exp``
+is the portable one (:mod:`matchers.core.portable_exp`) in both paths, so whole matchers give the
+same bits with and without numba."""
 
 from __future__ import annotations
 
@@ -14,10 +12,10 @@ import pytest
 
 from matchers import Problem, get, tm
 from matchers.blocks import sinkhorn
-from matchers.hypergraph import sparse_tensor, tensor_build, tensor_product
+from matchers.core import portable_exp
+from matchers.hypergraph import candidate_search, sparse_tensor, tensor_build, tensor_product
 from matchers.hypergraph.tensor_build import build_tensor
 
-RTOL = 1e-12  # compiled (C library exp) vs numpy (possibly AVX-512 exp): a few ulp at most
 
 
 def test_numba_is_installed_and_the_kernels_compile():
@@ -94,7 +92,7 @@ def test_compiled_products_are_bit_identical_to_bincount(shape):
     assert np.array_equal(tensor.slot_sums(x), sums)
     assert np.array_equal(tensor.bilinear(y, z), bilinear)
     assert not tensor._matrix  # compiled products need no sorted layout
-    assert tensor._compact_slots.dtype == np.uint16  # they stream 2-byte indices
+    assert tensor.compact_slots.dtype == np.uint16  # they stream 2-byte indices
     tensor.prepare_products()
     assert not tensor._matrix  # ... even when asked for it (TM): the compiled loop is faster
 
@@ -114,12 +112,14 @@ def test_matchers_give_the_same_matchings_without_numba(name, monkeypatch):
     monkeypatch.setattr(sparse_tensor, "COMPILED", False)
     monkeypatch.setattr(sinkhorn, "_positive_kernel_jit", None)
     monkeypatch.setattr(tm, "_doubly_kernel_jit", None)
+    monkeypatch.setattr(tm, "_steps_jit", None)
     monkeypatch.setattr(tensor_build, "_match_indices_jit", None)
-    monkeypatch.setattr(tensor_build, "_decay_jit", None)
+    monkeypatch.setattr(portable_exp, "_exp_into_jit", None)
+    monkeypatch.setattr(candidate_search, "_nearest_jit", None)
     for problem, fast in zip(problems, compiled, strict=True):
         slow = get(name)(problem, seed=1)
         assert np.array_equal(fast.pairs, slow.pairs)
-        np.testing.assert_allclose(fast.scores, slow.scores, rtol=RTOL, atol=1e-300)
+        assert np.array_equal(fast.scores, slow.scores)  # the same bits
 
 
 @pytest.mark.parametrize("recipe", ["paper", "duchenne"])
@@ -129,11 +129,11 @@ def test_compiled_tensor_assembly_agrees_with_numpy(recipe, size, monkeypatch):
     problem = Problem(rng.uniform(0, 20, (size[0], 3)), rng.uniform(0, 20, (size[1], 3)))
     compiled = build_tensor(problem, recipe, 3)
     monkeypatch.setattr(tensor_build, "_match_indices_jit", None)
-    monkeypatch.setattr(tensor_build, "_decay_jit", None)
+    monkeypatch.setattr(portable_exp, "_exp_into_jit", None)
     plain = build_tensor(problem, recipe, 3)
     assert compiled.nnz > 0
     assert np.array_equal(compiled.indices, plain.indices)
-    np.testing.assert_allclose(compiled.values, plain.values, rtol=RTOL, atol=0)
+    assert np.array_equal(compiled.values, plain.values)  # exp included: the portable one
 
 
 def test_compiled_degrees_and_worst_case_weights_are_bit_identical():

@@ -1,20 +1,16 @@
 """Optional numba compilation for the few hot loops numpy cannot vectorise or runs slowly (the
 Sinkhorn sweeps of :mod:`matchers.blocks.sinkhorn`, the tensor products, degrees and worst-case weights
-of :mod:`matchers.hypergraph.tensor_product`, TM's doubly l2 normalisation, and the tensor builder's match
-indices and exp(-d / sigma) values — numpy's float64 exp on a CPU without AVX-512 is a 4x slower
-loop around the same C library exp).
+of :mod:`matchers.hypergraph.tensor_product`, TM's iteration, the candidate search, and the tensor
+builder's match indices and exp(-d / sigma) values, :mod:`matchers.core.portable_exp`).
 
 ``njit(fn)`` returns the compiled function when numba imports, else None — callers keep their
 numpy implementation and use it whenever the compiled one is missing, so numba is an accelerator,
 never a requirement. A numba that is installed but fails to import (broken against this numpy, or
 a module of the same name as one it imports shadowing it, e.g. a ``timeit.py`` in the script's
 directory) logs one warning saying so: the results are the same, the speed is not. Every compiled
-kernel performs the same floating-point operations in the same order as its numpy twin: the
-purely arithmetic ones are tested bit for bit in ``tests/test_jit_kernels.py``; the tensor values'
-``exp`` is the C library's here and may be numpy's AVX-512 code there (last-bit differences), so
-those are tested within ``rtol`` 1e-12 and with identical matchings; scores are canonicalised
-before every assignment (``matchers.core.discretise``), so results do not depend on whether numba is
-installed.
+kernel performs the same floating-point operations in the same order as its numpy twin (the exp
+included: both use the portable one), tested bit for bit in ``tests/test_jit_kernels.py``, so
+results do not depend on whether numba is installed.
 
 Compiled code is cached on disk so that worker processes load it instead of compiling it again
 (≈ 1.5 s per kernel). The cache lives in ``$CADSIM_CACHE_DIR/numba`` (default

@@ -4,16 +4,21 @@ For each query row (a sampled triangle's descriptor) the ``k`` nearest rows of `
 other view's ordered triples) by L1 or Euclidean distance, ties broken by candidate index, and
 each list in candidate-index order. No tree promises that choice — which of several exactly
 tied candidates a k-d tree keeps depends on its traversal — so the search is brute force: every
-distance of a query is computed (the compiled path histograms their float64 bit patterns in the
-same pass, 64 bins per octave), the k-th smallest is found by a selection inside the one bin
-that holds it, and one more pass keeps everything strictly closer and then the lowest-indexed
-candidates at exactly the k-th distance, in index order.
+distance of a query is computed (a vectorised pass over the candidates' coordinate columns); a
+bound on the k-th smallest comes from every 8th of them (the end of the histogram bin, 64 per
+octave of float64 bit patterns, that holds the sample's estimate); one branch-free pass pools
+the candidates closer than the bound, in index order; the k-th smallest is found inside the
+pool (its histogram, then a selection inside the one bin that holds it), and one more pass over
+the pool keeps everything strictly closer and then the lowest-indexed candidates at exactly the
+k-th distance. The pool is exact whenever it holds at least k candidates; when the sample
+misjudged, it is every candidate.
 
 At every size the uncapped tensor meets (queries x k <= 10^6 entries) brute force is also the
 fastest exact search, measured on two cores against a k-d tree made canonical (asked for a few
 more than k, re-ranked): 20 v 20 (400 queries x 6,840 candidates, k = 400) 4.7 vs 60 ms,
 25 v 40 (1,000 x 59,280, k = 1,000) 69 vs 440 ms, 10 v 100 (120 x 970,200, k = 1,000) 150 vs
-210 ms — and 3.5 ms against 9 ms for the plain threaded cKDTree query it replaces at 20 v 20.
+210 ms (with the earlier one-pass histogram; the sampled bound halves the 20 v 20 time again,
+9.5-11.8 -> 4.9 ms on one thread, docs/matchers.md).
 Two paths give the same result bit for bit: a compiled loop per query (numba,
 :mod:`matchers.core.jit`; split over threads by :func:`matchers.core.row_threads.split_rows` —
 rows are independent, so the split never changes a bit) and a numpy one over blocks of queries (:data:`BLOCK_CELLS` distances
@@ -51,8 +56,10 @@ def nearest(
     dist = np.empty((len(queries), k))
     idx = np.empty((len(queries), k), dtype=np.int64)
 
+    columns = np.ascontiguousarray(candidates.T)  # (3, F): each coordinate contiguous
+
     def job(lo: int, hi: int) -> None:
-        _nearest_jit(queries[lo:hi], candidates, k, p, dist[lo:hi], idx[lo:hi])
+        _nearest_jit(queries[lo:hi], columns, k, p, dist[lo:hi], idx[lo:hi])
 
     split_rows(job, len(queries), len(queries) * len(candidates))
     return dist, idx
@@ -125,59 +132,96 @@ _kth = njit(_kth_smallest) or _kth_smallest  # called by the compiled kernel
 _LOW_EXPONENT = 1013  # float64 exponent field of 2**-10: smaller distances share the first bin
 _BIN_SHIFT = 46  # 11 exponent + 6 mantissa bits: 64 bins per octave
 _BINS = 14 * 64  # 2**-10 .. 2**4 (distances of unit-scale descriptors), larger in the last bin
+_SAMPLE_STRIDE = 8  # every 8th distance of a query estimates its k-th smallest
+_SAMPLE_MARGIN = 1.25  # the estimate's rank among the samples over k / stride: a pool ~1.25 k
+
+
+def _bin_of(value_bits: np.int64, low: np.int64) -> np.int64:
+    # the histogram bin of a non-negative float64 by its bit pattern (order-preserving)
+    return min(max((value_bits >> _BIN_SHIFT) - low, 0), _BINS - 1)
+
+
+_bin = njit(_bin_of) or _bin_of
+
+
+def _edge_bin(values: np.ndarray, size: int, rank: int, hist: np.ndarray, low: np.int64):
+    # (bin holding the rank-th smallest (0-based) of values[:size], values in lower bins)
+    bits = values.view(np.int64)
+    hist[:] = 0
+    for s in range(size):
+        hist[s & 3, _bin(bits[s], low)] += 1  # 4 interleaved: no chain of increments
+    below = 0
+    edge = 0
+    while True:
+        here = hist[0, edge] + hist[1, edge] + hist[2, edge] + hist[3, edge]
+        if below + here > rank:
+            return edge, below
+        below += here
+        edge += 1
+
+
+_edge = njit(_edge_bin) or _edge_bin
 
 
 def _nearest_kernel(
     queries: np.ndarray,
-    candidates: np.ndarray,
+    columns: np.ndarray,
     k: int,
     p: int,
     dist_out: np.ndarray,
     idx_out: np.ndarray,
 ):
-    # per query: distances and a histogram over their float64 bit patterns (order-preserving for
-    # non-negative numbers) in one pass; the bin holding the k-th smallest is then the only one
-    # that needs a selection; one more pass keeps the candidates below it in index order
-    count, total = queries.shape[0], candidates.shape[0]
+    # per query: every distance (a vectorised pass over the candidates' coordinate columns); a
+    # bound t from a strided sample of them (the end of the histogram bin holding the sample's
+    # estimate of the k-th); the pool of candidates closer than t, in index order (branch-free);
+    # the exact k-th smallest from the pool's histogram and a selection inside its one bin —
+    # exact because the pool holds every candidate closer than t and at least k of them (else
+    # it is every candidate) — and one pass over the pool keeps the k
+    count, total = queries.shape[0], columns.shape[1]
+    c0, c1, c2 = columns[0], columns[1], columns[2]
     dist = np.empty(total)
-    bits = dist.view(np.int64)
-    bins = np.empty(total, dtype=np.int32)
     buf = np.empty(total + 1)
     pool = np.empty(total + 1, dtype=np.int64)
-    hist = np.empty((4, _BINS), dtype=np.int32)  # 4 interleaved: no chain of increments
+    hist = np.empty((4, _BINS), dtype=np.int32)
     low = np.int64(_LOW_EXPONENT) << np.int64(52 - _BIN_SHIFT)
+    samples = (total + _SAMPLE_STRIDE - 1) // _SAMPLE_STRIDE
+    sample = np.empty(samples + 1)
+    rank = min(samples - 1, int(k * _SAMPLE_MARGIN / _SAMPLE_STRIDE) + 8)
+    bound = np.empty(1, dtype=np.int64)
     for q in range(count):
         a0, a1, a2 = queries[q, 0], queries[q, 1], queries[q, 2]
-        hist[:] = 0
-        for j in range(total):
-            d0 = a0 - candidates[j, 0]
-            d1 = a1 - candidates[j, 1]
-            d2 = a2 - candidates[j, 2]
-            if p == 1:
-                d = (abs(d0) + abs(d1)) + abs(d2)
-            else:
-                d = np.sqrt((d0 * d0 + d1 * d1) + d2 * d2)
-            dist[j] = d
-            b = (bits[j] >> _BIN_SHIFT) - low
-            b = min(max(b, 0), _BINS - 1)
-            bins[j] = b
-            hist[j & 3, b] += 1
-        below = 0
-        edge = 0
-        while True:
-            here = hist[0, edge] + hist[1, edge] + hist[2, edge] + hist[3, edge]
-            if below + here >= k:
-                break
-            below += here
-            edge += 1
-        size = 0  # distances in the edge bin
-        kept = 0  # candidates in bins up to the edge, in index order
-        for j in range(total):  # branch-free: write always, advance when kept
-            b = bins[j]
-            pool[kept] = j
-            kept += b <= edge
-            buf[size] = dist[j]
-            size += b == edge
+        if p == 1:
+            for j in range(total):
+                dist[j] = (abs(a0 - c0[j]) + abs(a1 - c1[j])) + abs(a2 - c2[j])
+        else:
+            for j in range(total):
+                d0, d1, d2 = a0 - c0[j], a1 - c1[j], a2 - c2[j]
+                dist[j] = np.sqrt((d0 * d0 + d1 * d1) + d2 * d2)
+        for s in range(samples):
+            sample[s] = dist[s * _SAMPLE_STRIDE]
+        edge, _ = _edge(sample, samples, rank, hist, low)
+        kept = total
+        if edge < _BINS - 1:  # t: the first float64 of the next bin
+            bound[0] = (edge + 1 + low) << np.int64(_BIN_SHIFT)
+            t = bound.view(np.float64)[0]
+            kept = 0
+            for j in range(total):  # branch-free: write always, advance when kept
+                pool[kept] = j
+                kept += dist[j] < t
+        if kept < k:  # the sample misjudged (or the last bin): every candidate
+            kept = total
+        if kept == total:
+            for j in range(total):
+                pool[j] = j
+        for s in range(kept):
+            buf[s] = dist[pool[s]]
+        edge, below = _edge(buf, kept, k - 1, hist, low)
+        bits = buf.view(np.int64)
+        size = 0  # the pool's distances in the edge bin, gathered to the front of buf
+        for s in range(kept):
+            value = buf[s]
+            buf[size] = value
+            size += _bin(bits[s], low) == edge
         kth = _kth(buf, size, k - 1 - below)
         room = k - below  # places left for candidates at exactly the k-th distance
         for s in range(size):

@@ -127,7 +127,7 @@ class SparseTensor:
         """Sort the fused-product layout now (a caller about to run many products, like TM's
         100 fixed iterations); otherwise it is sorted on the :data:`FUSE_AFTER`-th product, or
         never when the products are compiled (:data:`~matchers.hypergraph.tensor_product.COMPILED`: the
-        compiled loops on :attr:`_compact_slots` are faster than the sorted layout)."""
+        compiled loops on :attr:`compact_slots` are faster than the sorted layout)."""
         if not COMPILED:
             self._fused(now=True)
 
@@ -152,7 +152,7 @@ class SparseTensor:
         return self._matrix[0]
 
     @property
-    def _compact_slots(self) -> np.ndarray:
+    def compact_slots(self) -> np.ndarray:
         """:attr:`_slots` as uint16 when every match index fits (nm <= 65536), for the compiled
         products: 6 instead of 24 index bytes per triple to stream (computed once per index
         pattern, shared with :meth:`with_values` copies)."""
@@ -187,7 +187,7 @@ class SparseTensor:
         outside ``mask`` — BCAGM's block updates use this to skip the entries that cannot
         contribute (its reference code keeps an (i, j)-pair index for the same purpose)."""
         if COMPILED:  # one pass, straight into the column-major layout
-            by_slot, values = compiled_restricted(self._compact_slots, self.values, mask)
+            by_slot, values = compiled_restricted(self.compact_slots, self.values, mask)
             return SparseTensor(by_slot.T, values, self.n, self.m, self.info)
         inside = np.asarray(mask, dtype=bool)[self.indices].sum(axis=1) >= 2
         return SparseTensor(self.indices[inside], self.values[inside], self.n, self.m, self.info)
@@ -210,7 +210,7 @@ class SparseTensor:
             pair += pair.T  # [b, c] = y_b z_c + y_c z_b, the same sum in the same order
             return fused @ pair.reshape(-1)
         if COMPILED:
-            return compiled_bilinear(self._compact_slots, self.values, y, z, self.size)
+            return compiled_bilinear(self.compact_slots, self.values, y, z, self.size)
         ia, ib, ic = self._columns
         ya, yb, yc = np.take(y, ia), np.take(y, ib), np.take(y, ic)
         za, zb, zc = np.take(z, ia), np.take(z, ib), np.take(z, ic)
@@ -236,7 +236,7 @@ class SparseTensor:
         if fused is not None:
             return fused @ np.outer(x, x).reshape(-1)
         if COMPILED:
-            return compiled_slot_sums(self._compact_slots, self.values, x, self.size)
+            return compiled_slot_sums(self.compact_slots, self.values, x, self.size)
         ia, ib, ic = self._columns
         xa, xb, xc = np.take(x, ia), np.take(x, ib), np.take(x, ic)
         weights = np.empty((self.nnz, 3))
@@ -252,14 +252,14 @@ class SparseTensor:
         if not self.nnz:
             return np.zeros(self.size)
         if COMPILED:
-            return compiled_degrees(self._compact_slots, self.values, self.size)
+            return compiled_degrees(self.compact_slots, self.values, self.size)
         return np.bincount(self._incidences, np.repeat(self.values, 3), minlength=self.size)
 
     def min_weighted(self, b: np.ndarray) -> np.ndarray:
         """Each stored value times the smallest of ``b`` (length nm) over its triple's three
         matches: h * min(b_a, b_b, b_c) per stored triple (maximin's worst case, Eq. 5)."""
         if COMPILED and self.nnz:
-            return compiled_min_weighted(self._compact_slots, self.values, b)
+            return compiled_min_weighted(self.compact_slots, self.values, b)
         return self.values * np.asarray(b, dtype=float)[self.indices].min(axis=1)
 
     def value(self, x: np.ndarray) -> float:

@@ -55,6 +55,7 @@ from scipy.spatial import cKDTree
 
 from matchers.core.jit import njit
 from matchers.core.memory_budget import check_memory
+from matchers.core.portable_exp import decay
 from matchers.core.problem import Problem
 from matchers.core.row_threads import split_rows
 from matchers.hypergraph.candidate_search import nearest
@@ -148,16 +149,8 @@ def build_tensor(
     if bandwidth is None:
         mean = float(found.dist.mean())
         bandwidth = mean if mean > 0 else 1.0
-    dist = found.dist
-    if _decay_jit is None:
-        values = np.exp(-dist / bandwidth).reshape(-1)
-    else:
-        flat, values = dist.reshape(-1), np.empty(dist.size)
-
-        def job(lo: int, hi: int) -> None:
-            _decay_jit(flat[lo:hi], float(bandwidth), values[lo:hi])
-
-        split_rows(job, flat.size, flat.size * 4)
+    values = np.empty(found.dist.size)
+    decay(found.dist.reshape(-1), float(bandwidth), values)  # exp(-d / bandwidth), portable
     info |= {
         "triangles": found.triangles,
         "neighbours": found.neighbours,
@@ -288,17 +281,6 @@ def _match_indices(
 
 
 _match_indices_jit = njit(_match_indices)
-
-
-def _decay(flat: np.ndarray, bandwidth: float, out: np.ndarray) -> None:
-    # into out: np.exp(-flat / bandwidth) of a 1-D array — the same division, and the same C
-    # library exp numpy calls on CPUs without AVX-512 (tested bit for bit), without numpy's 4x
-    # slower loop around it
-    for i in range(flat.size):
-        out[i] = np.exp(-flat[i] / bandwidth)
-
-
-_decay_jit = njit(_decay)
 
 
 # Working bytes per stored entry (distances, neighbour indices, the three match indices, the value

@@ -147,7 +147,8 @@ def _restricted_kernel(slots: np.ndarray, values: np.ndarray, mask: np.ndarray):
     return indices, out
 
 
-_slot_sums_jit = njit(_slot_sums_kernel)
+slot_sums_jit = njit(_slot_sums_kernel)
+"""The compiled product (or None), for loops that call it from compiled code (TM's)."""
 _restricted_jit = njit(_restricted_kernel)
 _bilinear_jit = njit(_bilinear_kernel)
 _degrees_jit = njit(_degrees_kernel)
@@ -155,7 +156,7 @@ _min_weighted_jit = njit(_min_weighted_kernel)
 COMPILED = all(
     kernel is not None
     for kernel in (
-        _slot_sums_jit,
+        slot_sums_jit,
         _bilinear_jit,
         _degrees_jit,
         _min_weighted_jit,
@@ -167,7 +168,7 @@ COMPILED = all(
 def compiled_slot_sums(slots: np.ndarray, values: np.ndarray, x: np.ndarray, size: int):
     """``SparseTensor.slot_sums`` from the concatenated (3N,) slot indices; needs numba
     (:data:`COMPILED`)."""
-    return _slot_sums_jit(slots, values, np.ascontiguousarray(x, dtype=np.float64), size)
+    return slot_sums_jit(slots, values, np.ascontiguousarray(x, dtype=np.float64), size)
 
 
 def compiled_bilinear(
