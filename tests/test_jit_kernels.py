@@ -17,7 +17,6 @@ from matchers.hypergraph import candidate_search, sparse_tensor, tensor_build, t
 from matchers.hypergraph.tensor_build import build_tensor
 
 
-
 def test_numba_is_installed_and_the_kernels_compile():
     # numba is a declared dependency: without it every kernel test below would test nothing new
     assert tensor_product.COMPILED
