@@ -8,7 +8,8 @@ Stages (each cached, so a second run only re-renders): generate every scenario's
 all matchers × runs (parameters tuned and τ calibrated on validation only; the untuned table
 beside); the paper's protocol; the CAD noise sweep (re-detection on stored clean depth); the regime
 sweep on every dataset; the dataset spread; the localisation sweep on CAD (prior re-drawn per
-position error); the external benchmark on the shipped DMGM CAD pairs (``eval/data/dmgm-cad``,
+position error); the V2X task on cad-v2x; the multi-agent table on cad-multi
+(:mod:`eval.studies.multiagent`); the external benchmark on the shipped DMGM CAD pairs (``eval/data/dmgm-cad``,
 :mod:`eval.studies.external`) and the ranking agreement with it (:mod:`eval.studies.agreement`); tables and
 figures; run record. Ends by printing Table I beside the paper's.
 
@@ -71,10 +72,19 @@ from eval.studies.external import (
     evaluate_external,
     external_matchers,
 )
+from eval.studies.multiagent import LABEL as MA_LABEL
+from eval.studies.multiagent import MATCHERS as MA_MATCHERS
+from eval.studies.multiagent import PRESETS as MA_PRESETS
+from eval.studies.multiagent import SCENARIO as MA_SCENARIO
+from eval.studies.multiagent import SUBSETS as MA_SUBSETS
+from eval.studies.multiagent import TEST_SNAPSHOTS as MA_TEST_SNAPSHOTS
+from eval.studies.multiagent import VAL_SNAPSHOTS as MA_VAL_SNAPSHOTS
+from eval.studies.multiagent import evaluate_multiagent
 from eval.studies.prior_defaults import SENSITIVITY, write_sensitivity
 from eval.studies.spread import spread_rows
 from eval.studies.v2x_table import PRESETS as V2X_PRESETS
 from eval.studies.v2x_table import evaluate_v2x
+from matchers.fusion import available_fusions
 
 log = logging.getLogger("eval.reproduce")
 
@@ -122,6 +132,10 @@ V2X_PAIRS = 25
 V2X_TRAIN_SEED_OFFSET = 2000
 V2X_TRAIN_FACTOR = 2
 V2X_RUNS = 3
+# Multi-agent (cad-multi: 4 vehicles + 2 roadside units per snapshot): test and validation
+# snapshots on disjoint scenario seeds, two-view matchers on every pair of views, fused per
+# subset of N views (eval.studies.multiagent), MULTIAGENT_RUNS seeds.
+MULTIAGENT_RUNS = 2
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -232,6 +246,12 @@ def build_parser() -> argparse.ArgumentParser:
         type=int,
         default=V2X_RUNS,
         help=f"runs per level of the cad-v2x preset sweep (default {V2X_RUNS}; 0: skip cad-v2x)",
+    )
+    p.add_argument(
+        "--multiagent-runs",
+        type=int,
+        default=MULTIAGENT_RUNS,
+        help=f"runs of the multi-agent table (default {MULTIAGENT_RUNS}; 0: skip cad-multi)",
     )
     p.add_argument("--out", default="results", help="output directory (default: results)")
     p.add_argument("--data", default="data", help="dataset directory (default: data)")
@@ -537,6 +557,32 @@ def main(argv: list[str] | None = None) -> int:
                 log.info("[prior sensitivity] every grid point of the prior matchers on 069 + 071")
                 write_sensitivity(out, runner)
         count("prior_sensitivity", before)
+        multiagent_seeds = list(range(args.multiagent_runs))
+        multiagent_record: dict = {}
+        with timer.stage("multiagent_generate"):
+            multi_dirs = (
+                _generate_multi(data, args, multiagent_record) if multiagent_seeds else None
+            )
+        with timer.stage("multiagent"):
+            before = asdict(runner.totals)
+            for stale in ("table_multiagent.csv", "table_multiagent.md"):
+                (out / stale).unlink(missing_ok=True)
+            if multi_dirs is not None:
+                multi_named, _ = chosen_specs(out, "CAD", parse_matchers(",".join(MA_MATCHERS)))
+                log.info(
+                    "[multiagent] %s: %d matchers × %d fusions × N in %s × %d presets × %d runs",
+                    MA_LABEL,
+                    len(multi_named),
+                    len(available_fusions()),
+                    sorted(MA_SUBSETS),
+                    len(MA_PRESETS),
+                    len(multiagent_seeds),
+                )
+                evaluate_multiagent(*multi_dirs, list(multi_named), multiagent_seeds, runner, out)
+                multiagent_record |= {"seeds": multiagent_seeds, "matchers": list(multi_named)}
+                multiagent_record |= {"presets": list(MA_PRESETS), "fusions": available_fusions()}
+                multiagent_record |= {"subsets": {str(n): list(v) for n, v in MA_SUBSETS.items()}}
+        count("multiagent", before)
 
     with timer.stage("tables_figures"):
         markdown = write_tables(out, PAPER_CSV)
@@ -578,6 +624,7 @@ def main(argv: list[str] | None = None) -> int:
             "seeds": {"main": seeds, "extra": spread_seeds},
         },
         v2x=v2x_record,
+        multiagent=multiagent_record,
         thresholds=taus,
         runs=runs,
         code_version=code_version(),
@@ -624,6 +671,27 @@ def _generate_v2x(data: Path, args: argparse.Namespace, record: dict):
     record["scenario"] = scenario_file(path) | {"path": _shown(path)}
     record["test"]["checksum"], record["val"]["checksum"] = entry.test_checksum, entry.val_checksum
     return entry
+
+
+def _generate_multi(data: Path, args: argparse.Namespace, record: dict) -> tuple[Path, Path]:
+    """Generate cad-multi's test and validation snapshots (:mod:`eval.studies.multiagent`'s
+    counts; disjoint scenario seeds); their folders. ``record`` gets what the run record keeps."""
+    from cadsim.scenario import load_scenario
+
+    path = ROOT / MA_SCENARIO
+    scenario = load_scenario(path)
+    splits = {
+        "test": (data / "cad-multi", MA_TEST_SNAPSHOTS, scenario.seed),
+        "val": (data / "cad-multi-val", MA_VAL_SNAPSHOTS, scenario.seed + VAL_SEED_OFFSET),
+    }
+    for split, (folder, n, seed) in splits.items():
+        n = n if args.pairs is None else min(args.pairs, n)
+        log.info("[multiagent generate] %s %s: %d snapshots (seed %d)", MA_LABEL, split, n, seed)
+        made = _generate(path, folder, n, None if split == "test" else seed, args)
+        record[split] = {"dir": str(folder), "snapshots": n, "seed": seed}
+        record[split] |= {"new_records": made.new_records}
+    record["scenario"] = scenario_file(path) | {"path": _shown(path)}
+    return splits["test"][0], splits["val"][0]
 
 
 def _write_regime_cards(out: Path, entries) -> None:

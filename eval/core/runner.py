@@ -45,6 +45,7 @@ class RunRequest:
     limit: int | None = None
     keep: float | None = None
     localisation: tuple[float, float] | str | None = None
+    views: tuple[int, int] | None = None
 
     def spec(self, version: str) -> RunSpec:
         return RunSpec(
@@ -56,6 +57,7 @@ class RunRequest:
             self.limit,
             self.keep,
             self.localisation,
+            self.views,
         )
 
 
@@ -87,18 +89,20 @@ def requests_for(
     limit: int | None = None,
     keep: float | None = None,
     localisation: tuple[float, float] | str | None = None,
+    views: tuple[int, int] | None = None,
 ) -> list[RunRequest]:
     """Every combination of (dataset dir, checksum) × matcher × seed × noise rate (first `limit`
     frame pairs of each dataset; None: all; non-covisible detections thinned to level `keep`,
     where 1 and None both mean no thinning and share the untouched runs; the localisation prior
     re-drawn at (position sigma m, yaw sigma deg) or by a GNSS-like preset (its name), None: each
-    record's own)."""
+    record's own; ``views``: the pair of views (i, j) of N-view snapshots, None: the records'
+    pairs)."""
     matchers, seeds, noise_rates = list(matchers), list(seeds), list(noise_rates)
     keep = None if keep is None or float(keep) == 1.0 else float(keep)
     if localisation is not None and not isinstance(localisation, str):
         localisation = (float(localisation[0]), float(localisation[1]))
     return [
-        RunRequest(d, c, m, s, r, limit, keep, localisation)
+        RunRequest(d, c, m, s, r, limit, keep, localisation, views)
         for d, c in datasets
         for r in noise_rates
         for s in seeds
@@ -161,6 +165,7 @@ def _group(missing: Sequence[RunRequest], version: str, workers: int = 1) -> lis
             req.limit,
             req.keep,
             req.localisation,
+            req.views,
         )
         groups.setdefault(key, {}).setdefault(req.noise_rate, []).append(req.matcher)
     blocks: list[tuple[tuple, tuple[MatcherSpec, ...], tuple[float | None, ...]]] = []
@@ -181,7 +186,7 @@ def _group(missing: Sequence[RunRequest], version: str, workers: int = 1) -> lis
             break
         blocks[widest : widest + 1] = halves
     return [
-        RunTask(k[0], k[1], k[2], rates, matchers, version, k[3], k[4], k[5])
+        RunTask(k[0], k[1], k[2], rates, matchers, version, k[3], k[4], k[5], k[6])
         for k, matchers, rates in blocks
     ]
 

@@ -66,10 +66,16 @@ class RunSpec:
     # a re-drawn localisation prior: (position sigma m, yaw sigma deg) of the i.i.d. model, or a
     # GNSS-like preset's name (cadsim.sensing.gnss_error); None: the record's own
     localisation: tuple[float, float] | str | None = None
+    # the pair of views (i, j) of each N-view snapshot (view i receives); None: the record's pair
+    views: tuple[int, int] | None = None
 
     def key(self) -> str:
-        """Hex SHA-256 of the canonical JSON of the fields."""
-        text = json.dumps(asdict(self), sort_keys=True, separators=(",", ":"))
+        """Hex SHA-256 of the canonical JSON of the fields (``views`` only when set, so that the
+        keys of two-view runs do not depend on it)."""
+        fields = asdict(self)
+        if fields["views"] is None:
+            del fields["views"]
+        text = json.dumps(fields, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()
 
 
@@ -87,6 +93,7 @@ class RunTask:
     limit: int | None = None
     keep: float | None = None
     localisation: tuple[float, float] | str | None = None
+    views: tuple[int, int] | None = None
 
     def __post_init__(self) -> None:
         if not self.noise_rates or (None in self.noise_rates and len(self.noise_rates) > 1):
@@ -116,6 +123,7 @@ class RunTask:
                 self.limit,
                 self.keep,
                 self.localisation,
+                self.views,
             )
             for rate in self.noise_rates
             for m in self.matchers
@@ -276,7 +284,7 @@ def execute(task: RunTask) -> list[RunResult]:
     count = len(dataset) if task.limit is None else min(task.limit, len(dataset))
     token = task.token
     for k in range(count):
-        pair = dataset[k]
+        pair = dataset[k] if task.views is None else dataset.snapshot(k).pair(*task.views)
         if task.noise_rates == (None,):
             variants = [pair]
         else:  # the pair re-detected at every rate: one plan and one noise field per view

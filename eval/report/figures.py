@@ -405,6 +405,54 @@ def write_fig_prior_sensitivity(out_dir: str | Path) -> list[Path]:
     return _save(fig, out_dir / "fig_prior_sensitivity")
 
 
+FUSION_LINES = {"independent": "-", "spectral": "--", "clear": "-.", "transitive": ":"}
+
+
+def write_fig_multiagent(out_dir: str | Path) -> list[Path]:
+    """Pooled pairwise F1 and the cycle-violation rate against the number of agents, from
+    ``table_multiagent.csv``: one column per preset, colour per two-view matcher, line style per
+    fusion; none without the CSV."""
+    out_dir = Path(out_dir)
+    path = out_dir / "table_multiagent.csv"
+    if not path.is_file():
+        return []
+    table = pd.read_csv(path)
+    if table.empty:
+        return []
+    presets = list(dict.fromkeys(table["preset"]))
+    matchers = sorted(table["matcher"].unique(), key=matcher_order)
+    colors = _colors(matchers)
+    panels = (
+        ("f1_pooled", "pooled pairwise F1 (%)"),
+        ("cycle_violation_rate", "cycle violations (%)"),
+    )
+    fig, axes = _figure(6.4 * len(presets), 7.2, nrows=2, ncols=len(presets))
+    for col, preset in enumerate(presets):
+        for r, (metric, y_label) in enumerate(panels):
+            ax = axes[r, col]
+            rows = table[table["preset"] == preset]
+            for (matcher, fusion), line in rows.groupby(["matcher", "fusion"], sort=False):
+                line = line.sort_values("n_agents")
+                ax.plot(
+                    line["n_agents"],
+                    100 * line[metric],
+                    color=colors[matcher],
+                    ls=FUSION_LINES.get(fusion, "-"),
+                    marker=_marker(matcher),
+                    ms=4,
+                    label=f"{matcher} + {fusion}",
+                )
+            ax.set_xlabel("agents N (views 1-2 vehicles, a roadside unit from N = 3)")
+            ax.set_ylabel(y_label)
+            ax.set_title(f"{preset}: {y_label.split(' (')[0]} against N")
+            ax.set_xticks(sorted(table["n_agents"].unique()))
+            ax.set_ylim(-2, 102)
+            ax.grid(alpha=0.3)
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=4, fontsize=7)
+    return _save(fig, out_dir / "fig_multiagent")
+
+
 def render_all(out_dir: str | Path) -> list[Path]:
     """Every figure whose inputs are in `out_dir`."""
     return (
@@ -415,4 +463,5 @@ def render_all(out_dir: str | Path) -> list[Path]:
         + write_fig_localisation_presets(out_dir)
         + write_qualitative(out_dir)
         + write_fig_prior_sensitivity(out_dir)
+        + write_fig_multiagent(out_dir)
     )

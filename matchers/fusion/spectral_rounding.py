@@ -1,0 +1,53 @@
+"""From a spectral embedding of every detection to one object per row, one detection per view.
+
+Shared by :mod:`matchers.fusion.spectral` and :mod:`matchers.fusion.clear`: the rows of the k
+eigenvectors are normalised, k cluster centres are picked among them (each the row least similar
+to the centres already picked, starting from row 0: the pivoting of CLEAR, Fathian et al. 2020),
+and each view's detections go to distinct centres by a linear assignment on their similarity
+(Hungarian, scipy) — so no object holds two detections of one view. Similarities are rounded to
+1e-9 first: eigenvectors of repeated eigenvalues differ between LAPACK builds by a rotation that
+the row similarities do not see, and by last bits that the rounding removes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from matchers.fusion.evidence import PairwiseEvidence
+
+DECIMALS = 9
+
+
+def object_count(eigenvalues: np.ndarray, inside: np.ndarray, evidence: PairwiseEvidence) -> int:
+    """How many eigenvalues are on the objects' side (``inside``, bool per eigenvalue), kept
+    between the largest view (every detection of a view is a different object) and the total."""
+    largest = max(evidence.sizes, default=0)
+    return int(np.clip(np.count_nonzero(inside), largest, max(evidence.total, largest)))
+
+
+def round_embedding(vectors: np.ndarray, evidence: PairwiseEvidence) -> np.ndarray:
+    """Global-row labels from the (D, k) embedding ``vectors`` (module docstring)."""
+    total, k = vectors.shape
+    if total == 0:
+        return np.empty(0, dtype=np.int64)
+    norms = np.sqrt(np.sum(vectors * vectors, axis=1, keepdims=True))
+    unit = np.divide(vectors, norms, out=np.zeros_like(vectors), where=norms > 0)
+    similarity = np.round(unit @ unit.T, DECIMALS)  # (D, D), basis-free
+    centres = [0]
+    closest = similarity[0].copy()  # each row's similarity to its most similar centre
+    for _ in range(1, k):
+        closest[centres] = np.inf
+        nxt = int(np.argmin(closest))  # first of the least similar rows
+        centres.append(nxt)
+        closest = np.maximum(closest, similarity[nxt])
+    to_centre = similarity[:, centres]  # (D, k)
+    labels = np.empty(total, dtype=np.int64)
+    off = evidence.offsets
+    for v in range(len(evidence.sizes)):
+        rows = slice(off[v], off[v + 1])
+        if off[v + 1] == off[v]:
+            continue
+        r, c = linear_sum_assignment(to_centre[rows], maximize=True)
+        labels[off[v] + r] = c
+    return labels
