@@ -23,6 +23,7 @@ from eval.core.result_files import write_text
 from eval.report.tables import PAPER_COLUMN, PAPER_NAMES, dataset_order, method_name, params_text
 from eval.studies.agreement import readme_part as agreement_readme
 from eval.studies.external import readme_part as external_readme
+from eval.studies.multiagent import readme_part as multiagent_readme
 from eval.studies.prior_defaults import readme_part as prior_sensitivity_readme
 from eval.studies.v2x_table import readme_part as v2x_readme
 
@@ -408,6 +409,9 @@ def results_section(results: Path, readme_dir: Path) -> str:
     out += external_readme(results, rel)
     out += prior_sensitivity_readme(results, rel)
     out += v2x_readme(results, rel)
+    stages = record.get("wall_s", {})
+    multi_s = sum(stages.get(k, 0.0) for k in ("multiagent_generate", "multiagent")) or None
+    out += multiagent_readme(results, rel, multi_s)
     if (results / "fig_localisation.png").is_file():
         loc = record.get("localisation_sweep", {})
         out += [

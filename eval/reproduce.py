@@ -578,7 +578,7 @@ def main(argv: list[str] | None = None) -> int:
                     len(MA_PRESETS),
                     len(multiagent_seeds),
                 )
-                evaluate_multiagent(*multi_dirs, list(multi_named), multiagent_seeds, runner, out)
+                evaluate_multiagent(*multi_dirs, multi_named, multiagent_seeds, runner, out)
                 multiagent_record |= {"seeds": multiagent_seeds, "matchers": list(multi_named)}
                 multiagent_record |= {"presets": list(MA_PRESETS), "fusions": available_fusions()}
                 multiagent_record |= {"subsets": {str(n): list(v) for n, v in MA_SUBSETS.items()}}

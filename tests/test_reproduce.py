@@ -47,6 +47,9 @@ OUTPUTS = (
     "table_external.md",
     "table_external.csv",
     "agreement.csv",
+    "table_multiagent.md",
+    "table_multiagent.csv",
+    "fig_multiagent.png",
 )
 MATCHERS = ["maximin", "none", "sm"]
 
@@ -114,6 +117,19 @@ def test_tiny_reproduce_writes_every_output_and_reruns_from_cache(tmp_path, caps
         loc = pd.read_csv(out / "localisation_sweep.csv")
         assert sorted(loc["position_sigma_m"].unique()) == [0.0, 2.0]
         assert {"pose", "pose_refine", "maximin"} <= set(loc["matcher"])
+    multi = pd.read_csv(out / "table_multiagent.csv")
+    assert sorted(multi["n_agents"].unique()) == [2, 3, 4, 6]
+    assert set(multi["preset"]) == {"denied", "gnss-urban"} and (multi["snapshots"] == 2).all()
+    assert set(multi["fusion"]) >= {"independent", "spectral", "clear", "transitive"}
+    fused = multi[multi["fusion"] != "independent"]
+    assert (fused["cycle_violation_rate"] == 0).all()
+    fractions = ["f1_pooled", "cycle_violation_rate", "precision_pooled", "recall_pooled"]
+    assert multi[fractions].stack().between(0, 1).all()
+    assert set(json.loads((out / "run_record.json").read_text())["multiagent"]["test"]) >= {
+        "dir",
+        "seed",
+        "snapshots",
+    }
     tuning = pd.read_csv(out / "tuning.csv")
     assert set(tuning["dataset"]) == set(labels)
     assert (tuning.groupby(["dataset", "matcher"])["chosen"].sum() == 1).all()
