@@ -9,7 +9,7 @@ import numpy as np
 from matchers.core.memory_budget import check_memory
 from matchers.fusion.evidence import PairwiseEvidence
 from matchers.fusion.spectral import association_matrix, memory_bytes
-from matchers.fusion.spectral_rounding import object_count, round_embedding
+from matchers.fusion.spectral_rounding import EIGEN_DECIMALS, object_count, round_embedding
 from matchers.fusion.universe import Universe, from_labels
 
 EIGENVALUE_CEILING = 0.5
@@ -39,8 +39,8 @@ def clear(evidence: PairwiseEvidence, ceiling: float = EIGENVALUE_CEILING) -> Un
     scale = 1.0 / np.sqrt(degree + 1.0)
     laplacian = (np.diag(degree) - adjacency) * scale[:, None] * scale[None, :]
     values, vectors = np.linalg.eigh(laplacian)  # ascending
-    k = object_count(values, values < ceiling, evidence)
-    labels = round_embedding(vectors[:, :k], evidence)
+    k = object_count(np.round(values, EIGEN_DECIMALS) < ceiling, evidence)
+    labels = round_embedding(values, vectors, k, evidence)
     return from_labels(evidence, labels, "clear", started)
 
 

@@ -8,7 +8,7 @@ import numpy as np
 
 from matchers.core.memory_budget import check_memory
 from matchers.fusion.evidence import PairwiseEvidence
-from matchers.fusion.spectral_rounding import object_count, round_embedding
+from matchers.fusion.spectral_rounding import EIGEN_DECIMALS, object_count, round_embedding
 from matchers.fusion.universe import Universe, from_labels
 
 EIGENVALUE_FLOOR = 0.5
@@ -53,8 +53,9 @@ def spectral(evidence: PairwiseEvidence, floor: float = EIGENVALUE_FLOOR) -> Uni
     if not evidence.total:
         return from_labels(evidence, np.empty(0, np.int64), "spectral", started)
     values, vectors = np.linalg.eigh(w)  # ascending
-    k = object_count(values, values > floor, evidence)
-    labels = round_embedding(vectors[:, -k:], evidence)
+    k = object_count(np.round(values, EIGEN_DECIMALS) > floor, evidence)
+    values, vectors = values[::-1], vectors[:, ::-1]  # the largest first
+    labels = round_embedding(values, vectors, k, evidence)
     return from_labels(evidence, labels, "spectral", started)
 
 

@@ -17,20 +17,34 @@ from scipy.optimize import linear_sum_assignment
 from matchers.fusion.evidence import PairwiseEvidence
 
 DECIMALS = 9
+DEGENERATE = 1e-8
+"""Eigenvalues closer than this are one eigenvalue: an embedding never cuts through its space."""
+EIGEN_DECIMALS = 8
+"""Eigenvalues are rounded to this before they are counted against a threshold (an eigenvalue of
+exactly 0.5, common in small graphs, must fall on the same side on every LAPACK build)."""
 
 
-def object_count(eigenvalues: np.ndarray, inside: np.ndarray, evidence: PairwiseEvidence) -> int:
-    """How many eigenvalues are on the objects' side (``inside``, bool per eigenvalue), kept
-    between the largest view (every detection of a view is a different object) and the total."""
+def object_count(inside: np.ndarray, evidence: PairwiseEvidence) -> int:
+    """How many eigenvalues are on the objects' side (``inside``, bool per eigenvalue, decided on
+    eigenvalues rounded to :data:`EIGEN_DECIMALS`), kept between the largest view (every
+    detection of a view is a different object) and the total."""
     largest = max(evidence.sizes, default=0)
     return int(np.clip(np.count_nonzero(inside), largest, max(evidence.total, largest)))
 
 
-def round_embedding(vectors: np.ndarray, evidence: PairwiseEvidence) -> np.ndarray:
-    """Global-row labels from the (D, k) embedding ``vectors`` (module docstring)."""
-    total, k = vectors.shape
-    if total == 0:
+def round_embedding(
+    values: np.ndarray, vectors: np.ndarray, k: int, evidence: PairwiseEvidence
+) -> np.ndarray:
+    """Global-row labels of k objects from the eigenvectors ``vectors`` (D, D), columns ordered
+    by ``values`` from the most relevant (module docstring). The embedding takes the first k
+    columns and every further one whose eigenvalue equals the k-th (within
+    :data:`DEGENERATE`): a basis of part of an eigenspace is arbitrary (LAPACK builds differ),
+    the whole space's row similarities are not."""
+    total = vectors.shape[0]
+    if total == 0 or k == 0:
         return np.empty(0, dtype=np.int64)
+    width = k + int(np.count_nonzero(np.abs(values[k:] - values[k - 1]) <= DEGENERATE))
+    vectors = vectors[:, :width]
     norms = np.sqrt(np.sum(vectors * vectors, axis=1, keepdims=True))
     unit = np.divide(vectors, norms, out=np.zeros_like(vectors), where=norms > 0)
     similarity = np.round(unit @ unit.T, DECIMALS)  # (D, D), basis-free
