@@ -12,8 +12,13 @@ from hypothesis import strategies as st
 from eval.protocol.multiway_metrics import multiway_counts, summarise_counts
 from matchers import ProblemTooLarge
 from matchers.core.memory_budget import BUDGET_ENV
-from matchers.fusion import PairwiseEvidence, available_fusions, get_fusion, register_fusion
-from matchers.fusion import registry
+from matchers.fusion import (
+    PairwiseEvidence,
+    available_fusions,
+    get_fusion,
+    register_fusion,
+    registry,
+)
 
 FUSIONS = available_fusions()
 FUSED = [name for name in FUSIONS if name != "independent"]
