@@ -11,7 +11,6 @@ the callable as a ``search_space`` attribute (entry points), or, for the built-i
 
 from __future__ import annotations
 
-import importlib
 import logging
 from collections.abc import Callable
 from functools import cache
@@ -19,6 +18,7 @@ from importlib.metadata import EntryPoint, entry_points
 
 from matchers.core.matching import Matching
 from matchers.core.memory_budget import budgeted
+from matchers.core.named_lookup import lookup
 from matchers.core.search_spaces import BUILTIN_SEARCH_SPACES, check_search_space
 
 log = logging.getLogger(__name__)
@@ -100,27 +100,7 @@ def get(name: str) -> Matcher:
     """The matcher called ``name``: registered first, then built-in, then entry point, then a
     ``package.module:function`` import path (what a command line can name without registering
     anything; worker processes import it themselves)."""
-    if name in _registered:
-        return _registered[name]
-    if name in _BUILTIN:
-        return _load(_BUILTIN[name])
-    points = _entry_points()
-    if name in points:
-        fn = points[name].load()
-        if not callable(fn):
-            raise TypeError(f"entry point {name!r} ({points[name].value}) is not callable")
-        _registered[name] = fn
-        return fn
-    if ":" in name:  # "package.module:function" — importable in every worker process
-        module, _, attribute = name.partition(":")
-        try:
-            fn = getattr(importlib.import_module(module), attribute)
-        except (ImportError, AttributeError) as exc:
-            raise ValueError(f"matcher {name!r}: cannot import it ({exc})") from None
-        if not callable(fn):
-            raise ValueError(f"matcher {name!r} is not callable")
-        return fn  # not added to available(): an import path names itself
-    raise ValueError(f"unknown matcher {name!r}; available: {', '.join(available())}")
+    return lookup(name, "matcher", _registered, _BUILTIN, _entry_points(), available)
 
 
 def search_space(name: str) -> list[dict]:
@@ -168,11 +148,6 @@ def deterministic(name: str) -> bool:
 def available() -> list[str]:
     """Sorted names of every matcher get() can return."""
     return sorted(set(_BUILTIN) | set(_registered) | set(_entry_points()))
-
-
-def _load(target: str) -> Matcher:
-    module, _, attr = target.partition(":")
-    return getattr(importlib.import_module(module), attr)
 
 
 @cache

@@ -6,11 +6,10 @@ import time
 
 import numpy as np
 
-from matchers.core.memory_budget import check_memory
 from matchers.fusion.evidence import PairwiseEvidence
-from matchers.fusion.spectral import association_matrix, memory_bytes
-from matchers.fusion.spectral_rounding import EIGEN_DECIMALS, object_count, round_embedding
-from matchers.fusion.universe import Universe, from_labels
+from matchers.fusion.spectral import association_matrix
+from matchers.fusion.spectral_rounding import check_dense, fuse_spectrum, memory_bytes
+from matchers.fusion.universe import Universe
 
 EIGENVALUE_CEILING = 0.5
 """An eigenvalue of the normalised Laplacian below this counts as an object: a consistent
@@ -25,23 +24,14 @@ def clear(evidence: PairwiseEvidence, ceiling: float = EIGENVALUE_CEILING) -> Un
     and the embedding is rounded by pivot rows and one assignment per view
     (:mod:`matchers.fusion.spectral_rounding`). Consistent by construction."""
     started = time.perf_counter()
-    check_memory(
-        f"clear fusion ({evidence.total} detections)",
-        memory_bytes(evidence),
-        "the number of views or detections",
-    )
+    check_dense(evidence, "clear")
     if not ceiling > 0:
         raise ValueError(f"ceiling: expected a positive number, got {ceiling!r}")
-    if not evidence.total:
-        return from_labels(evidence, np.empty(0, np.int64), "clear", started)
     adjacency = association_matrix(evidence, weighted=False) - np.eye(evidence.total)
     degree = adjacency.sum(axis=1)
     scale = 1.0 / np.sqrt(degree + 1.0)
     laplacian = (np.diag(degree) - adjacency) * scale[:, None] * scale[None, :]
-    values, vectors = np.linalg.eigh(laplacian)  # ascending
-    k = object_count(np.round(values, EIGEN_DECIMALS) < ceiling, evidence)
-    labels = round_embedding(values, vectors, k, evidence)
-    return from_labels(evidence, labels, "clear", started)
+    return fuse_spectrum(evidence, laplacian, False, ceiling, "clear", started)
 
 
 clear.deterministic = True

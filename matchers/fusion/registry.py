@@ -11,11 +11,11 @@ budget before it runs) and ``deterministic = True``.
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable
 from functools import cache
 from importlib.metadata import EntryPoint, entry_points
 
+from matchers.core.named_lookup import lookup
 from matchers.fusion.universe import Universe
 
 ENTRY_POINT_GROUP = "cadsim.fusions"
@@ -47,28 +47,7 @@ def register_fusion(name: str, fn: Fusion, *, replace: bool = False) -> None:
 def get_fusion(name: str) -> Fusion:
     """The fusion called ``name``: registered, built-in, entry point, or a
     ``package.module:function`` import path."""
-    if name in _registered:
-        return _registered[name]
-    if name in _BUILTIN:
-        module, _, attr = _BUILTIN[name].partition(":")
-        return getattr(importlib.import_module(module), attr)
-    points = _entry_points()
-    if name in points:
-        fn = points[name].load()
-        if not callable(fn):
-            raise TypeError(f"entry point {name!r} ({points[name].value}) is not callable")
-        _registered[name] = fn
-        return fn
-    if ":" in name:
-        module, _, attr = name.partition(":")
-        try:
-            fn = getattr(importlib.import_module(module), attr)
-        except (ImportError, AttributeError) as exc:
-            raise ValueError(f"fusion {name!r}: cannot import it ({exc})") from None
-        if not callable(fn):
-            raise ValueError(f"fusion {name!r} is not callable")
-        return fn
-    raise ValueError(f"unknown fusion {name!r}; available: {', '.join(available_fusions())}")
+    return lookup(name, "fusion", _registered, _BUILTIN, _entry_points(), available_fusions)
 
 
 def available_fusions() -> list[str]:

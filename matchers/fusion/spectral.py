@@ -6,10 +6,9 @@ import time
 
 import numpy as np
 
-from matchers.core.memory_budget import check_memory
 from matchers.fusion.evidence import PairwiseEvidence
-from matchers.fusion.spectral_rounding import EIGEN_DECIMALS, object_count, round_embedding
-from matchers.fusion.universe import Universe, from_labels
+from matchers.fusion.spectral_rounding import check_dense, fuse_spectrum, memory_bytes
+from matchers.fusion.universe import Universe
 
 EIGENVALUE_FLOOR = 0.5
 """An eigenvalue of the association matrix above this counts as an object: a consistent
@@ -27,12 +26,6 @@ def association_matrix(evidence: PairwiseEvidence, weighted: bool) -> np.ndarray
     return w
 
 
-def memory_bytes(evidence: PairwiseEvidence) -> float:
-    """Working memory of a dense spectral fusion: the (D, D) matrix, its eigenvectors, the
-    similarities and LAPACK's workspace."""
-    return 6.0 * 8.0 * float(evidence.total) ** 2
-
-
 def spectral(evidence: PairwiseEvidence, floor: float = EIGENVALUE_FLOOR) -> Universe:
     """Pachauri et al.'s synchronisation: the leading eigenvectors of the score-weighted
     association matrix W (identity blocks on the diagonal, each pair of views' declared matches
@@ -42,21 +35,11 @@ def spectral(evidence: PairwiseEvidence, floor: float = EIGENVALUE_FLOOR) -> Uni
     largest view and the total. Partial views (not every object in every view) are rounded as in
     CLEAR (:mod:`matchers.fusion.spectral_rounding`). Consistent by construction."""
     started = time.perf_counter()
-    check_memory(
-        f"spectral fusion ({evidence.total} detections)",
-        memory_bytes(evidence),
-        "the number of views or detections",
-    )
+    check_dense(evidence, "spectral")
     if not floor > 0:
         raise ValueError(f"floor: expected a positive number, got {floor!r}")
     w = association_matrix(evidence, weighted=True)
-    if not evidence.total:
-        return from_labels(evidence, np.empty(0, np.int64), "spectral", started)
-    values, vectors = np.linalg.eigh(w)  # ascending
-    k = object_count(np.round(values, EIGEN_DECIMALS) > floor, evidence)
-    values, vectors = values[::-1], vectors[:, ::-1]  # the largest first
-    labels = round_embedding(values, vectors, k, evidence)
-    return from_labels(evidence, labels, "spectral", started)
+    return fuse_spectrum(evidence, w, True, floor, "spectral", started)
 
 
 spectral.deterministic = True

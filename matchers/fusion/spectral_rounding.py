@@ -14,7 +14,9 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
+from matchers.core.memory_budget import check_memory
 from matchers.fusion.evidence import PairwiseEvidence
+from matchers.fusion.universe import Universe, from_labels
 
 DECIMALS = 9
 DEGENERATE = 1e-8
@@ -65,3 +67,39 @@ def round_embedding(
         r, c = linear_sum_assignment(to_centre[rows], maximize=True)
         labels[off[v] + r] = c
     return labels
+
+
+def memory_bytes(evidence: PairwiseEvidence) -> float:
+    """Working memory of a dense spectral fusion: the (D, D) matrix, its eigenvectors, the
+    similarities and LAPACK's workspace."""
+    return 6.0 * 8.0 * float(evidence.total) ** 2
+
+
+def check_dense(evidence: PairwiseEvidence, method: str) -> None:
+    """Refuse (``ProblemTooLarge``) a dense fusion over the per-process memory budget."""
+    check_memory(
+        f"{method} fusion ({evidence.total} detections)",
+        memory_bytes(evidence),
+        "the number of views or detections",
+    )
+
+
+def fuse_spectrum(
+    evidence: PairwiseEvidence,
+    matrix: np.ndarray,
+    largest: bool,
+    threshold: float,
+    method: str,
+    started: float,
+) -> Universe:
+    """The universe from the spectrum of the symmetric (D, D) ``matrix``: objects are its
+    eigenvalues above ``threshold`` (``largest``) or below it, the embedding their eigenvectors
+    (:func:`object_count`, :func:`round_embedding`)."""
+    if not evidence.total:
+        return from_labels(evidence, np.empty(0, np.int64), method, started)
+    values, vectors = np.linalg.eigh(matrix)  # ascending
+    rounded = np.round(values, EIGEN_DECIMALS)
+    k = object_count(rounded > threshold if largest else rounded < threshold, evidence)
+    if largest:
+        values, vectors = values[::-1], vectors[:, ::-1]
+    return from_labels(evidence, round_embedding(values, vectors, k, evidence), method, started)
