@@ -6,8 +6,9 @@ VENV := .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 EXTRAS := test,highway,dask
-# Off-screen GL for pyrender: EGL (Mesa llvmpipe) and OSMesa. Installed when missing and we may.
-GL_PKGS := libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6
+# Off-screen GL for pyrender: EGL (Mesa llvmpipe) and OSMesa; OpenMP for LightGBM (the learned
+# matchers). Installed when missing and we may.
+GL_PKGS := libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6 libgomp1
 export SDL_VIDEODRIVER := dummy
 export MPLBACKEND := Agg
 

@@ -32,6 +32,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "show": ("cadsim.commands.show", "draw one frame pair with boxes and ground-truth lines"),
     "schema": ("cadsim.commands.schema", "print the JSON Schema of scenario files"),
     "import": ("cadsim.commands.import_", "write external data (DMGM CAD pairs) as a dataset"),
+    "train": ("cadsim.commands.train", "train the learned matchers on training datasets"),
     "evaluate": ("eval.commands.evaluate", "run matchers on datasets (cached, parallel)"),
     "sweep-noise": (
         "eval.commands.sweep_noise",
@@ -65,8 +66,13 @@ COMMAND_EXAMPLES: dict[str, tuple[str, ...]] = {
     "import": (
         "cadsim import dmgm path/to/DMGM/data/cad/test --out data/dmgm --sequences 069,071",
     ),
+    "train": (
+        "cadsim train data/cad-train data/cad-v2x-train --out my-model.json",
+        "cadsim train eval/data/dmgm-cad/val-070 --variants learned --out dmgm070.json",
+    ),
     "evaluate": (
         "cadsim evaluate data/cad --val data/cad-val --matchers sm,maximin --runs 1 --out my-run",
+        "cadsim evaluate data/cad --matchers learned,maximin_learned --model my-model.json --out l",
         "cadsim evaluate data/cad data/mrc --val data/cad-val data/mrc-val --tune --out my-tuned",
         "cadsim evaluate data/cad --no-calibration --matchers my_pkg.matcher:match --out mine",
         "cadsim evaluate data/cad --matchers pose,maximin_pose --localisation gnss-urban --out urban",

@@ -23,6 +23,7 @@ from matchers.core.registry import (
     deterministic,
     get,
     register,
+    required_options,
     requires,
     search_space,
 )
@@ -41,6 +42,7 @@ __all__ = [
     "deterministic",
     "get",
     "register",
+    "required_options",
     "requires",
     "search_space",
     "shared_tensors",

@@ -8,6 +8,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from learned_fixture import needed_options
 from matchers import Problem, available, get, requires
 
 NAMES = ["appearance", "bcagm", "consistency", "hgm", "maximin", "mos", "rrwhm", "rrwm", "sm", "tm"]
@@ -87,4 +88,4 @@ def test_every_listed_matcher_handles_an_empty_problem():
     prior = {"world1": empty, "world2": empty, "world_sigma": 1.0}
     for name in available():
         fields = prior if requires(name) else {}
-        check_valid(get(name)(Problem(empty, empty, **fields)), 0, 0, None)
+        check_valid(get(name)(Problem(empty, empty, **fields), **needed_options(name)), 0, 0, None)

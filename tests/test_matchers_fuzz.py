@@ -15,6 +15,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from learned_fixture import needed_options
 from matchers import Problem, ProblemTooLarge, available, get, requires
 
 MATCHERS = available()
@@ -80,7 +81,7 @@ def _check(name: str, problem: Problem, threshold) -> None:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error", RuntimeWarning)  # overflow/invalid = a silent NaN risk
-            matching = get(name)(problem, seed=0, threshold=threshold)
+            matching = get(name)(problem, seed=0, threshold=threshold, **needed_options(name))
     except ProblemTooLarge:
         return
     except (ValueError, TypeError) as exc:
@@ -111,11 +112,11 @@ def test_matcher_survives_fuzzed_views(name, problem, threshold):
 def test_bad_threshold_is_refused_by_name(name, bad):
     problem = Problem(np.eye(3), np.eye(3), world1=np.eye(3), world2=np.eye(3), world_sigma=1.0)
     with pytest.raises((ValueError, TypeError), match="threshold"):
-        get(name)(problem, seed=0, threshold=bad)
+        get(name)(problem, seed=0, threshold=bad, **needed_options(name))
 
 
 @pytest.mark.parametrize("name", MATCHERS)
 def test_unknown_option_is_refused(name):
     problem = Problem(np.eye(3), np.eye(3), world1=np.eye(3), world2=np.eye(3), world_sigma=1.0)
     with pytest.raises(TypeError, match="no_such_option"):
-        get(name)(problem, no_such_option=1)
+        get(name)(problem, no_such_option=1, **needed_options(name))

@@ -5,6 +5,7 @@ import textwrap
 
 import numpy as np
 import pytest
+from learned_fixture import needed_options
 
 import matchers
 from matchers import Matching, Problem, available, get, register
@@ -113,6 +114,7 @@ def test_matchers_that_declare_themselves_seed_free_are():
     assert {"none", "appearance", "sm", "rrwm", "consistency", "pose"} <= set(declared)
     assert not deterministic("maximin") and not deterministic("rrwhm")
     for name in declared:
-        a, b = get(name)(problem, seed=0), get(name)(problem, seed=7)
+        options = needed_options(name)
+        a, b = get(name)(problem, seed=0, **options), get(name)(problem, seed=7, **options)
         assert np.array_equal(a.pairs, b.pairs), name
         assert np.array_equal(a.scores, b.scores), name

@@ -6,6 +6,7 @@ import inspect
 import numpy as np
 import pytest
 
+from learned_fixture import needed_options
 from matchers import Problem, available, get, register, requires, search_space
 from matchers.core import registry
 from matchers.core.search_spaces import MAX_CONFIGS, check_search_space
@@ -43,7 +44,7 @@ def test_every_matcher_has_a_valid_grid_its_matcher_accepts(name):
     problem = rich_problem()
     for config in space:
         assert not set(config) & ABSOLUTE_WIDTHS, config
-        matching = get(name)(problem, seed=0, threshold=0.3, **config)
+        matching = get(name)(problem, seed=0, threshold=0.3, **config, **needed_options(name))
         assert matching.scores.shape == (problem.n1, problem.n2)
         assert np.all(np.isfinite(matching.scores))
 
@@ -51,8 +52,10 @@ def test_every_matcher_has_a_valid_grid_its_matcher_accepts(name):
 @pytest.mark.parametrize("name", available())
 def test_every_kernel_width_of_a_matcher_is_in_its_grid(name):
     options = set(inspect.signature(get(name)).parameters)
-    if name == "maximin_pose":  # forwards maximin's options (**options)
+    if name in ("maximin_pose", "maximin_learned"):  # forward maximin's options (**options)
         options |= set(inspect.signature(get("maximin")).parameters)
+    if name == "rrwm_learned":  # forwards RRWM's
+        options |= set(inspect.signature(get("rrwm")).parameters)
     tunable = set().union(*search_space(name))
     assert options & WIDTHS <= tunable
     if options & ABSOLUTE_WIDTHS:  # an absolute width has its relative twin in the grid

@@ -268,6 +268,8 @@ class FramePair:
             world1=world1,
             world2=world2,
             world_sigma=sigma,
+            classes1=tuple(self.view1.classes),
+            classes2=tuple(self.view2.classes),
         )
 
     @property

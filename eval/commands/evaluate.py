@@ -21,10 +21,15 @@ from cadsim.limits import MAX_RUNS, MAX_WORKERS
 from eval.core.cache import ResultCache
 from eval.core.executor import add_scheduler_argument, make_executor
 from eval.core.runner import Runner
+from eval.core.tasks import MatcherSpec
+from eval.protocol.model_options import with_model
 from eval.protocol.variants import PROTOCOLS
 from eval.report.tables import PAPER_CSV, write_tables
 from eval.studies.evaluation import evaluate, open_entry, parse_matchers, val_dirs
 from matchers.core.jit import cache_root
+
+# the learned matchers that `--matchers all` gains with --model (the prior one must be named)
+LEARNED_PLAIN = ("learned", "maximin_learned", "rrwm_learned")
 
 
 def add_runner_arguments(parser: argparse.ArgumentParser) -> None:
@@ -86,6 +91,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="NAME",
         help="a title per dataset, same order (default: from its scenario's name)",
     )
+    parser.add_argument(
+        "--model",
+        metavar="MODEL",
+        help="model file of the learned matchers (cadsim train); refused when it was trained on "
+        "a record of a test dataset. With --matchers all, the learned matchers join",
+    )
     add_localisation_argument(parser)
     add_runner_arguments(parser)
 
@@ -130,6 +141,9 @@ def run(args: argparse.Namespace) -> int:
         for d, v, name in zip(args.datasets, vals, labels, strict=True)
     ]
     matchers = parse_matchers(args.matchers)
+    if args.model and args.matchers.strip() == "all":
+        matchers += [MatcherSpec(n) for n in LEARNED_PLAIN]
+    matchers = with_model(matchers, args.model, [e.test_dir for e in entries])
     with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(ResultCache(args.cache), executor, progress=not args.no_progress)
         evaluate(

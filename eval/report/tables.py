@@ -167,9 +167,16 @@ def params_text(params: object) -> str:
     options = json.loads(params)
     if not options:
         return "default"
-    return ", ".join(
-        f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in options.items()
-    )
+    shown = []
+    for key, value in options.items():
+        if key == "model_sha256":  # the model shows as its file name and content hash
+            continue
+        if key == "model":
+            digest = str(options.get("model_sha256", ""))[:12]
+            shown.append(f"model={Path(str(value)).name}" + (f" ({digest})" if digest else ""))
+        else:
+            shown.append(f"{key}={value:g}" if isinstance(value, float) else f"{key}={value}")
+    return ", ".join(shown) if shown else "default"
 
 
 def _cells(row: pd.Series, show_params: bool) -> dict[str, str]:

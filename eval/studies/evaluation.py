@@ -129,13 +129,14 @@ def open_entry(
 def parse_matchers(text: str) -> list[MatcherSpec]:
     """``all`` or a comma-separated list of names, case-insensitive (``SM,Maximin`` as the tables
     print them). ``all``: every registered matcher that needs nothing beyond what every dataset
-    gives (``matchers.requires`` empty; the localisation-prior matchers must be named), paper
+    gives (``matchers.requires`` empty; the localisation-prior matchers must be named) and needs
+    no option (``matchers.required_options`` empty: the learned matchers need a model), paper
     order first. An unknown name is refused with the closest known ones."""
-    from matchers.core.registry import available, requires
+    from matchers.core.registry import available, required_options, requires
 
     known = list(available())
     if text.strip() == "all":
-        plain = [n for n in known if not requires(n)]
+        plain = [n for n in known if not requires(n) and not required_options(n)]
         names = [n for n in PAPER_ORDER if n in plain] + [n for n in plain if n not in PAPER_ORDER]
     else:
         by_lower = {n.lower(): n for n in known}

@@ -65,10 +65,11 @@ TABLE_COLUMNS = [
 
 
 def prior_matchers() -> list[str]:
-    """Registered matchers that need the localisation prior (``matchers.requires`` names it)."""
-    from matchers.core.registry import available, requires
+    """Registered matchers that need the localisation prior (``matchers.requires`` names it) and
+    no option (the learned matchers need a model: named with it)."""
+    from matchers.core.registry import available, required_options, requires
 
-    return [n for n in available() if "world1" in requires(n)]
+    return [n for n in available() if "world1" in requires(n) and not required_options(n)]
 
 
 def external_matchers(text: str = "all") -> list[MatcherSpec]:

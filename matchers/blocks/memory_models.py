@@ -199,3 +199,22 @@ def prior_evidence_memory(
         return prior if also is None else max(prior, also(problem, **options))
 
     return estimate
+
+
+FEATURE_BYTES = 8.0 * 40  # per candidate match: the learned matchers' feature row and its copies
+
+
+def learned_memory(prior: bool, also: Estimate | None = None) -> Estimate:
+    """The learned matchers (:mod:`matchers.learned`): their features' largest step — the
+    consistency support (dense (nm)^2), the local context, with the prior the refined prior's
+    vote — plus the feature table; ``also`` (the matcher that takes the learned unary) runs
+    after it, so the larger of the two."""
+
+    def estimate(problem: Problem, **options) -> float:
+        steps = [consistency_memory(problem), context_memory(problem)]
+        if prior:
+            steps.append(pose_refine_memory(problem))
+        own = max(steps) + FEATURE_BYTES * problem.n1 * problem.n2
+        return own if also is None else max(own, also(problem, **options))
+
+    return estimate

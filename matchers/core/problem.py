@@ -43,6 +43,8 @@ class Problem:
       the localisation prior. world_sigma: its stated position uncertainty per view, metres
       (> 0; the standard deviation of one view's error along each horizontal axis). Requires
       world1/world2.
+    * classes1: n strings, classes2: m strings — each detection's class label as its detector
+      reports it (``"car"``, ``"label2"``); only equality between the views is meaningful.
 
     Validated on construction: NaN/inf or inconsistent shapes raise ``ValueError`` naming the array.
 
@@ -61,6 +63,8 @@ class Problem:
     world1: np.ndarray | None = None
     world2: np.ndarray | None = None
     world_sigma: float | None = None
+    classes1: tuple[str, ...] | None = None
+    classes2: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         p1 = _as_array("points1", self.points1, 2)
@@ -95,6 +99,24 @@ class Problem:
         for first, second, width in (("pixels1", "pixels2", 2), ("world1", "world2", 3)):
             self._set_per_object(first, second, width)
         self._set_world_sigma()
+        self._set_classes()
+
+    def _set_classes(self) -> None:
+        """Validate the optional class labels: both or neither, one string per detection."""
+        if (self.classes1 is None) != (self.classes2 is None):
+            raise ValueError("classes1/classes2: give both or neither")
+        if self.classes1 is None:
+            return
+        for name, value, count in (
+            ("classes1", self.classes1, self.n1),
+            ("classes2", self.classes2, self.n2),
+        ):
+            if isinstance(value, str) or not all(isinstance(c, str) for c in value):
+                raise ValueError(f"{name}: expected a sequence of class-name strings")
+            labels = tuple(value)
+            if len(labels) != count:
+                raise ValueError(f"{name}: {len(labels)} labels for {count} points")
+            object.__setattr__(self, name, labels)
 
     def _set_per_object(self, first: str, second: str, width: int) -> None:
         """Validate an optional pair of (n, width) / (m, width) per-object arrays."""

@@ -31,6 +31,10 @@ _BUILTIN: dict[str, str] = {
     "appearance": "matchers.appearance:appearance",
     "bcagm": "matchers.bcagm:bcagm",
     "hgm": "matchers.hgm:hgm",
+    "learned": "matchers.learned:learned",
+    "learned_pose": "matchers.learned:learned_pose",
+    "maximin_learned": "matchers.learned_unary:maximin_learned",
+    "rrwm_learned": "matchers.learned_unary:rrwm_learned",
     "maximin": "matchers.maximin:maximin",
     "mos": "matchers.mos:mos",
     "none": "matchers.none:none",
@@ -132,6 +136,17 @@ def requires(name: str) -> frozenset[str]:
     ['world1', 'world2', 'world_sigma']
     """
     return frozenset(getattr(get(name), "requires", ()))
+
+
+def required_options(name: str) -> frozenset[str]:
+    """Options matcher ``name`` cannot run without (``{"model"}`` for the learned matchers: a
+    model file's path; empty for most): the callable's ``required_options`` attribute. A
+    harness leaves such a matcher out of ``all`` and gives it the option when it has one.
+
+    >>> sorted(required_options("learned")), sorted(required_options("sm"))
+    (['model'], [])
+    """
+    return frozenset(getattr(get(name), "required_options", ()))
 
 
 def deterministic(name: str) -> bool:

@@ -92,6 +92,12 @@ BUILTIN_SEARCH_SPACES: dict[str, list[dict]] = {
     "cbm_pose": _context_pose(),
     "freealign_pose": _context_pose(),
     "optimal_transport_pose": _context_pose(),
+    # The learned matchers: the classifier is their tuning (trained, not searched); the hybrids
+    # search their base matcher's kernel widths.
+    "learned": [{}],
+    "learned_pose": [{}],
+    "maximin_learned": _hypergraph(),
+    "rrwm_learned": _pairwise(),
 }
 
 

@@ -1,0 +1,60 @@
+"""Giving the learned matchers their model: ``--model MODEL`` of the commands, and the protocol
+rule that a model never scores the data it was trained on.
+
+:func:`with_model` checks the model file once (it loads; it shares no record with any dataset
+to be scored — the test datasets; a validation set may be its training data, as for a model
+trained on DMGM's calibration sequence) and adds ``model`` (the absolute path) and
+``model_sha256`` (its content, so that the result cache never serves a run of another model
+written to the same path) to every matcher that needs a model."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+
+from eval.core.tasks import MatcherSpec
+
+
+def check_no_overlap(model_path: str | Path, scored_dirs: Iterable[str | Path]) -> str:
+    """The model's sha256 after checking that it loads and that none of ``scored_dirs`` holds a
+    record it was trained on; ValueError in one line otherwise."""
+    from cadsim.dataset.training_set import overlapping_records
+    from matchers.learning.model_file import load_model
+
+    model = load_model(model_path)
+    shared = overlapping_records(model.training_records(), scored_dirs)
+    if shared:
+        folder, count = next(iter(shared.items()))
+        raise ValueError(
+            f"--model {model_path}: trained on {count} record(s) of {folder}, which it would "
+            "score; train on a training split (cadsim train) instead"
+        )
+    return model.sha256
+
+
+def with_model(
+    specs: Sequence[MatcherSpec], model_path: str | Path | None, scored_dirs: Iterable[str | Path]
+) -> dict[str, MatcherSpec]:
+    """{row label: spec}: ``specs`` under their own labels, with ``model`` / ``model_sha256``
+    added to each matcher that needs a model (``matchers.required_options``; its row keeps the
+    plain name); ValueError when one needs it and ``model_path`` is None."""
+    from matchers.core.registry import required_options
+
+    needing = [s for s in specs if "model" in required_options(s.name)]
+    if not needing:
+        return {s.label: s for s in specs}
+    if model_path is None:
+        raise ValueError(
+            f"--matchers: {needing[0].name} needs a model file: give --model MODEL "
+            "(written by cadsim train)"
+        )
+    sha = check_no_overlap(model_path, scored_dirs)
+    path = str(Path(model_path).resolve())
+    out = {}
+    for spec in specs:
+        if spec in needing:
+            options = dict(spec.options) | {"model": path, "model_sha256": sha}
+            out[spec.label] = MatcherSpec.of(spec.name, **options)
+        else:
+            out[spec.label] = spec
+    return out

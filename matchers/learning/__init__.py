@@ -1,0 +1,1 @@
+"""Learned pairwise affinities: candidate-pair features, the model file, training."""
