@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-
 from learned_fixture import needed_options
+
 from matchers import Problem, available, get, requires
 
 NAMES = ["appearance", "bcagm", "consistency", "hgm", "maximin", "mos", "rrwhm", "rrwm", "sm", "tm"]

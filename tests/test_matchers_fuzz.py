@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-
 from learned_fixture import needed_options
+
 from matchers import Problem, ProblemTooLarge, available, get, requires
 
 MATCHERS = available()

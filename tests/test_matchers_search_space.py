@@ -5,8 +5,8 @@ import inspect
 
 import numpy as np
 import pytest
-
 from learned_fixture import needed_options
+
 from matchers import Problem, available, get, register, requires, search_space
 from matchers.core import registry
 from matchers.core.search_spaces import MAX_CONFIGS, check_search_space
