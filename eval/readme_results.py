@@ -25,6 +25,7 @@ from eval.studies.agreement import readme_part as agreement_readme
 from eval.studies.external import readme_part as external_readme
 from eval.studies.multiagent import readme_part as multiagent_readme
 from eval.studies.prior_defaults import readme_part as prior_sensitivity_readme
+from eval.studies.transfer import readme_part as transfer_readme
 from eval.studies.v2x_table import readme_part as v2x_readme
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
@@ -412,6 +413,8 @@ def results_section(results: Path, readme_dir: Path) -> str:
     stages = record.get("wall_s", {})
     multi_s = sum(stages.get(k, 0.0) for k in ("multiagent_generate", "multiagent")) or None
     out += multiagent_readme(results, rel, multi_s)
+    transfer_s = sum(stages.get(k, 0.0) for k in ("transfer",)) or None
+    out += transfer_readme(results, rel, transfer_s)
     if (results / "fig_localisation.png").is_file():
         loc = record.get("localisation_sweep", {})
         out += [

@@ -82,6 +82,7 @@ from eval.studies.multiagent import VAL_SNAPSHOTS as MA_VAL_SNAPSHOTS
 from eval.studies.multiagent import evaluate_multiagent
 from eval.studies.prior_defaults import SENSITIVITY, write_sensitivity
 from eval.studies.spread import spread_rows
+from eval.studies.transfer import evaluate_transfer, test_sets, train_models, train_sets
 from eval.studies.v2x_table import PRESETS as V2X_PRESETS
 from eval.studies.v2x_table import evaluate_v2x
 from matchers.fusion import available_fusions
@@ -136,6 +137,11 @@ V2X_RUNS = 3
 # snapshots on disjoint scenario seeds, two-view matchers on every pair of views, fused per
 # subset of N views (eval.studies.multiagent), MULTIAGENT_RUNS seeds.
 MULTIAGENT_RUNS = 2
+# Transfer of the learned matchers (eval.studies.transfer): CAD's training split on its own
+# scenario seed (seed + CAD_TRAIN_SEED_OFFSET; 1000 is validation, 2000/3000 the spread sets),
+# CAD_TRAIN_PAIRS pairs; models trained into DATA/models.
+CAD_TRAIN_SEED_OFFSET = 4000
+CAD_TRAIN_PAIRS = 50
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -252,6 +258,11 @@ def build_parser() -> argparse.ArgumentParser:
         type=int,
         default=MULTIAGENT_RUNS,
         help=f"runs of the multi-agent table (default {MULTIAGENT_RUNS}; 0: skip cad-multi)",
+    )
+    p.add_argument(
+        "--no-transfer",
+        action="store_true",
+        help="skip the learned matchers' transfer matrix (also skipped without cad-v2x)",
     )
     p.add_argument("--out", default="results", help="output directory (default: results)")
     p.add_argument("--data", default="data", help="dataset directory (default: data)")
@@ -583,6 +594,30 @@ def main(argv: list[str] | None = None) -> int:
                 multiagent_record |= {"presets": list(MA_PRESETS), "fusions": available_fusions()}
                 multiagent_record |= {"subsets": {str(n): list(v) for n, v in MA_SUBSETS.items()}}
         count("multiagent", before)
+        transfer_record: dict = {}
+        do_transfer = not args.no_transfer and v2x_entry is not None and external_seeds
+        with timer.stage("transfer_generate"):
+            cad_train = _generate_cad_train(data, args, transfer_record) if do_transfer else None
+        with timer.stage("transfer"):
+            before = asdict(runner.totals)
+            for stale in ("table_transfer.csv", "table_transfer.md"):
+                (out / stale).unlink(missing_ok=True)
+            if cad_train is not None:
+                sets = train_sets(data, cad_train, CALIBRATION_DIR)
+                tests = test_sets(data, out, TEST_DIR, CALIBRATION_DIR)
+                log.info(
+                    "[transfer] %d models × %d test sets × 4 learned matchers",
+                    len(sets),
+                    len(tests),
+                )
+                models = train_models(sets, data / "models", progress)
+                evaluate_transfer(models, tests, runner, out)
+                transfer_record |= {
+                    "train": {k: [_shown(d) for d in v] for k, v in sets.items()},
+                    "test": [t.label for t in tests],
+                    "train_s": {k: round(v[1], 2) for k, v in models.items()},
+                }
+        count("transfer", before)
 
     with timer.stage("tables_figures"):
         markdown = write_tables(out, PAPER_CSV)
@@ -625,6 +660,7 @@ def main(argv: list[str] | None = None) -> int:
         },
         v2x=v2x_record,
         multiagent=multiagent_record,
+        transfer=transfer_record,
         thresholds=taus,
         runs=runs,
         code_version=code_version(),
@@ -692,6 +728,25 @@ def _generate_multi(data: Path, args: argparse.Namespace, record: dict) -> tuple
         record[split] |= {"new_records": made.new_records}
     record["scenario"] = scenario_file(path) | {"path": _shown(path)}
     return splits["test"][0], splits["val"][0]
+
+
+def _generate_cad_train(data: Path, args: argparse.Namespace, record: dict) -> Path | None:
+    """Generate CAD's training split for the learned matchers (scenario seed +
+    CAD_TRAIN_SEED_OFFSET); its folder, or None without the CAD scenario."""
+    from cadsim.scenario import load_scenario
+
+    path = ROOT / SCENARIOS[0]
+    if not path.is_file():
+        return None
+    scenario = load_scenario(path)
+    seed = scenario.seed + CAD_TRAIN_SEED_OFFSET
+    pairs = CAD_TRAIN_PAIRS if args.pairs is None else min(args.pairs, CAD_TRAIN_PAIRS)
+    folder = data / "cad-train"
+    log.info("[transfer generate] CAD train: %d pairs (seed %d)", pairs, seed)
+    made = _generate(path, folder, pairs, seed, args)
+    record["cad_train"] = {"dir": str(folder), "pairs": pairs, "seed": seed}
+    record["cad_train"] |= {"new_records": made.new_records}
+    return folder
 
 
 def _write_regime_cards(out: Path, entries) -> None:

@@ -144,6 +144,12 @@ def test_a_small_reproduce_gives_the_same_tables_on_every_dispatch_level(tmp_pat
     plain = _tables(tmp_path / "plain" / "out")
     assert {"table1.csv", "regime_sweep.csv", "crossovers.csv", "noise_runs.csv"} <= set(plain)
     assert "localisation_presets.csv" in plain  # cad-v2x: GNSS draws, latency, detector errors
+    assert "table_transfer.csv" in plain  # the learned matchers: trained models, their rows
+    models = {
+        name: sorted(p.read_bytes() for p in (tmp_path / name / "data" / "models").glob("*.json"))
+        for name in done
+    }
+    assert len(models["plain"]) == 4 and all(m == models["plain"] for m in models.values())
     record = json.loads((tmp_path / "plain" / "out" / "run_record.json").read_text())
     for name in done:
         if name == "plain":

@@ -50,6 +50,8 @@ OUTPUTS = (
     "table_multiagent.md",
     "table_multiagent.csv",
     "fig_multiagent.png",
+    "table_transfer.md",
+    "table_transfer.csv",
 )
 MATCHERS = ["maximin", "none", "sm"]
 
@@ -130,6 +132,18 @@ def test_tiny_reproduce_writes_every_output_and_reruns_from_cache(tmp_path, caps
         "seed",
         "snapshots",
     }
+    transfer = pd.read_csv(out / "table_transfer.csv")
+    assert set(transfer["train"].str.split().str[0]) == {"cadsim", "DMGM"}
+    assert set(transfer["matcher"]) == {
+        "learned",
+        "learned_pose",
+        "maximin_learned",
+        "rrwm_learned",
+    }
+    assert transfer["test"].nunique() == 3 and len(transfer) == 4 * 3 * 4
+    assert transfer[["f1_pooled", "ap"]].stack().between(0, 1).all()
+    assert transfer["model_sha256"].nunique() == 4  # one model per training set
+    assert len(list((data / "models").glob("*.json"))) == 4
     tuning = pd.read_csv(out / "tuning.csv")
     assert set(tuning["dataset"]) == set(labels)
     assert (tuning.groupby(["dataset", "matcher"])["chosen"].sum() == 1).all()

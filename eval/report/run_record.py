@@ -33,6 +33,7 @@ PACKAGES = (
     "eclipse-sumo",
     "highway-env",
     "dask",
+    "lightgbm",
 )
 
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import logging
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
@@ -25,6 +26,8 @@ from pathlib import Path
 import numpy as np
 
 from matchers.learning.features import FEATURES_VERSION, feature_names
+
+log = logging.getLogger(__name__)
 
 FORMAT = "cadsim-learned-model"
 FORMAT_VERSION = 1
@@ -71,18 +74,36 @@ class LearnedModel:
             return np.zeros(0)
         booster = self._loaded.get(variant)
         if booster is None:
-            booster = self._loaded[variant] = _parse_booster(self.boosters[variant], variant)
+            width = len(feature_names(VARIANTS[variant]))
+            booster = self._loaded[variant] = _parse_booster(self.boosters[variant], variant, width)
         return np.asarray(booster.predict(features, num_threads=1), dtype=float)
 
 
-def _parse_booster(text: str, variant: str):
+class _LightGBMLog:
+    """LightGBM's messages (its "[Fatal] ..." before an exception, included) to debug logging:
+    the error a user sees is ours, in one line."""
+
+    def info(self, msg: str) -> None:
+        log.debug("lightgbm: %s", msg.strip())
+
+    def warning(self, msg: str) -> None:
+        log.debug("lightgbm: %s", msg.strip())
+
+
+def _parse_booster(text: str, variant: str, width: int):
     import lightgbm
 
+    lightgbm.register_logger(_LightGBMLog())
     try:
-        return lightgbm.Booster(model_str=text, params={"num_threads": 1})
+        booster = lightgbm.Booster(model_str=text, params={"num_threads": 1})
     except lightgbm.basic.LightGBMError as exc:
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else "unreadable"
         raise ValueError(f"variants.{variant}.booster: not a LightGBM model ({first})") from None
+    if booster.num_feature() != width:
+        raise ValueError(
+            f"variants.{variant}.booster: {booster.num_feature()} features, expected {width}"
+        )
+    return booster
 
 
 def save_model(model: LearnedModel, path: str | Path) -> str:
@@ -157,4 +178,7 @@ def _from_bytes(data: bytes, digest: str) -> LearnedModel:
         boosters[name] = text
     if not isinstance(document["training"], dict):
         raise ValueError("training: expected an object")
-    return LearnedModel(boosters, document["training"], digest)
+    model = LearnedModel(boosters, document["training"], digest)
+    for name, text in boosters.items():  # parsed now: a broken model is refused when loaded
+        model._loaded[name] = _parse_booster(text, name, len(feature_names(VARIANTS[name])))
+    return model
