@@ -158,3 +158,16 @@ def test_none_appearance_and_learned_rows_share_one_calibration_path(
     assert sorted(map(sorted, calibrated)) == [["appearance"], ["learned"], ["none"]]
     assert set(taus[entry.label]) == {"none", "appearance", "learned"}
     assert taus[entry.label]["learned"] is not None
+
+
+def test_cadsim_train_writes_a_model_and_refuses_bad_variants(tmp_path, capsys):
+    from cadsim.cli import main
+
+    out = tmp_path / "m.json"
+    args = ["train", str(DMGM / "test-069-071"), "--rounds", "5", "--no-progress"]
+    assert main([*args, "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "learned, learned_pose trained on 109 frame pairs" in printed
+    assert sorted(load_model(out).boosters) == ["learned", "learned_pose"]
+    assert main([*args, "--variants", "learned,bogus", "--out", str(tmp_path / "x.json")]) == 2
+    assert "--variants" in capsys.readouterr().err and not (tmp_path / "x.json").exists()
