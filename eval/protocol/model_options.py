@@ -3,7 +3,7 @@ rule that a model never scores the data it was trained on.
 
 :func:`with_model` checks the model file once (it loads; it shares no record with any dataset
 to be scored — the test datasets; a validation set may be its training data, as for a model
-trained on DMGM's calibration sequence) and adds ``model`` (the absolute path) and
+trained on DMGM's calibration sequence) and adds ``model`` (the path as given: results name it as the command did) and
 ``model_sha256`` (its content, so that the result cache never serves a run of another model
 written to the same path) to every matcher that needs a model."""
 
@@ -49,7 +49,7 @@ def with_model(
             "(written by cadsim train)"
         )
     sha = check_no_overlap(model_path, scored_dirs)
-    path = str(Path(model_path).resolve())
+    path = str(model_path)  # as given (relative to the working directory workers share)
     out = {}
     for spec in specs:
         if spec in needing:
