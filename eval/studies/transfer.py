@@ -37,6 +37,7 @@ from eval.core.tasks import MatcherSpec
 from eval.protocol.model_options import with_model
 from eval.report.tables import build_table
 from eval.studies.evaluation import chosen_specs, evaluate, open_entry
+from matchers.learning.model_file import load_model
 
 log = logging.getLogger(__name__)
 
@@ -120,7 +121,10 @@ def train_models(
     for label, dirs in sets.items():
         started = time.perf_counter()
         path = folder / f"{slug(label)}.json"
-        sha, model = train_datasets([str(d) for d in dirs], path, progress=progress)
+        model = _trained_already(path, dirs)
+        if model is None:
+            _, model = train_datasets([str(d) for d in dirs], path, progress=progress)
+        sha = model.sha256 or load_model(path).sha256
         seconds = time.perf_counter() - started
         log.info(
             "[transfer] %s: %s (%s candidate matches) in %.1f s, sha256 %s",
@@ -132,6 +136,25 @@ def train_models(
         )
         models[label] = (path, seconds)
     return models
+
+
+def _trained_already(path: Path, dirs: Sequence[Path]):
+    """The model at ``path`` when it was trained, with today's features and parameters, on
+    exactly the datasets at ``dirs`` (training is deterministic: training again would write the
+    same bytes); else None."""
+    from cadsim.dataset import Dataset
+    from matchers.learning.training import PARAMS, ROUNDS
+
+    if not path.is_file():
+        return None
+    try:
+        model = load_model(path)
+    except ValueError:
+        return None
+    recorded = [d.get("checksum") for d in model.training.get("datasets", [])]
+    same = recorded == [Dataset(d).checksum for d in dirs]
+    same = same and model.training.get("params") == PARAMS
+    return model if same and model.training.get("rounds") == ROUNDS else None
 
 
 def _hybrid_options(test: TestSet) -> dict[str, dict]:
