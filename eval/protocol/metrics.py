@@ -141,22 +141,27 @@ def pair_metrics(predicted, ground_truth, n1: int, n2: int) -> PairMetrics:
     unmatched_negative2 = n2 - int(np.count_nonzero(_covered(n2, pred[:, 1], gt[:, 1])))
     correct = 2 * tp + unmatched_negative1 + unmatched_negative2
     negatives = n1 + n2 - 2 * len(gt)
-    precision = float(_precision(tp, len(pred), len(gt)))
-    recall = float(_recall(tp, len(gt)))
+    # the vectorised conventions above, for one pair in plain floats (the same operations in
+    # the same order, so the same bits; a tenth of the time, which re-scoring cached runs feels)
+    n_gt, n_pred, right = len(gt), len(pred), unmatched_negative1 + unmatched_negative2
+    precision = tp / n_pred if n_pred > 0 else (1.0 if n_gt == 0 else 0.0)
+    recall = tp / n_gt if n_gt > 0 else 1.0
+    total = precision + recall
+    positive = tp / n_gt if n_gt > 0 else 0.0
+    negative = right / negatives if negatives > 0 else 0.0
+    classes = float(n_gt > 0) + float(negatives > 0)
     return PairMetrics(
         n1=int(n1),
         n2=int(n2),
-        n_gt=len(gt),
-        n_pred=len(pred),
+        n_gt=n_gt,
+        n_pred=n_pred,
         tp=int(tp),
         correct=int(correct),
-        accuracy=float(_accuracy(correct, n1 + n2)),
-        balanced_accuracy=float(
-            _balanced_accuracy(tp, len(gt), unmatched_negative1 + unmatched_negative2, negatives)
-        ),
-        precision=precision,
-        recall=recall,
-        f1=float(_f1(precision, recall)),
+        accuracy=correct / (n1 + n2) if n1 + n2 > 0 else 1.0,
+        balanced_accuracy=(positive + negative) / classes if classes > 0 else 1.0,
+        precision=float(precision),
+        recall=float(recall),
+        f1=2 * precision * recall / total if total > 0 else 0.0,
     )
 
 
