@@ -413,8 +413,8 @@ def results_section(results: Path, readme_dir: Path) -> str:
     stages = record.get("wall_s", {})
     multi_s = sum(stages.get(k, 0.0) for k in ("multiagent_generate", "multiagent")) or None
     out += multiagent_readme(results, rel, multi_s)
-    transfer_s = sum(stages.get(k, 0.0) for k in ("transfer",)) or None
-    out += transfer_readme(results, rel, transfer_s)
+    transfer_runs = record.get("runs", {}).get("transfer", {}).get("computed")
+    out += transfer_readme(results, rel, stages.get("transfer"), transfer_runs)
     if (results / "fig_localisation.png").is_file():
         loc = record.get("localisation_sweep", {})
         out += [
