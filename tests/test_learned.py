@@ -171,3 +171,18 @@ def test_cadsim_train_writes_a_model_and_refuses_bad_variants(tmp_path, capsys):
     assert sorted(load_model(out).boosters) == ["learned", "learned_pose"]
     assert main([*args, "--variants", "learned,bogus", "--out", str(tmp_path / "x.json")]) == 2
     assert "--variants" in capsys.readouterr().err and not (tmp_path / "x.json").exists()
+
+
+def test_no_pickle_outside_the_restricted_reader():
+    import re
+
+    root = Path(__file__).resolve().parents[1]
+    allowed = root / "cadsim" / "importers" / "restricted_pickle.py"
+    pattern = re.compile(r"^\s*(import|from)\s+(pickle|cPickle|dill|cloudpickle|joblib)\b", re.M)
+    found = [
+        str(path.relative_to(root))
+        for folder in ("cadsim", "matchers", "eval")
+        for path in (root / folder).rglob("*.py")
+        if path != allowed and pattern.search(path.read_text())
+    ]
+    assert not found, found
