@@ -12,9 +12,9 @@ import pytest
 from learned_fixture import model_path, synthetic_pairs
 
 from matchers import get, required_options
-from matchers.learning.features import feature_names, pair_features
-from matchers.learning.model_file import load_model, save_model
-from matchers.learning.training import labels, train_model
+from matchers.learned_features import feature_names, pair_features
+from matchers.learned_model import load_model, save_model
+from matchers.learned_training import labels, train_model
 
 DMGM = Path(__file__).resolve().parents[1] / "eval" / "data" / "dmgm-cad"
 

@@ -2,7 +2,7 @@
 (``learned``, ``learned_pose``; also the unary of ``maximin_learned`` / ``rrwm_learned``) on the
 candidate matches of every record of the given datasets, and write the model file (JSON data:
 LightGBM's text trees, the features' version, the training data's checksums;
-:mod:`matchers.learning.model_file`). Deterministic: the same datasets give the same bytes.
+:mod:`matchers.learned_model`). Deterministic: the same datasets give the same bytes.
 
 Train on training splits only — never on the data a table scores: ``cadsim evaluate --model``
 refuses a model that shares a record with an evaluated dataset. ``make reproduce`` generates
@@ -21,7 +21,7 @@ log = logging.getLogger(__name__)
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from matchers.learning.model_file import VARIANTS
+    from matchers.learned_model import VARIANTS
 
     parser.add_argument("datasets", nargs="+", metavar="DATASET_DIR", help="training datasets")
     parser.add_argument("--out", required=True, metavar="MODEL", help="model file to write")
@@ -41,8 +41,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def train_datasets(dirs, out, variants: str = "auto", rounds: int | None = None, progress=False):
     """Train on the datasets at ``dirs`` and write the model to ``out``; (sha256, model)."""
     from cadsim.dataset.training_set import training_examples
-    from matchers.learning.model_file import VARIANTS, save_model
-    from matchers.learning.training import ROUNDS, train_model
+    from matchers.learned_model import VARIANTS, save_model
+    from matchers.learned_training import ROUNDS, train_model
 
     examples, record = training_examples(dirs, progress)
     if not examples:

@@ -37,7 +37,7 @@ from eval.core.tasks import MatcherSpec
 from eval.protocol.model_options import with_model
 from eval.report.tables import build_table
 from eval.studies.evaluation import chosen_specs, evaluate, open_entry
-from matchers.learning.model_file import load_model
+from matchers.learned_model import load_model
 
 log = logging.getLogger(__name__)
 
@@ -143,7 +143,7 @@ def _trained_already(path: Path, dirs: Sequence[Path]):
     exactly the datasets at ``dirs`` (training is deterministic: training again would write the
     same bytes); else None."""
     from cadsim.dataset import Dataset
-    from matchers.learning.training import PARAMS, ROUNDS
+    from matchers.learned_training import PARAMS, ROUNDS
 
     if not path.is_file():
         return None

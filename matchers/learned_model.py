@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from matchers.learning.features import FEATURES_VERSION, feature_names
+from matchers.learned_features import FEATURES_VERSION, feature_names
 
 log = logging.getLogger(__name__)
 

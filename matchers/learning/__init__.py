@@ -1,1 +1,0 @@
-"""Learned pairwise affinities: candidate-pair features, the model file, training."""
