@@ -123,8 +123,9 @@ def train_models(
         path = folder / f"{slug(label)}.json"
         model = _trained_already(path, dirs)
         if model is None:
-            _, model = train_datasets([str(d) for d in dirs], path, progress=progress)
-        sha = model.sha256 or load_model(path).sha256
+            sha, model = train_datasets([str(d) for d in dirs], path, progress=progress)
+        else:
+            sha = model.sha256
         seconds = time.perf_counter() - started
         log.info(
             "[transfer] %s: %s (%s candidate matches) in %.1f s, sha256 %s",
