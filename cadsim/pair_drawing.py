@@ -264,6 +264,11 @@ def draw_birdseye(
     ax.legend(fontsize=6, loc="upper right", framealpha=0.8, ncol=2)
 
 
+def _labels(view) -> list[str]:
+    """A view's labels as its detector reported them (the true class where the record has none)."""
+    return view.true_classes if view.reported_classes is None else view.reported_classes
+
+
 def draw_pair_from_record(pair, labels: bool = True):
     """Figure of a dataset ``FramePair``: its boxes and its ground-truth pairs, with a bird's-eye
     panel below (:func:`draw_birdseye`); from above only, with the localisation prior, when the
@@ -275,8 +280,8 @@ def draw_pair_from_record(pair, labels: bool = True):
             pair.view2.positions,
             pair.gt_pairs,
             world=None if prior is None else prior[:2],
-            labels1=pair.view1.classes if labels else None,
-            labels2=pair.view2.classes if labels else None,
+            labels1=_labels(pair.view1) if labels else None,
+            labels2=_labels(pair.view2) if labels else None,
             title=f"{pair.name} (pair {pair.index}): {len(pair.view1)} | {len(pair.view2)} "
             f"detections, {len(pair.gt_pairs)} covisible (ground truth)",
         )
@@ -298,8 +303,8 @@ def draw_pair_from_record(pair, labels: bool = True):
         pair.view1.boxes,
         pair.view2.boxes,
         pair.gt_pairs,
-        labels1=pair.view1.classes if labels else None,
-        labels2=pair.view2.classes if labels else None,
+        labels1=_labels(pair.view1) if labels else None,
+        labels2=_labels(pair.view2) if labels else None,
     )
     draw_birdseye(
         fig.add_axes((0.08, 0.45 / height, 0.84, (below - 0.5) / height)),

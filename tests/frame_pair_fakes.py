@@ -22,7 +22,7 @@ def _view(ids, positions, features, rng) -> ViewDetections:
         boxes=np.hstack([corner, corner + rng.uniform(5, 40, size=(k, 2))]),
         features=features.astype(np.float32),
         object_ids=list(ids),
-        classes=["car"] * k,
+        true_classes=["car"] * k,
         pixels=rng.integers(50, 500, size=k),
     )
 

@@ -118,11 +118,12 @@ def test_features_carry_the_reported_class():
     )
     assert truthful.object_ids == ["v0", "v1", "v2"]
     onehot = slice(FEATURE_LAYOUT["attributes"].start, FEATURE_LAYOUT["attributes"].start + len(FEATURE_CLASSES))  # fmt: skip
-    assert truthful.object_ids == confused.object_ids and truthful.classes == confused.classes
-    for k, true_cls in enumerate(truthful.classes):
+    assert truthful.object_ids == confused.object_ids and truthful.true_classes == confused.true_classes
+    for k, true_cls in enumerate(truthful.true_classes):
         told = FEATURE_CLASSES[int(np.argmax(truthful.features[k, onehot]))]
         seen = FEATURE_CLASSES[int(np.argmax(confused.features[k, onehot]))]
         assert told == true_cls and seen != true_cls
+        assert truthful.reported_classes[k] == told and confused.reported_classes[k] == seen
     # HOG and colour blocks are untouched.
     rest = slice(0, FEATURE_LAYOUT["attributes"].start)
     np.testing.assert_array_equal(truthful.features[:, rest], confused.features[:, rest])

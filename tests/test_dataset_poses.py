@@ -55,7 +55,7 @@ def test_the_record_keeps_the_attribute_seed_and_redetect_reuses_it(fake_dataset
     for v in (1, 2):
         stored = pair.record["observers"][v - 1]["attribute_seed"]
         assert stored == attribute_seed(11, pair.episode, pair.slot, v)
-    assert ds.manifest["format_version"] == FORMAT_VERSION == 3
+    assert ds.manifest["format_version"] == FORMAT_VERSION == 5
 
 
 def test_redetect_keeps_the_records_attribute_errors_whatever_the_seed(tmp_path):
@@ -80,9 +80,15 @@ def test_redetect_keeps_the_records_attribute_errors_whatever_the_seed(tmp_path)
         for view in (pair.view1, pair.view2)
         for f in view.features
     ]
-    truth = pair.view1.classes + pair.view2.classes
+    truth = pair.view1.true_classes + pair.view2.true_classes
     wrong = sum(r != t for r, t in zip(reported, truth, strict=True))
     assert 0 < wrong < len(truth)  # at rate 0.5 some, not all, are misreported
+    # The record keeps what the detector reported beside the truth, and a matcher sees only the
+    # reported class: the planted confusion reaches the Problem, the true class does not.
+    assert pair.view1.reported_classes + pair.view2.reported_classes == reported
+    problem = pair.problem()
+    assert list(problem.classes1) + list(problem.classes2) == reported != truth
+    assert problem.classes1 == tuple(pair.select(range(len(pair.view1)), []).view1.reported_classes)
 
 
 def test_an_older_dataset_is_refused_in_one_line_naming_both_versions(fake_dataset, tmp_path):
@@ -95,11 +101,11 @@ def test_an_older_dataset_is_refused_in_one_line_naming_both_versions(fake_datas
         Dataset(old)
     message = str(info.value)
     assert "\n" not in message and str(old) in message
-    assert "format version 1 is older than the versions 2, 3 or 4" in message
+    assert "format version 1 is older than the versions 2, 3, 4, 5 or 6" in message
     assert "regenerate" in message
-    manifest["format_version"] = 5
+    manifest["format_version"] = 7
     (old / "manifest.json").write_text(json.dumps(manifest))
-    with pytest.raises(DatasetError, match="version 5 is not the versions 2, 3 or 4"):
+    with pytest.raises(DatasetError, match="version 7 is not the versions 2, 3, 4, 5 or 6"):
         Dataset(old)
 
 

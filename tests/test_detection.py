@@ -162,7 +162,7 @@ def test_features_fixed_width_non_negative_and_look_alikes_match(renderer):
     attr = f[:, FEATURE_LAYOUT["attributes"]]
     assert attr[idx["red1"]] @ attr[idx["red2"]] == pytest.approx(1.0)
     assert attr[idx["red1"]] @ attr[idx["p"]] < 0.2  # different class and size
-    assert dets.classes[idx["p"]] == "person"
+    assert dets.true_classes[idx["p"]] == "person"
 
 
 def test_redetection_from_stored_arrays_needs_no_renderer(renderer):

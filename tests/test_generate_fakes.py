@@ -189,6 +189,7 @@ def detect(
         boxes=np.array([r[1] for r in rows], float).reshape(-1, 4),
         features=np.array([r[2] for r in rows], np.float32).reshape(len(rows), 3 + len(classes)),
         object_ids=[r[3] for r in rows],
-        classes=[r[4] for r in rows],
+        true_classes=[r[4] for r in rows],
+        reported_classes=[r[4] for r in rows],  # a truthful fake detector
         pixels=np.array([r[5] for r in rows], np.int64),
     )

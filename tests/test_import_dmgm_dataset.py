@@ -57,7 +57,7 @@ def test_hand_made_folder_imports_field_by_field(tmp_path):
     np.testing.assert_array_equal(pair.view1.positions, a["pos"].astype(float))
     np.testing.assert_array_equal(pair.view2.features, b["x"])
     assert pair.view1.object_ids == [str(int(v)) for v in a["y"]]
-    assert pair.view1.classes == [f"label{k}" for k in a["label"]]
+    assert pair.view1.true_classes == [f"label{k}" for k in a["label"]]
     np.testing.assert_array_equal(pair.gt_pairs, [[0, 1], [3, 0]])
     # The prior: DMGM's left-handed world made right-handed by negating y; its stated sigma.
     world1, world2, sigma = pair.prior()

@@ -62,7 +62,7 @@ def _detections(scenario, snap, pair, views, noise_rate: float, seed: int):
 def test_overhead_sees_more_robots_than_side(scenario, rendered):
     counts = np.array(
         [
-            [d.classes.count("robot") for d in _detections(scenario, *item, 0.0, 0)]
+            [d.true_classes.count("robot") for d in _detections(scenario, *item, 0.0, 0)]
             for item in rendered
         ]
     )

@@ -48,7 +48,7 @@ def test_the_acceptance_rule_needs_every_view_linked_into_one_group():
 def test_cad_multi_has_six_views_per_snapshot_that_meet_the_acceptance_rule(multi):
     ds = Dataset(multi, verify=True)
     assert len(ds) == 2 and ds.n_views == 6
-    assert ds.manifest["format_version"] == 4
+    assert ds.manifest["format_version"] == 6
     for k in range(len(ds)):
         snap = ds.snapshot(k)
         assert snap.kinds == ["vehicle"] * 4 + ["roadside"] * 2

@@ -21,7 +21,7 @@ def _view(ids, seed):
         boxes=rng.uniform(0, 100, size=(k, 4)),
         features=rng.uniform(size=(k, 4)).astype(np.float32),
         object_ids=list(ids),
-        classes=["car"] * k,
+        true_classes=["car"] * k,
         pixels=rng.integers(1, 500, size=k),
     )
 

@@ -38,7 +38,7 @@ def summarise(ds) -> dict:
         cov = len(pair.gt_pairs)
         z1, z2 = pair.view1.positions[:, 2], pair.view2.positions[:, 2]
         depths.extend([z1, z2])
-        class_mix.update(pair.view1.classes + pair.view2.classes)
+        class_mix.update(pair.view1.true_classes + pair.view2.true_classes)
         pairs.append(
             {
                 "index": pair.index,
@@ -50,8 +50,8 @@ def summarise(ds) -> dict:
                 "covisible": cov,
                 "non_covisible1": len(pair.view1) - cov,
                 "non_covisible2": len(pair.view2) - cov,
-                "classes1": dict(sorted(Counter(pair.view1.classes).items())),
-                "classes2": dict(sorted(Counter(pair.view2.classes).items())),
+                "classes1": dict(sorted(Counter(pair.view1.true_classes).items())),
+                "classes2": dict(sorted(Counter(pair.view2.true_classes).items())),
                 "depth1": _range(z1),
                 "depth2": _range(z2),
             }

@@ -7,7 +7,7 @@ Reading (needs neither SUMO nor pyrender)::
     ds = Dataset("data/cad")          # len(ds), ds[k], iteration, ds.manifest, ds.checksum
     pair = ds[0]
     pair.view1.positions              # (n, 3) metres, view 1's camera frame (x right, y down, z fwd)
-    pair.view1.features               # (n, d) float32; also .boxes .object_ids .classes .pixels
+    pair.view1.features               # (n, d) float32; also .boxes .object_ids .true_classes .reported_classes .pixels
     pair.gt_pairs                     # (k, 2) int: (i, j) = same object in view1[i] and view2[j]
     problem = pair.problem()          # matchers.Problem
     noisy = pair.redetect(noise_rate=0.05, seed=1)   # new noise on stored clean depth, no render

@@ -15,7 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.sparse.csgraph import connected_components
 
-_FIELDS = ("positions", "boxes", "features", "object_ids", "classes", "pixels")
+_FIELDS = ("positions", "boxes", "features", "object_ids", "true_classes", "pixels")
+_REPORTED = "reported_classes"
+_LEGACY_TRUE = "classes"  # formats 2-4 stored only the true class, under this name
 
 
 @dataclass(frozen=True, eq=False)
@@ -23,17 +25,21 @@ class ViewDetections:
     """k detections of one view.
 
     positions: (k, 3) float64 metres, camera frame. boxes: (k, 4) float64 pixels (u0, v0, u1, v1).
-    features: (k, d) float32. object_ids, classes: k strings. pixels: (k,) int64 visible pixels
-    (0 = unknown). world: (k, 3) float64 metres (x, y horizontal, z up) or None — a stored prior.
+    features: (k, d) float32. object_ids, true_classes: k strings of ground truth, for metrics
+    only (never part of a matcher's input). pixels: (k,) int64 visible pixels (0 = unknown).
+    world: (k, 3) float64 metres (x, y horizontal, z up) or None — a stored prior.
+    reported_classes: k strings, the class the view's detector reported (what a matcher may
+    see), or None where the record does not say (formats before 5).
     """
 
     positions: np.ndarray
     boxes: np.ndarray
     features: np.ndarray
     object_ids: list[str]
-    classes: list[str]
+    true_classes: list[str]
     pixels: np.ndarray
     world: np.ndarray | None = None
+    reported_classes: list[str] | None = None
 
     def __post_init__(self) -> None:
         k = len(self.object_ids)
@@ -43,7 +49,8 @@ class ViewDetections:
         features = features.reshape(k, -1) if features.size or k else features.reshape(0, 0)
         pixels = np.asarray(self.pixels, dtype=np.int64).reshape(-1)
         for name, arr in (("positions", positions), ("boxes", boxes), ("features", features),
-                          ("pixels", pixels), ("classes", self.classes)):  # fmt: skip
+                          ("pixels", pixels), ("true_classes", self.true_classes),
+                          ("reported_classes", [None] * k if self.reported_classes is None else self.reported_classes)):  # fmt: skip
             if len(arr) != k:
                 raise ValueError(f"detections.{name}: {len(arr)} rows for {k} object ids")
         if self.world is not None:
@@ -60,26 +67,32 @@ class ViewDetections:
         object.__setattr__(self, "features", features)
         object.__setattr__(self, "pixels", pixels)
         object.__setattr__(self, "object_ids", [str(v) for v in self.object_ids])
-        object.__setattr__(self, "classes", [str(v) for v in self.classes])
+        object.__setattr__(self, "true_classes", [str(v) for v in self.true_classes])
+        if self.reported_classes is not None:
+            object.__setattr__(self, "reported_classes", [str(v) for v in self.reported_classes])
 
     def __len__(self) -> int:
         return len(self.object_ids)
 
     @classmethod
     def from_detections(cls, det) -> ViewDetections:
-        """From any object with the detection adapter's fields (``cadsim.sensing.detection.Detections``)."""
-        return cls(**{f: getattr(det, f) for f in _FIELDS})
+        """From any object with the detection adapter's fields (``cadsim.sensing.detection.Detections``);
+        a detector that reports no ``reported_classes`` gives matchers no class."""
+        fields = {f: getattr(det, f) for f in _FIELDS}
+        return cls(**fields, reported_classes=getattr(det, _REPORTED, None))
 
     def to_arrays(self, prefix: str) -> dict[str, np.ndarray]:
         """Arrays for an npz, keys ``PREFIX_FIELD``; strings as fixed-width unicode arrays;
         ``PREFIX_world`` only when a prior is stored."""
         world = {} if self.world is None else {f"{prefix}_world": self.world}
+        if self.reported_classes is not None:
+            world[f"{prefix}_{_REPORTED}"] = np.array(self.reported_classes, dtype=str)
         return world | {
             f"{prefix}_positions": self.positions,
             f"{prefix}_boxes": self.boxes,
             f"{prefix}_features": self.features,
             f"{prefix}_object_ids": np.array(self.object_ids, dtype=str),
-            f"{prefix}_classes": np.array(self.classes, dtype=str),
+            f"{prefix}_true_classes": np.array(self.true_classes, dtype=str),
             f"{prefix}_pixels": self.pixels,
         }
 
@@ -88,6 +101,8 @@ class ViewDetections:
         """Inverse of ``to_arrays``; ``what`` names the file in errors. Features stored as
         uint8 with a scalar ``PREFIX_features_scale`` (compact imported data) are returned as
         float32 ``q · scale``."""
+        if f"{prefix}_true_classes" not in arrays and f"{prefix}_{_LEGACY_TRUE}" in arrays:
+            arrays = dict(arrays) | {f"{prefix}_true_classes": arrays[f"{prefix}_{_LEGACY_TRUE}"]}
         missing = [f"{prefix}_{f}" for f in _FIELDS if f"{prefix}_{f}" not in arrays]
         if missing:
             raise ValueError(f"{what}: missing arrays {missing}")
@@ -97,14 +112,18 @@ class ViewDetections:
             if features.dtype != np.uint8 or np.size(scale) != 1:
                 raise ValueError(f"{what}: {prefix}_features_scale needs uint8 features, one scale")
             features = features.astype(np.float32) * np.float32(np.ravel(scale)[0])
+        reported = arrays.get(f"{prefix}_{_REPORTED}")
         return cls(
             positions=arrays[f"{prefix}_positions"],
             boxes=arrays[f"{prefix}_boxes"],
             features=features,
             object_ids=arrays[f"{prefix}_object_ids"].tolist(),
-            classes=arrays[f"{prefix}_classes"].tolist(),
+            true_classes=arrays[f"{prefix}_true_classes"].tolist(),
             pixels=arrays[f"{prefix}_pixels"],
             world=arrays.get(f"{prefix}_world"),
+            reported_classes=(
+                None if reported is None else np.asarray(reported).reshape(-1).tolist()
+            ),
         )
 
     def take(self, rows) -> ViewDetections:
@@ -117,9 +136,14 @@ class ViewDetections:
             boxes=self.boxes[rows],
             features=self.features[rows] if len(self) else self.features,
             object_ids=[self.object_ids[r] for r in rows],
-            classes=[self.classes[r] for r in rows],
+            true_classes=[self.true_classes[r] for r in rows],
             pixels=self.pixels[rows],
             world=None if self.world is None else self.world[rows],
+            reported_classes=(
+                None
+                if self.reported_classes is None
+                else [self.reported_classes[r] for r in rows]
+            ),
         )
 
     def equals(self, other: ViewDetections) -> bool:
@@ -128,7 +152,8 @@ class ViewDetections:
             return False
         return (
             self.object_ids == other.object_ids
-            and self.classes == other.classes
+            and self.true_classes == other.true_classes
+            and self.reported_classes == other.reported_classes
             and (self.world is None or np.array_equal(self.world, other.world))
             and all(
                 np.array_equal(getattr(self, f), getattr(other, f))

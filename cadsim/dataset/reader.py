@@ -25,7 +25,12 @@ from cadsim.dataset.checksum import dataset_checksum, record_dir_checksum
 from cadsim.dataset.detections import ViewDetections, ground_truth_pairs
 from cadsim.dataset.encoding import decode_png, load_npz
 from cadsim.dataset.manifest import DatasetError, read_manifest
-from cadsim.dataset.seeds import localisation_seed, noise_seed, simulation_seed
+from cadsim.dataset.seeds import (
+    LOCALISATION_STREAM,
+    NOISE_STREAM,
+    redraw_episode_seed,
+    redraw_seed,
+)
 from cadsim.observer_pose import ObserverPose, camera_to_world
 from cadsim.sensing.gnss_error import draw_error as draw_gnss_error
 from cadsim.sensing.gnss_error import model_of as gnss_model
@@ -268,8 +273,9 @@ class FramePair:
             world1=world1,
             world2=world2,
             world_sigma=sigma,
-            classes1=tuple(self.view1.classes),
-            classes2=tuple(self.view2.classes),
+            # the detector's reported classes only: the true ones never reach a matcher
+            classes1=_reported(self.view1),
+            classes2=_reported(self.view2),
         )
 
     @property
@@ -366,13 +372,16 @@ class FramePair:
             to_world.append(pose)
         return np.linalg.inv(to_world[0]) @ to_world[1]
 
-    def localise(self, position_sigma_m: float, yaw_sigma_deg: float, seed: int) -> FramePair:
+    def localise(
+        self, position_sigma_m: float, yaw_sigma_deg: float, seed: int | None
+    ) -> FramePair:
         """This pair with its localisation prior re-drawn: each observer's pose error has
         standard deviations ``position_sigma_m`` (metres per ground axis) and ``yaw_sigma_deg``,
-        seeded by (seed, episode, slot, view). Nothing is re-rendered or re-detected. Same
-        arguments ⇒ the same prior; for one seed the error scales with the sigmas; the dataset's
-        root seed and its scenario's sigmas ⇒ the record's own prior. ``ValueError`` for a record
-        whose prior is stored (imported) or that has no cameras.
+        seeded by the run seed ``seed`` and the record's identity, its simulation seed included
+        (:func:`cadsim.dataset.seeds.redraw_seed`: another split never shares the draw). Nothing
+        is re-rendered or re-detected. Same arguments ⇒ the same prior; for one seed the error
+        scales with the sigmas; ``seed=None`` and the scenario's sigmas ⇒ the record's own prior.
+        ``ValueError`` for a record whose prior is stored (imported) or that has no cameras.
 
         >>> pair.localise(2.5, 2.5 * 0.2 / 1.2, seed=0).prior()[2]   # doctest: +SKIP
         2.5
@@ -380,20 +389,28 @@ class FramePair:
         config = LocalisationConfig(position_sigma_m=position_sigma_m, yaw_sigma_deg=yaw_sigma_deg)
         return self._redrawn(config, self._view_seeds(seed))
 
-    def localise_preset(self, preset: str, seed: int) -> FramePair:
+    def localise_preset(self, preset: str, seed: int | None) -> FramePair:
         """This pair with its localisation prior re-drawn by the GNSS-like model ``preset``
         (:mod:`cadsim.sensing.gnss_error`: ``exact``, ``rtk``, ``gnss-open-sky``, ``gnss-urban``,
-        ``denied`` — no prior), seeded by (seed, episode, slot, view) for the per-view draws and
-        by (seed, episode) for the episode's bias and drift. With the dataset's root seed and the
-        scenario's own preset it gives back the record's own prior. ``ValueError`` as
+        ``denied`` — no prior), seeded by the run seed and the record's identity (simulation
+        seed, episode, slot, view) for the per-view draws and by (seed, simulation seed, episode)
+        for the episode's bias and drift (:mod:`cadsim.dataset.seeds`). ``seed=None`` and the
+        scenario's own preset give back the record's own prior. ``ValueError`` as
         :meth:`localise`."""
         config = LocalisationConfig(preset=preset)
-        episode = (simulation_seed(seed, self.episode),)  # the episode's bias and drift
+        if seed is None:  # the record's own: the episode's bias and drift from its simulation seed
+            return self._redrawn(config, self._view_seeds(None) + (self.sim_seed,))
+        episode = (redraw_episode_seed(seed, self.sim_seed, self.episode),)
         return self._redrawn(config, self._view_seeds(seed) + episode)
 
-    def _view_seeds(self, seed: int) -> tuple[int, int]:
-        """The two views' localisation seeds under root ``seed`` (stream 4)."""
-        return tuple(localisation_seed(seed, self.episode, self.slot, v) for v in self.view_numbers)
+    def _view_seeds(self, seed: int | None) -> tuple[int, int]:
+        """The two views' localisation seeds of run ``seed`` (None: the record's own)."""
+        if seed is None:
+            return tuple(int(o["localisation_seed"]) for o in self._observers)
+        return tuple(
+            redraw_seed(LOCALISATION_STREAM, seed, self.sim_seed, self.episode, self.slot, v)
+            for v in self.view_numbers
+        )
 
     def _redrawn(self, config: LocalisationConfig, seeds: tuple[int, ...]) -> FramePair:
         """This pair with its prior drawn from ``config`` and ``seeds``; ValueError for a stored
@@ -447,16 +464,17 @@ class FramePair:
                 pair.__dict__[name] = self.__dict__[name]
         return pair
 
-    def redetect(self, noise_rate: float, seed: int) -> FramePair:
+    def redetect(self, noise_rate: float, seed: int | None) -> FramePair:
         """This pair re-detected at depth-noise rate ``noise_rate`` (σ = noise_rate · d²): noise
-        seeded by (seed, episode, slot, view) applied to the stored clean depth, then detection;
-        nothing is re-rendered. Same arguments ⇒ identical detections; rate 0 ⇒ clean-depth
-        detections; the dataset's root seed and noise rate ⇒ the stored detections. Features are
+        seeded by the run seed ``seed`` and the record's identity, its simulation seed included
+        (:func:`cadsim.dataset.seeds.redraw_seed`), applied to the stored clean depth, then
+        detection; nothing is re-rendered. Same arguments ⇒ identical detections; rate 0 ⇒
+        clean-depth detections; ``seed=None`` and the dataset's noise rate ⇒ the stored detections. Features are
         the stored ones (they depend on colour, instance map and the record's attribute errors,
         ``attribute_seed``, not on depth), so only positions are re-estimated."""
         return self.redetect_rates([noise_rate], seed)[0]
 
-    def redetect_rates(self, noise_rates: Sequence[float], seed: int) -> list[FramePair]:
+    def redetect_rates(self, noise_rates: Sequence[float], seed: int | None) -> list[FramePair]:
         """``[self.redetect(rate, seed) for rate in noise_rates]`` (the same bits), at a fraction
         of the cost: which objects are detected, their pixels and features are decided once per
         view (:func:`cadsim.sensing.detection.plan_detections`, kept on this pair), the seeded
@@ -470,13 +488,13 @@ class FramePair:
                 raise ValueError(f"noise_rate: expected a finite value >= 0, got {rate!r}")
         noise_cfg, plans = self._detection_plans
         per_view = []
-        for v, depth, plan in zip(
-            self.view_numbers, (self.depth1, self.depth2), plans, strict=True
+        for v, depth, plan, observer in zip(
+            self.view_numbers, (self.depth1, self.depth2), plans, self._observers, strict=True
         ):
             clean = np.asarray(depth, dtype=np.float64).ravel()[plan.pixels]
             unit = None
             if any(rate > 0 for rate in rates):
-                rng = np.random.default_rng(noise_seed(seed, self.episode, self.slot, v))
+                rng = np.random.default_rng(self._noise_seed(seed, v, observer))
                 unit = unit_noise(depth.shape, noise_cfg, rng).ravel()[plan.pixels]
             per_view.append(
                 [
@@ -490,6 +508,12 @@ class FramePair:
             self._derived((view1, view2), rate, self._localisation)
             for rate, view1, view2 in zip(rates, *per_view, strict=True)
         ]
+
+    def _noise_seed(self, seed: int | None, view: int, observer: dict) -> int:
+        """Depth-noise seed of view ``view`` in run ``seed`` (None: the record's own)."""
+        if seed is None:
+            return int(observer["noise_seed"])
+        return redraw_seed(NOISE_STREAM, seed, self.sim_seed, self.episode, self.slot, view)
 
     @cached_property
     def _detection_plans(self) -> tuple[NoiseConfig, tuple[DetectionPlan, DetectionPlan]]:
@@ -544,6 +568,11 @@ class FramePair:
                 )
             )
         return noise_cfg, (plans[0], plans[1])
+
+
+def _reported(view: ViewDetections) -> tuple[str, ...] | None:
+    """The classes a view's detector reported (None where the record does not say)."""
+    return None if view.reported_classes is None else tuple(view.reported_classes)
 
 
 def _box_centres(boxes: np.ndarray) -> np.ndarray:

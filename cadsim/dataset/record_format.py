@@ -4,7 +4,7 @@ Files of ``pairs/eEEEEE_sSS/`` (see docs/dataset.md for every field):
 ``view1.png``/``view2.png`` colour (RGB as PNG); ``depth.npz`` clean depth ``depth1``/``depth2``
 (H, W) float32 metres along the optical axis, 0 = no hit; ``instance.npz`` ``instance1``/
 ``instance2`` (H, W) int32 index into ``record.json``'s ``objects``, -1 = none; ``detections.npz``
-``view{1,2}_{positions,boxes,features,object_ids,classes,pixels}`` at the scenario's noise
+``view{1,2}_{positions,boxes,features,object_ids,true_classes,reported_classes,pixels}`` at the scenario's noise
 config; ``record.json`` cameras, observers (with their true world poses), seeds, snapshot time and
 objects, ground truth, and the localisation prior's parameters (``prior``; the pose error itself is
 drawn at read time from ``observers[].localisation_seed``).
@@ -20,7 +20,11 @@ Version 4 is the N-view snapshot record (:class:`SnapshotRecord`, DESIGN §12): 
 viewN.png``, ``depth1 … depthN``, ``instance1 … instanceN``, ``view{k}_…`` detections, one
 observer entry per view with its ``kind`` ("vehicle" or "roadside": a roadside unit's pose is
 known exactly), per-view detection counts and per-pair covisible counts; frame-pair datasets are
-still written as version 3, byte for byte as before. A change of the record layout bumps
+still written as version 3, byte for byte as before. Versions 5 (frame pairs) and 6 (N-view
+snapshots) store each detection's true class as ``view{k}_true_classes`` (ground truth, for
+metrics only) and the class the view's detector reported as ``view{k}_reported_classes`` (what a
+matcher sees, ``Problem.classes1/2``); earlier versions stored only the true class, as
+``view{k}_classes``, and are read with no reported class (``Problem.classes1/2`` None). A change of the record layout bumps
 ``FORMAT_VERSION``; the reader reads
 :data:`READABLE_VERSIONS` and refuses others with a message naming them (a version-2 dataset is
 read with every velocity 0, and the latency presets refuse it).
@@ -41,9 +45,9 @@ from cadsim.observer_pose import ObserverPose
 from cadsim.sensing.localisation import LocalisationConfig
 from cadsim.world import WorldObject
 
-FORMAT_VERSION = 3
-MULTI_VIEW_FORMAT = 4
-READABLE_VERSIONS = (2, 3, 4)
+FORMAT_VERSION = 5
+MULTI_VIEW_FORMAT = 6
+READABLE_VERSIONS = (2, 3, 4, 5, 6)
 
 
 @dataclass(frozen=True, eq=False)
@@ -107,7 +111,7 @@ def _check_image(name: str, arr: np.ndarray, shape: tuple[int, int], dtype) -> n
 
 @dataclass(frozen=True, eq=False)
 class SnapshotRecord:
-    """One accepted N-view snapshot (format version 4): the views of every observer of the
+    """One accepted N-view snapshot (format version 6): the views of every observer of the
     snapshot, in observer order (vehicles first, then roadside units). kinds: per view
     "vehicle" or "roadside". Other fields as :class:`PairRecord`."""
 
@@ -185,7 +189,7 @@ def encode_record(rec: PairRecord) -> dict[str, bytes]:
 
 
 def encode_snapshot(rec: SnapshotRecord) -> dict[str, bytes]:
-    """{file name: bytes} of an N-view snapshot record (format version 4); deterministic. Ground
+    """{file name: bytes} of an N-view snapshot record (format version 6); deterministic. Ground
     truth is the detections' object ids (shared across views); ``counts.covisible`` holds each
     pair "i-j" (1-based, i < j) of views' covisible count."""
     views = rec.views

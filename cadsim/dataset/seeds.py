@@ -7,13 +7,18 @@ stream 1: depth noise of (episode, slot, view) spawn_key (1, e, s, v)   v = 1 or
 stream 3: detector attributes of (e, s, v)     spawn_key (3, e, s, v)   (class confusion, size noise)
 stream 4: localisation error of (e, s, v)      spawn_key (4, e, s, v)
 
-``FramePair.redetect(rate, seed)`` draws its noise from stream 1 with ``seed`` as the root: with
-the dataset's own root seed and noise rate it reproduces the stored detections exactly, and across
-rates the noise field is the same one, scaled (common random numbers for noise sweeps). The
-attribute seed is stored in the record and reused by ``redetect`` whatever its seed: which objects
-a view's detector misclassifies is part of the dataset, not of a noise run.
-``FramePair.localise(position_sigma_m, yaw_sigma_deg, seed)`` draws the observers' pose errors from
-stream 4 the same way (the dataset's root seed gives back the record's own prior).
+Redraws at evaluation time (seed scheme 2). ``FramePair.redetect(rate, seed)`` and
+``FramePair.localise(…, seed)`` / ``localise_preset(preset, seed)`` draw a *run*'s depth noise and
+pose errors from :func:`redraw_seed`: the run seed together with the record's identity *including
+its simulation seed*, which is derived from the dataset's own root seed. Two datasets made with
+different seeds (a validation and a test split) therefore never share a run's noise, although
+their records have the same (episode, slot) numbers — under seed scheme 1 the run seed alone was
+the root, so every split saw the same per-view GNSS bias, heading error and outliers in run r.
+``seed=None`` gives back the record's own draws (the stored detections, the stored prior: the
+seeds written at generation). Across rates the noise field is the same one, scaled (common
+random numbers for noise sweeps). The attribute seed is stored in the record and reused by
+``redetect`` whatever its seed: which objects a view's detector misclassifies is part of the
+dataset, not of a noise run.
 """
 
 from __future__ import annotations
@@ -21,6 +26,10 @@ from __future__ import annotations
 import numpy as np
 
 _SIM, _NOISE, _REDETECT, _ATTRIBUTES, _LOCALISATION = 0, 1, 2, 3, 4
+_RUN_EPISODE = 5  # a run's per-episode draws (the GNSS bias and drift of a redrawn prior)
+SEED_SCHEME = 2
+"""Version of the evaluation-time seed derivation (module docstring); the run record states it."""
+NOISE_STREAM, LOCALISATION_STREAM = _NOISE, _LOCALISATION
 
 
 def _check(root: int) -> int:
@@ -52,3 +61,23 @@ def localisation_seed(root: int, episode: int, slot: int, view: int) -> int:
     """Seed of the localisation (pose) error of view ``view`` (1 or 2) of record (episode, slot)."""
     ss = np.random.SeedSequence(_check(root), spawn_key=(_LOCALISATION, episode, slot, view))
     return int(ss.generate_state(1, np.uint64)[0] >> 1)
+
+
+def redraw_seed(
+    stream: int, run_seed: int, sim_seed: int, episode: int, slot: int, view: int
+) -> int:
+    """Seed of a run's redraw of ``stream`` (:data:`NOISE_STREAM` or :data:`LOCALISATION_STREAM`)
+    for view ``view`` of record (episode, slot) whose simulation seed is ``sim_seed`` (which
+    carries the dataset's root seed): ``SeedSequence([run_seed, sim_seed], spawn_key=(stream,
+    episode, slot, view))``."""
+    entropy = [_check(run_seed), _check(sim_seed)]
+    ss = np.random.SeedSequence(entropy, spawn_key=(int(stream), episode, slot, view))
+    return int(ss.generate_state(1, np.uint64)[0] >> 1)
+
+
+def redraw_episode_seed(run_seed: int, sim_seed: int, episode: int) -> int:
+    """Seed of a run's per-episode draws (a redrawn prior's GNSS bias and drift) for the episode
+    simulated with ``sim_seed``; in [0, 2**31) like :func:`simulation_seed`."""
+    entropy = [_check(run_seed), _check(sim_seed)]
+    ss = np.random.SeedSequence(entropy, spawn_key=(_RUN_EPISODE, episode))
+    return int(ss.generate_state(1, np.uint32)[0] >> 1)

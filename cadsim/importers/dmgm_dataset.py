@@ -78,7 +78,9 @@ def _detections(view: DmgmView) -> ViewDetections:
         boxes=np.column_stack([u, v, u, v]),
         features=view.x,
         object_ids=[str(i) for i in view.y],
-        classes=[f"label{k}" for k in view.label],
+        true_classes=[f"label{k}" for k in view.label],
+        # the data's own labels are all a matcher gets from it: they are its "reported" class
+        reported_classes=[f"label{k}" for k in view.label],
         pixels=np.zeros(n, dtype=np.int64),
         world=view.pos_world.astype(np.float64) * [1.0, -1.0, 1.0],
     )

@@ -112,14 +112,17 @@ class DetectionConfig:
 class Detections:
     """k detections of one view. positions: (k, 3) camera frame (OpenCV: x right, y down, z
     forward), metres, from the noisy depth. boxes: (k, 4) pixel box x0, y0, x1, y1 (pixel edges).
-    features: (k, FEATURE_DIM) float32, non-negative. object_ids, classes: ground truth, k each
-    (never part of the features). pixels: (k,) visible pixel counts."""
+    features: (k, FEATURE_DIM) float32, non-negative. object_ids, true_classes: ground truth, k
+    each (for metrics only: never part of the features, never given to a matcher).
+    reported_classes: the class the view's detector reported for each detection (after its class
+    confusion), what matchers may see. pixels: (k,) visible pixel counts."""
 
     positions: np.ndarray
     boxes: np.ndarray
     features: np.ndarray
     object_ids: list[str] = field(default_factory=list)
-    classes: list[str] = field(default_factory=list)
+    true_classes: list[str] = field(default_factory=list)
+    reported_classes: list[str] = field(default_factory=list)
     pixels: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
     def __len__(self) -> int:
@@ -155,7 +158,9 @@ class DetectionPlan:
 
     pixels: flat indices (row · W + column) of every detection's mask, concatenated in detection
     order; ``starts[i]:starts[i + 1]`` are detection i's. centres: (k, 2) mask centroids (u, v),
-    pixels. The other fields are those of :class:`Detections`, and the detected objects."""
+    pixels. reported_classes: the class the detector reported for each detected object (a
+    clutter detection: the class it was drawn as). The other fields are those of
+    :class:`Detections`, and the detected objects."""
 
     pixels: np.ndarray
     starts: np.ndarray
@@ -166,6 +171,7 @@ class DetectionPlan:
     camera: Camera
     surface_to_center: bool
     shape: tuple[int, int]
+    reported_classes: list[str] = field(default_factory=list)
 
     def __len__(self) -> int:
         return len(self.objects)
@@ -198,7 +204,8 @@ class DetectionPlan:
             boxes=self.boxes.copy(),
             features=self.features.copy(),
             object_ids=[o.id for o in self.objects],
-            classes=[o.cls for o in self.objects],
+            true_classes=[o.cls for o in self.objects],
+            reported_classes=list(self.reported_classes),
             pixels=np.diff(self.starts),
         )
 
@@ -279,6 +286,7 @@ def plan_detections(
         boxes.append((x0, y0, x1, y1))
         depths.append(float(np.median(clean[pix])))
         visible.append(len(pix) / in_image if in_image > 0 else 1.0)
+    reported = {objects[i].id: seen_cls[i] for i in candidates}
     if config.has_errors and attribute_rng is not None:
         kept, masks, centres, boxes, features = _with_detector_errors(
             (kept, masks, centres, boxes, features), depths, visible, clean_depth, camera,
@@ -295,6 +303,7 @@ def plan_detections(
         camera=camera,
         surface_to_center=config.surface_to_center,
         shape=(h, w),
+        reported_classes=[reported.get(o.id, o.cls) for o in kept],  # clutter: its drawn class
     )
 
 
