@@ -201,7 +201,8 @@ CAD_FIRST_RECORD_SHA256 = {
     "view2.png": "b62907d3d134c1da90fc0ab95932a58096bc6fcd5093ebb281d085884cebb2c0",
     "depth.npz": "c32da99931e813f050e7b89dbebe559339fabf98549f1fc45707595c04082aa0",
     "instance.npz": "bdae9f703818d0474879b0816b54d76aca5bfa5573a9f76e6187acc7624ed063",
-    "detections.npz": "a2be457d8577a736a8a25ae56bca9d9fc86e3b6caf72ca82cc6ca296a7853bd7",
+    # format 5 stores true_classes and reported_classes (was: classes); the arrays are unchanged
+    "detections.npz": "5bb4fb59ba4047647deee7102b45d31ce8cb286da17dac3ab6dc71dbad410b3a",
 }
 
 

@@ -307,29 +307,63 @@ class FramePair:
         records: the stored positions and the source's stated sigma."""
         if self.view1.world is not None and self.view2.world is not None:
             return self.view1.world, self.view2.world, float(self.record["prior"]["world_sigma_m"])
+        errors = self._pose_errors()
+        if errors is None:
+            return None
+        sent, offset = self._sent_view2
+        worlds = []
+        for k, (positions, camera, pose, error) in enumerate(zip((self.view1.positions, sent), self.cameras, self.observer_poses, errors, strict=True)):  # fmt: skip
+            shift = offset if k else np.zeros(3)  # the sender's pose when it sent (latency)
+            world = camera.camera_to_world(positions) + shift
+            worlds.append(perturbed_world(world, np.asarray(pose.position) + shift, error))
+        return worlds[0], worlds[1], self.localisation[0].stated_sigma_m
+
+    def _pose_errors(self) -> tuple[PoseError, PoseError] | None:
+        """Each view's drawn pose error (about its observer's body origin), or None when the
+        record has no simulated prior (none, stored, or ``denied``)."""
         loc = self.localisation
-        if loc is None:
+        if loc is None or self.cameras is None:
             return None
         config, seeds = loc
         model = None if config.preset is None else gnss_model(config.preset)
         if model is not None and not model.given:
             return None  # denied: the vehicles have no pose to share
-        sent, offset = self._sent_view2
         latency = config.latency_s
-        worlds = []
-        for k, (positions, camera, pose, seed, vehicle, kind) in enumerate(zip((self.view1.positions, sent), self.cameras, self.observer_poses, seeds[:2], self.observer_ids, self.observer_kinds, strict=True)):  # fmt: skip
-            shift = offset if k else np.zeros(3)  # the sender's pose when it sent (latency)
+        errors = []
+        for k, (seed, vehicle, kind) in enumerate(zip(seeds[:2], self.observer_ids, self.observer_kinds, strict=True)):  # fmt: skip
             if kind == "roadside":  # a surveyed pole: its pose is exact
-                error = PoseError(0.0, 0.0, 0.0)
+                errors.append(PoseError(0.0, 0.0, 0.0))
             elif model is None:
-                error = PoseError.draw(config, np.random.default_rng(seed))
+                errors.append(PoseError.draw(config, np.random.default_rng(seed)))
             else:
                 episode_seed = seeds[2] if len(seeds) > 2 else self.sim_seed
                 when = self.time - (latency if k else 0.0)
-                error = draw_gnss_error(model, episode_seed, vehicle, when, seed)
-            world = camera.camera_to_world(positions) + shift
-            worlds.append(perturbed_world(world, np.asarray(pose.position) + shift, error))
-        return worlds[0], worlds[1], config.stated_sigma_m
+                errors.append(draw_gnss_error(model, episode_seed, vehicle, when, seed))
+        return errors[0], errors[1]
+
+    def broadcast_relative_pose(self) -> np.ndarray | None:
+        """4x4 transform from view 2's camera frame into view 1's that the two observers' own
+        noisy (broadcast) poses imply, pose₁⁻¹ · pose₂ — each camera's true placement (view 2's
+        at the time its message was made) with its observer's pose error applied — in the frames
+        of :meth:`true_relative_pose`: what a vehicle knows with no matching at all. Uses the
+        poses only, never a detection. None without a simulated prior (none, stored, denied)."""
+        errors = self._pose_errors()
+        if errors is None:
+            return None
+        _, offset = self._sent_view2
+        to_world = []
+        for k, (camera, pose, error) in enumerate(zip(self.cameras, self.observer_poses, errors, strict=True)):  # fmt: skip
+            shift = offset if k else np.zeros(3)
+            c, s = np.cos(error.dyaw), np.sin(error.dyaw)
+            turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+            pivot = np.asarray(pose.position, dtype=float) + shift
+            pivot[2] = 0.0  # the yaw error turns about the vertical through the body origin
+            origin = np.asarray(camera.position, dtype=float) + shift
+            out = np.eye(4)
+            out[:3, :3] = turn @ camera.rotation_cam_to_world()
+            out[:3, 3] = turn @ (origin - pivot) + pivot + np.array([error.dx, error.dy, 0.0])
+            to_world.append(out)
+        return np.linalg.inv(to_world[0]) @ to_world[1]
 
     @cached_property
     def _sent_view2(self) -> tuple[np.ndarray, np.ndarray]:

@@ -26,7 +26,7 @@ import numpy as np
 
 from eval.core.tasks import MatcherSpec, PairOutcome, RunResult, RunSpec
 
-_FORMAT = 3  # 3: the positions, true pose and prior error of every pair (pose metrics)
+_FORMAT = 4  # 4: the positions, true pose, broadcast prior pose and camera mounts of every pair
 
 # Sources that cannot change a run's result (how tasks are dispatched, the CLI, drawing, benches):
 # left out of the code version so editing them does not invalidate the cache. Everything else
@@ -141,7 +141,9 @@ class ResultCache:
             **_ragged([o.scores for o in outcomes], "scores", np.float64),
             **_ragged([_points(o.points1, o.n1) for o in outcomes], "points1", np.float64),
             **_ragged([_points(o.points2, o.n2) for o in outcomes], "points2", np.float64),
-            "pose": np.array([_pose_row(o) for o in outcomes], dtype=np.float64).reshape(-1, 20),
+            "pose": np.array([_pose_row(o) for o in outcomes], dtype=np.float64).reshape(
+                -1, _POSE_ROW
+            ),
         }
         fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=path.parent)
         try:
@@ -198,27 +200,31 @@ def _points(points: np.ndarray | None, n: int) -> np.ndarray:
     return np.zeros(0) if points is None else np.asarray(points, dtype=np.float64).reshape(-1)
 
 
+_POSE_ROW = 16 + 16 + 32 + 1
+"""Stored pose fields of one outcome: true pose (16), prior pose (16), the two camera mounts
+(32), each NaN when unknown, and whether the positions were kept (1/0)."""
+
+
 def _pose_row(outcome: PairOutcome) -> np.ndarray:
-    """(20,) true pose (16, NaN when unknown), whether there is a prior error (1/0) and that
-    error (RTE, RRE; NaN for a failed fit), whether the positions were kept (1/0)."""
-    row = np.full(20, np.nan)
-    if outcome.true_pose is not None:
-        row[:16] = np.asarray(outcome.true_pose, dtype=np.float64).reshape(16)
-    row[16] = outcome.prior_error is not None
-    if outcome.prior_error is not None:
-        row[17:19] = outcome.prior_error
-    row[19] = outcome.points1 is not None and outcome.points2 is not None
+    """(:data:`_POSE_ROW`,) true pose, broadcast prior pose, camera → body mounts (NaN where
+    unknown), whether the positions were kept (1/0)."""
+    row = np.full(_POSE_ROW, np.nan)
+    for start, value, size in ((0, outcome.true_pose, 16), (16, outcome.prior_pose, 16), (32, outcome.extrinsics, 32)):  # fmt: skip
+        if value is not None:
+            row[start : start + size] = np.asarray(value, dtype=np.float64).reshape(size)
+    row[64] = outcome.points1 is not None and outcome.points2 is not None
     return row
 
 
 def _pose_fields(q1: np.ndarray, n1: int, q2: np.ndarray, n2: int, row: np.ndarray) -> dict:
     """The pose fields of a stored pair (:func:`_points`, :func:`_pose_row` reversed)."""
-    kept = row[19] == 1
+    kept = row[64] == 1
     return {
         "points1": _shaped(q1, n1) if kept else None,
         "points2": _shaped(q2, n2) if kept else None,
         "true_pose": None if np.isnan(row[0]) else row[:16].reshape(4, 4),
-        "prior_error": (float(row[17]), float(row[18])) if row[16] == 1 else None,
+        "prior_pose": None if np.isnan(row[16]) else row[16:32].reshape(4, 4),
+        "extrinsics": None if np.isnan(row[32]) else row[32:64].reshape(2, 4, 4),
     }
 
 

@@ -29,7 +29,6 @@ from typing import Any
 
 import numpy as np
 
-from eval.core.pose_metrics import pose_error, prior_transform
 from eval.core.thinning import thin_pair
 
 
@@ -140,9 +139,10 @@ class PairOutcome:
     time_s: the matcher's wall time on this pair, seconds; iterations: as the matcher reports.
     points1 (n1, D), points2 (n2, D): the positions the matcher saw (metres, each camera's frame;
     view 2's as its message reports them), true_pose: the 4x4 transform from view 2's frame into
-    view 1's (None when unknown: imported data), prior_error: (RTE m, RRE degrees) of the
-    transform the localisation prior implies (None without a prior) — for the pose metrics of
-    :mod:`eval.core.pose_metrics`.
+    view 1's (None when unknown: imported data), prior_pose: the 4x4 transform the two observers'
+    noisy broadcast poses imply (``FramePair.broadcast_relative_pose``; None without a prior),
+    extrinsics: (2, 4, 4) each view's camera → body transform (None when unknown) — for the pose
+    metrics of :mod:`eval.core.pose_metrics`.
     """
 
     index: int
@@ -160,7 +160,8 @@ class PairOutcome:
     points1: np.ndarray | None = None
     points2: np.ndarray | None = None
     true_pose: np.ndarray | None = None
-    prior_error: tuple[float, float] | None = None
+    prior_pose: np.ndarray | None = None
+    extrinsics: np.ndarray | None = None
 
     @property
     def assigned_scores(self) -> np.ndarray:
@@ -225,10 +226,11 @@ def _pair_outcomes(pair, task: RunTask, functions: list) -> list[PairOutcome]:
     problem = pair.problem()
     gt = np.asarray(pair.gt_pairs, dtype=np.int64).reshape(-1, 2)
     true_pose = pair.true_relative_pose() if hasattr(pair, "true_relative_pose") else None
-    prior_error = None
-    if true_pose is not None and problem.world1 is not None:
-        implied = prior_transform(problem.points1, problem.world1, problem.points2, problem.world2)
-        prior_error = pose_error(implied, true_pose)
+    prior_pose = extrinsics = None
+    if true_pose is not None:
+        prior_pose = pair.broadcast_relative_pose()  # the poses alone: no detection enters
+        mounts = pair.camera_extrinsics
+        extrinsics = None if mounts is None else np.stack(mounts).astype(float)
     with shared_tensors():  # the hypergraph matchers of a pair share its k-NN search
         matchings = [
             fn(problem, seed=task.seed, threshold=None, **dict(spec.options))
@@ -260,7 +262,8 @@ def _pair_outcomes(pair, task: RunTask, functions: list) -> list[PairOutcome]:
                 points1=np.asarray(problem.points1, dtype=float),
                 points2=np.asarray(problem.points2, dtype=float),
                 true_pose=true_pose,
-                prior_error=prior_error,
+                prior_pose=prior_pose,
+                extrinsics=extrinsics,
             )
         )
     return outcomes
