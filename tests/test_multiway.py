@@ -19,6 +19,7 @@ from matchers.fusion import (
     register_fusion,
     registry,
 )
+from matchers.fusion.universe import components
 
 FUSIONS = available_fusions()
 FUSED = [name for name in FUSIONS if name != "independent"]
@@ -100,13 +101,43 @@ def test_count_error_is_exact_on_planted_cases():
     assert summarise_counts([counts])["recall_pooled"] == 0.0
 
 
-def test_independent_keeps_the_pairs_and_counts_their_components():
+def test_independent_keeps_the_pairs_and_counts_by_the_fusions_clustering_rule():
     evidence, truth = inconsistent()
     universe = get_fusion("independent")(evidence)
     assert not universe.fused
     for key, pairs in evidence.matches.items():
         assert as_set(universe.pairs[key]) == as_set(pairs)
-    assert universe.count == 2  # objects 0 and 1 chained into one component, object 2 alone
+    # connected components chain objects 0 and 1 into one (2 objects); the greedy closure with
+    # one detection per view keeps the strong chains and drops the weak swapped pairs: 3
+    assert len(np.unique(components(evidence))) == 2
+    assert universe.count == 3
+    clustered = get_fusion("transitive")(evidence)
+    for mine, rule in zip(universe.labels, clustered.labels, strict=True):
+        np.testing.assert_array_equal(mine, rule)
+    assert summarise_counts([multiway_counts(universe, truth)])["count_error"] == 0.0
+
+
+def test_independent_never_puts_two_detections_of_a_view_in_one_object():
+    # A0-B0 (0.9), B0-C0 (0.8), A1-C0 (0.3): the match graph is one component holding both of
+    # view A's detections; the rule drops the weakest match that would join them
+    evidence = PairwiseEvidence(
+        (2, 1, 1),
+        {
+            (0, 1): np.array([[0.9], [0.1]]),
+            (1, 2): np.array([[0.8]]),
+            (0, 2): np.array([[0.1], [0.3]]),
+        },
+        {(0, 1): [[0, 0]], (1, 2): [[0, 0]], (0, 2): [[1, 0]]},
+    )
+    truth = [np.array([0, 1]), np.array([0]), np.array([0])]
+    assert len(np.unique(components(evidence))) == 1  # what components would count
+    universe = get_fusion("independent")(evidence)
+    assert universe.count == 2 and universe.labels[0][0] != universe.labels[0][1]
+    assert universe.labels[0][0] == universe.labels[1][0] == universe.labels[2][0]
+    assert as_set(universe.pairs[(0, 2)]) == {(1, 0)}  # its pairs are still the input's
+    counts = multiway_counts(universe, truth)
+    assert counts.objects_estimated == counts.objects_present == 2
+    assert counts.violations > 0  # the raw pairs still break a cycle
 
 
 @pytest.mark.parametrize(

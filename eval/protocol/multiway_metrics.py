@@ -8,9 +8,12 @@ Per snapshot, :func:`multiway_counts` counts; :func:`summarise_counts` pools the
 * **cycle-consistency violation rate**: over every ordered triple of distinct views (i, j, k) and
   every detection a of view i with a composed match i -> j -> k (a matched to b in j, b matched
   to c in k), the share whose direct match i -> k is not c (unmatched included). A fused result
-  has none by construction.
+  has none by construction, so for fused outputs it is an invariant to check (the multi-agent
+  study reports it as one), not a figure of merit; only ``independent``'s raw pairs can break it.
 * **count error**: |objects estimated - objects present| / objects present per snapshot (the
-  objects present: distinct true objects among the views' detections), averaged over snapshots.
+  objects present: distinct true objects among the views' detections), averaged over snapshots
+  (:func:`count_errors` per snapshot). ``independent``'s objects are those of the fusions'
+  clustering rule (:mod:`matchers.fusion.independent`).
 * **universe clustering precision / recall**: over pairs of detections in different views, those
   in one estimated object that are one true object, over all in one estimated object
   (precision) and over all of one true object (recall).
@@ -117,6 +120,15 @@ def multiway_counts(universe: Universe, truth: Sequence[np.ndarray]) -> Multiway
     )
 
 
+def count_errors(estimated, present) -> np.ndarray:
+    """Per snapshot, |objects estimated - objects present| / objects present; NaN where no
+    object is present (such a snapshot does not enter the mean)."""
+    estimated = np.asarray(estimated, dtype=float)
+    present = np.asarray(present, dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(present > 0, np.abs(estimated - present) / present, np.nan)
+
+
 def _ratio(num: float, den: float, empty: float) -> float:
     return float(num / den) if den > 0 else empty
 
@@ -130,17 +142,16 @@ def summarise_counts(counts: Sequence[MultiwayCounts]) -> dict[str, float]:
     precision = _ratio(tp, declared, 1.0)
     recall = _ratio(tp, true_pairs, 1.0)
     f1 = _ratio(2 * precision * recall, precision + recall, 0.0)
-    errors = [
-        abs(c.objects_estimated - c.objects_present) / c.objects_present
-        for c in counts
-        if c.objects_present
-    ]
+    errors = count_errors(
+        [c.objects_estimated for c in counts], [c.objects_present for c in counts]
+    )
+    errors = errors[np.isfinite(errors)]
     return {
         "precision_pooled": precision,
         "recall_pooled": recall,
         "f1_pooled": f1,
         "cycle_violation_rate": _ratio(violations, chains, 0.0),
-        "count_error": float(np.mean(errors)) if errors else 0.0,
+        "count_error": float(np.mean(errors)) if len(errors) else 0.0,
         "cluster_precision": _ratio(totals[7], totals[8], 1.0),
         "cluster_recall": _ratio(totals[7], totals[9], 1.0),
     }
