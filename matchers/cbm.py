@@ -13,8 +13,18 @@ cooperative perception, 2023), implemented from the paper's description, pose-fr
    the number of one-to-one pairs (Hungarian on the residuals) within eps. The hypothesis with the
    most support wins (ties: the smaller summed residual, then anchor order).
 
-Scores: exp(−r² / (2 eps²)) of the residual r under the winning motion (S where no hypothesis
-could be fitted); then the shared Hungarian + threshold.
+Declared pairs: the shared Hungarian on exp(−r² / (2 eps²)) of the residual r under the winning
+motion (on S / max S where no hypothesis could be fitted).
+
+Scores (:func:`supported_scores`): a declared pair's score is the share of the winning
+hypothesis's inliers (its support: the one-to-one pairs within eps) that agree with it — for each
+other inlier (k, l), w = exp(−2 (Δ / eps)²) if Δ = |d1_ik − d2_jl| ≤ eps, else 0 (0 for an inlier
+sharing exactly one object with it), averaged over the inliers other than the pair itself. The
+true pairs agree with every true inlier (scores near 1); a pair of objects seen in one view only
+agrees with them only by chance (near 0), so a threshold abstains. Fewer than 3 inliers (or no
+motion): the other declared pairs are the reference instead. Every other entry scores 0, and a
+declared pair with no support scores :data:`~matchers.core.discretise.SCORE_GRID` (2⁻⁴⁰), so the
+Hungarian on the scores returns the same pairs; no evidence at all (all residual scores 0): all 0.
 
 Variant ``cbm_pose``: what a connected vehicle adds — anchors ranked by S times the prior's
 likelihood (:func:`~matchers.blocks.prior.prior_likelihood`), and the motion the two noisy poses
@@ -41,6 +51,7 @@ from matchers.blocks.local_context import (
 )
 from matchers.blocks.memory_models import context_memory
 from matchers.blocks.prior import PRIOR_FIELDS
+from matchers.core.discretise import SCORE_GRID, canonical_scores, hungarian
 from matchers.core.matching import Matching
 from matchers.core.memory_budget import budgeted
 from matchers.core.problem import Problem
@@ -64,13 +75,72 @@ def anchor_motion(
     return rigid_fit(src, dst)
 
 
-def support(points1: np.ndarray, points2: np.ndarray, motion, eps: float) -> tuple[int, float]:
-    """(pairs within eps of a one-to-one assignment, their summed residual) under ``motion``."""
+def inliers(
+    points1: np.ndarray, points2: np.ndarray, motion, eps: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(rows, columns, residuals) of the pairs within eps of the one-to-one assignment (Hungarian
+    on the residuals) under ``motion``: the hypothesis's support."""
     rotation, translation = motion
     residual = cdist(points1, points2 @ rotation.T + translation)
     rows, cols = linear_sum_assignment(residual)
     inside = residual[rows, cols] <= eps
-    return int(inside.sum()), float(residual[rows, cols][inside].sum())
+    return rows[inside], cols[inside], residual[rows, cols][inside]
+
+
+def support(points1: np.ndarray, points2: np.ndarray, motion, eps: float) -> tuple[int, float]:
+    """(pairs within eps of a one-to-one assignment, their summed residual) under ``motion``."""
+    rows, _, residual = inliers(points1, points2, motion, eps)
+    return len(rows), float(residual.sum())
+
+
+def agreement_share(
+    d1: np.ndarray,
+    d2: np.ndarray,
+    pairs: tuple[np.ndarray, np.ndarray],
+    reference: tuple[np.ndarray, np.ndarray],
+    eps: float,
+) -> np.ndarray:
+    """(len(pairs),) share in [0, 1] of the ``reference`` pairs that agree with each of ``pairs``:
+    the mean over the reference pairs (k, l) other than (i, j) itself of w = exp(−2 (Δ / eps)²)
+    if Δ = |d1_ik − d2_jl| ≤ eps, else 0; w = 0 for a reference pair sharing exactly one object
+    with (i, j) (they contradict each other). 0 where no other reference pair exists."""
+    rows, cols = (np.asarray(a, dtype=np.int64) for a in pairs)
+    ref_rows, ref_cols = (np.asarray(a, dtype=np.int64) for a in reference)
+    delta = np.abs(d1[np.ix_(rows, ref_rows)] - d2[np.ix_(cols, ref_cols)])
+    same_row = rows[:, None] == ref_rows[None, :]
+    same_col = cols[:, None] == ref_cols[None, :]
+    itself = same_row & same_col
+    weight = np.where(delta <= eps, np.exp(-2.0 * (np.minimum(delta, eps) / eps) ** 2), 0.0)
+    weight[same_row | same_col] = 0.0
+    others = len(ref_rows) - itself.sum(axis=1)
+    share = weight.sum(axis=1) / np.maximum(others, 1)
+    return np.clip(np.where(others > 0, share, 0.0), 0.0, 1.0)
+
+
+def supported_scores(
+    points1: np.ndarray,
+    points2: np.ndarray,
+    raw: np.ndarray,
+    reference: tuple[np.ndarray, np.ndarray],
+    eps: float,
+) -> np.ndarray:
+    """(n, m) scores in [0, 1]: the pairs the shared Hungarian declares on ``raw`` (per-pair
+    evidence in [0, 1]) score their :func:`agreement_share` with ``reference`` (a verified set of
+    pairs; the declared pairs themselves when it has fewer than 3), at least
+    :data:`~matchers.core.discretise.SCORE_GRID`; every other entry 0. The Hungarian on the result
+    returns the same pairs as on ``raw`` (each declared score is positive, all others 0). ``raw``
+    with no positive entry (no evidence): all 0, and the same (tie-broken) assignment."""
+    raw = canonical_scores(np.clip(np.nan_to_num(raw, nan=0.0), 0.0, 1.0))
+    scores = np.zeros(raw.shape)
+    if not (raw > 0).any():
+        return scores
+    rows, cols = hungarian(raw)
+    if len(reference[0]) < 3:
+        reference = (rows, cols)
+    p1, p2 = np.asarray(points1, dtype=float), np.asarray(points2, dtype=float)
+    share = agreement_share(cdist(p1, p1), cdist(p2, p2), (rows, cols), reference, eps)
+    scores[rows, cols] = np.maximum(share, SCORE_GRID)
+    return scores
 
 
 def best_motion(problem: Problem, priority: np.ndarray, eps: float, anchors: int, extra=()):
@@ -96,12 +166,15 @@ def _run(name, problem, threshold, started, eps, neighbours, anchors, likelihood
     similarity = context_similarity(problem.points1, problem.points2, neighbours, eps)
     priority = similarity if likelihood is None else similarity * likelihood
     motion = best_motion(problem, priority, eps, anchors, extra)
+    p1, p2 = np.asarray(problem.points1, float), np.asarray(problem.points2, float)
+    none = np.zeros(0, dtype=np.int64)
     if motion is None:
-        scores = priority / max(float(priority.max()), 1e-300)
+        raw, reference = priority / max(float(priority.max()), 1e-300), (none, none)
     else:
-        scores = alignment_scores(problem.points1, problem.points2, motion, eps)
-    info = {"tolerance": float(eps), "aligned": motion is not None}
-    return finish(name, np.clip(scores, 0.0, 1.0), threshold, started, 0, info)
+        raw, reference = alignment_scores(p1, p2, motion, eps), inliers(p1, p2, motion, eps)[:2]
+    scores = supported_scores(p1, p2, raw, reference, eps)
+    info = {"tolerance": float(eps), "aligned": motion is not None, "inliers": len(reference[0])}
+    return finish(name, scores, threshold, started, 0, info)
 
 
 @budgeted(context_memory, "the number of objects or neighbours")

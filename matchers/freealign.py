@@ -12,8 +12,19 @@ context joins (ties: index order), and the members' rows and columns leave the c
 largest subgraph wins (ties: the smaller mean edge disagreement). The relative pose is fitted to
 it (Kabsch), as FreeAlign then does.
 
-Scores: exp(−r² / (2 eps²)) of the residual r under that pose (members of a subgraph of fewer
-than 3 pairs: 1, others 0); then the shared Hungarian + threshold.
+Declared pairs: the shared Hungarian on exp(−r² / (2 eps²)) of the residual r under that pose
+(on 1 for the members of a subgraph of fewer than 3 pairs, 0 elsewhere).
+
+Scores (:func:`~matchers.cbm.supported_scores`): a declared pair's score is the share of the
+winning subgraph's members that agree with it — for each other member (k, l),
+w = exp(−2 (Δ / eps)²) if Δ = |d1_ik − d2_jl| ≤ eps, else 0 (0 for a member sharing exactly one
+object with it), averaged over the members other than the pair itself. A member agrees with every
+other member within eps by construction (each weight ≥ e⁻² ≈ 0.14; near 1 for precise positions);
+a pair of objects seen in one view only agrees with them only by chance, so a threshold abstains. A
+subgraph of fewer than 3 members: the other declared pairs are the reference instead. Every other
+entry scores 0, and a declared pair with no support scores
+:data:`~matchers.core.discretise.SCORE_GRID` (2⁻⁴⁰), so the Hungarian on the scores returns the
+same pairs; no subgraph at all: all 0.
 
 Variant ``freealign_pose``: anchors and growth ranked by context similarity times the prior
 likelihood, so the search starts where the vehicles' poses say the common objects are.
@@ -37,6 +48,7 @@ from matchers.blocks.local_context import (
 )
 from matchers.blocks.memory_models import context_memory
 from matchers.blocks.prior import PRIOR_FIELDS
+from matchers.cbm import supported_scores
 from matchers.core.matching import Matching
 from matchers.core.memory_budget import budgeted
 from matchers.core.problem import Problem
@@ -90,14 +102,15 @@ def _run(name, problem, threshold, started, eps, neighbours, anchors, likelihood
     if len(best) >= 3:
         rows, cols = np.array(best).T
         motion = rigid_fit(p2[cols], p1[rows])
+    members = np.array(best, dtype=np.int64).reshape(-1, 2).T
     if motion is not None:
-        scores = alignment_scores(p1, p2, motion, eps)
+        raw = alignment_scores(p1, p2, motion, eps)
     else:
-        scores = np.zeros((n, m))
-        for i, j in best:
-            scores[i, j] = 1.0
+        raw = np.zeros((n, m))
+        raw[members[0], members[1]] = 1.0
+    scores = supported_scores(p1, p2, raw, (members[0], members[1]), eps)
     info = {"tolerance": float(eps), "subgraph": len(best)}
-    return finish(name, np.clip(scores, 0.0, 1.0), threshold, started, len(best), info)
+    return finish(name, scores, threshold, started, len(best), info)
 
 
 @budgeted(context_memory, "the number of objects or neighbours")

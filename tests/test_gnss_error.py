@@ -199,3 +199,16 @@ def test_a_validation_and_a_test_split_never_share_a_runs_localisation_draw(tmp_
         assert not np.allclose(errors[0], errors[1], atol=1e-6)
         # ... and the depth noise of a run differs too
         assert a._noise_seed(0, 1, a._observers[0]) != b._noise_seed(0, 1, b._observers[0])
+
+
+def test_the_calibration_statistic_grows_with_the_presets_error(tmp_path):
+    from eval.studies.gnss_calibration import match_disagreement, summary
+
+    data = _generated(tmp_path, {})
+    exact = match_disagreement([data.path], "exact")
+    open_sky = match_disagreement([data.path], "gnss-open-sky")
+    urban = match_disagreement([data.path], "gnss-urban")
+    assert len(exact) == len(open_sky) == sum(len(p.gt_pairs) for p in data) > 0
+    assert np.median(exact) < 0.3  # exact poses: only the detections' own error
+    assert np.median(exact) + 0.3 < np.median(open_sky) < np.median(urban)
+    assert summary(open_sky)["matches"] == len(open_sky) and np.isnan(summary([])["median_m"])

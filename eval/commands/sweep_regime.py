@@ -37,6 +37,7 @@ from eval.core.runner import Runner
 from eval.core.thinning import check_keep, noncovisible_share
 from eval.protocol.cluster_interval import t_interval
 from eval.protocol.crossovers import find_crossovers
+from eval.report.threshold_format import rounded
 from eval.studies.evaluation import (
     DatasetEntry,
     Named,
@@ -178,7 +179,7 @@ def write_sweep(out_dir: str | Path, result: SweepResult) -> list[Path]:
 
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    upsert_csv(out_dir / "regime_sweep.csv", result.rows.round(6))
+    upsert_csv(out_dir / "regime_sweep.csv", rounded(result.rows))
     upsert_csv(out_dir / "crossovers.csv", result.crossovers.round(4))
     return [out_dir / "regime_sweep.csv", out_dir / "crossovers.csv", *write_fig_regime(out_dir)]
 

@@ -21,6 +21,7 @@ from eval.core.pose_metrics import summarise_pose
 from eval.core.result_files import write_csv, write_text
 from eval.protocol.metrics import METRICS, POOLED, summarise_pooled, summarise_runs
 from eval.protocol.variants import MAIN, VARIANTS, variant_path
+from eval.report.threshold_format import rounded, tau_text
 
 PAPER_CSV = Path(__file__).resolve().parents[1] / "data" / "paper-table1.csv"
 
@@ -200,7 +201,7 @@ def _cells(row: pd.Series, show_params: bool) -> dict[str, str]:
     cells["Pooled P / R / F1"] = pooled_text(row)
     cells["AP"] = _pm(row.get("ap_mean", np.nan), row.get("ap_std", np.nan))
     tau = row.get("tau", np.nan)
-    cells["τ"] = "–" if pd.isna(tau) else f"{tau:.3f}"
+    cells["τ"] = tau_text(tau)
     cells["ms / pair"] = f"{row['time_median_ms']:.1f}"
     return cells
 
@@ -281,7 +282,7 @@ def to_latex(table: pd.DataFrame) -> str:
             ap = r.get("ap_mean", np.nan)
             cells.append("--" if pd.isna(ap) else f"{ap:.1f}")
             tau = r.get("tau", np.nan)
-            cells.append("--" if pd.isna(tau) else f"{tau:.3f}")
+            cells.append(tau_text(tau, "--"))
             cells.append(f"{r['time_median_ms']:.1f}")
             out.append(" & ".join(cells) + r" \\")
         out += [r"\bottomrule", r"\end{tabular}", r"\end{table}", ""]
@@ -297,7 +298,7 @@ def write_table1(
     table = build_table(out_dir, paper_csv, variant)
     markdown = to_markdown(table)
     write_text(variant_path(out_dir, "table1", variant, ".md"), markdown)
-    write_csv(table.round(6), variant_path(out_dir, "table1", variant, ".csv"))
+    write_csv(rounded(table), variant_path(out_dir, "table1", variant, ".csv"))
     if variant == MAIN:
         write_text(out_dir / "table1.tex", to_latex(table))
     return markdown

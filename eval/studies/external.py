@@ -27,6 +27,7 @@ from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
 from eval.protocol.metrics import POOLED
 from eval.report.tables import build_table, params_text, pooled_text
+from eval.report.threshold_format import rounded, tau_text
 from eval.studies.evaluation import evaluate, open_entry, parse_matchers
 
 log = logging.getLogger(__name__)
@@ -187,7 +188,7 @@ def to_markdown(table: pd.DataFrame) -> str:
             f"**{r['method']}**" if published else r["method"],
             "yes" if r["uses_prior"] else "no",
             "–" if published else params_text(r["params"]),
-            "–" if pd.isna(r["tau"]) else f"{r['tau']:.3f}" + (" (test)" if published else ""),
+            "–" if pd.isna(r["tau"]) else tau_text(r["tau"]) + (" (test)" if published else ""),
             _pct(r["precision_mean"]),
             _pct(r["recall_mean"]),
             _pct(r["f1_mean"]),
@@ -205,7 +206,7 @@ def write_table_external(out_dir: str | Path) -> pd.DataFrame:
     out_dir = Path(out_dir)
     table = build_external(out_dir)
     write_text(out_dir / "table_external.md", to_markdown(table))
-    write_csv(table.round(6), out_dir / "table_external.csv")
+    write_csv(rounded(table), out_dir / "table_external.csv")
     return table
 
 

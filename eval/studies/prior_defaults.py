@@ -35,6 +35,7 @@ from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
 from eval.protocol import tuning
 from eval.report.figures import write_fig_prior_sensitivity
+from eval.report.threshold_format import rounded
 
 DEFAULTS_FILE = Path(__file__).resolve().parents[1] / "data" / "prior-defaults.json"
 PRIOR_MATCHERS = ("pose", "pose_refine", "pose_appearance", "maximin_pose")
@@ -131,7 +132,7 @@ def write_sensitivity(out_dir: str | Path, runner: Runner, seed: int = 0) -> pd.
         test_f1=[means[label] for label in labels],
         test_f1_pooled=[pooled[label] for label in labels],
     )[["matcher", "config", "params", "val_f1", "tau", "chosen", "test_f1", "test_f1_pooled"]]
-    write_csv(table.round(6), out_dir / SUBDIR / SENSITIVITY)
+    write_csv(rounded(table), out_dir / SUBDIR / SENSITIVITY)
     write_fig_prior_sensitivity(out_dir)
     return table
 
