@@ -503,6 +503,33 @@ def goals(
     return out
 
 
+AUC_BAND = (0.60, 0.80)
+IMAGE_AUC_MAX = 0.75
+REALISM_LABEL = "CAD-V2X"
+
+
+def realism_check(results: Path) -> list[str]:
+    """The appearance-realism check on the held-out test split (``regime.csv``'s CAD-V2X row;
+    its settings were chosen on validation seeds, docs/scenarios.md): whole-feature AUC within
+    :data:`AUC_BAND`, image-only AUC at most :data:`IMAGE_AUC_MAX`."""
+    path = Path(results) / "regime.csv"
+    if not path.is_file():
+        return []
+    table = pd.read_csv(path).set_index("dataset")
+    if REALISM_LABEL not in table.index:
+        return []
+    whole, image = table.at[REALISM_LABEL, "appearance_auc"], table.at[REALISM_LABEL, "image_auc"]
+    low, high = AUC_BAND
+    inside = low <= whole <= high
+    return [
+        f"appearance realism on the held-out test split (settings chosen on validation seeds): "
+        f"whole-feature AUC {whole:.3f} — {'inside' if inside else 'outside'} {low:.2f}–"
+        f"{high:.2f}; image-only AUC {image:.3f} — "
+        f"{'at most' if image <= IMAGE_AUC_MAX else 'above'} {IMAGE_AUC_MAX:.2f} (point values "
+        "over every candidate pair of the split; DMGM's is 0.57)"
+    ]
+
+
 def readme_part(results: Path, rel: str) -> list[str]:
     """README lines for the V2X task (none without ``table_v2x.md``)."""
     results = Path(results)
@@ -526,6 +553,7 @@ def readme_part(results: Path, rel: str) -> list[str]:
         "the matcher chosen on validation is ahead of the runner-up beyond the episode-level "
         "interval in " + (", ".join(f"`{p}`" for p in separated) if separated else "no preset")
     ]
+    lines += realism_check(results)
     episodes = int(intervals["episodes"].max()) if len(intervals) else 0
     return [
         "### The V2X task",
