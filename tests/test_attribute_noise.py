@@ -118,7 +118,10 @@ def test_features_carry_the_reported_class():
     )
     assert truthful.object_ids == ["v0", "v1", "v2"]
     onehot = slice(FEATURE_LAYOUT["attributes"].start, FEATURE_LAYOUT["attributes"].start + len(FEATURE_CLASSES))  # fmt: skip
-    assert truthful.object_ids == confused.object_ids and truthful.true_classes == confused.true_classes
+    assert (
+        truthful.object_ids == confused.object_ids
+        and truthful.true_classes == confused.true_classes
+    )
     for k, true_cls in enumerate(truthful.true_classes):
         told = FEATURE_CLASSES[int(np.argmax(truthful.features[k, onehot]))]
         seen = FEATURE_CLASSES[int(np.argmax(confused.features[k, onehot]))]

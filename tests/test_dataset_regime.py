@@ -104,3 +104,22 @@ def test_the_image_auc_leaves_out_the_detectors_class_and_size():
     from cadsim.dataset.regime import cosine_similarity
 
     np.testing.assert_array_equal(image_similarity(g1, g2), cosine_similarity(g1, g2))
+
+
+def test_the_same_class_auc_reads_only_look_alike_false_pairs():
+    """Features that tell classes apart but nothing within a class: the pooled AUC is high, the
+    AUC against same-class false pairs is at chance."""
+    rng = np.random.default_rng(0)
+    pairs = []
+    for _ in range(20):
+        ids = [f"o{k}" for k in range(6)]
+        classes = ["car", "car", "car", "sign", "sign", "sign"]
+        onehot = np.array([[1.0, 0.0] if c == "car" else [0.0, 1.0] for c in classes])
+        f1 = np.hstack([onehot, rng.random((6, 4))]).astype(np.float32)
+        f2 = np.hstack([onehot, rng.random((6, 4))]).astype(np.float32)
+        v1 = ViewDetections(np.zeros((6, 3)), np.zeros((6, 4)), f1, ids, classes, np.ones(6))
+        v2 = ViewDetections(np.zeros((6, 3)), np.zeros((6, 4)), f2, ids, classes, np.ones(6))
+        pairs.append(Pair(v1, v2))
+    card = dataset_regime(pairs)
+    assert card["appearance_auc"] > 0.75
+    assert abs(card["same_class_auc"] - 0.5) < 0.1

@@ -127,7 +127,8 @@ def _regime_text(regime: dict) -> str:
     return (
         f"non-covisible share {num('noncovisible_share', '.2f')}, covisible share of the smaller "
         f"view {num('covisible_share_of_smaller', '.2f')}, appearance AUC "
-        f"{num('appearance_auc', '.3f')} (image alone {num('image_auc', '.3f')}), "
+        f"{num('appearance_auc', '.3f')} (image alone {num('image_auc', '.3f')}, against "
+        f"same-class false pairs {num('same_class_auc', '.3f')}), "
         "position error median "
         + (
             "– (needs a localisation prior and the true poses)"

@@ -140,9 +140,7 @@ class ViewDetections:
             pixels=self.pixels[rows],
             world=None if self.world is None else self.world[rows],
             reported_classes=(
-                None
-                if self.reported_classes is None
-                else [self.reported_classes[r] for r in rows]
+                None if self.reported_classes is None else [self.reported_classes[r] for r in rows]
             ),
         )
 

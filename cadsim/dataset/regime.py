@@ -25,6 +25,7 @@ REGIME_KEYS = (
     "covisible_share_of_smaller",
     "appearance_auc",
     "image_auc",
+    "same_class_auc",
     "position_error_median_m",
 )
 IMAGE_BLOCKS = ("hog", "color")
@@ -98,6 +99,11 @@ def dataset_regime(dataset: Iterable) -> dict:
       pairs (every (i, j) of every pair, pooled; 0.5 = appearance carries no information);
     - ``image_auc``: the same for the image part alone (:func:`image_similarity`: HOG and colour,
       without the detector's class and size — comparable with an external image descriptor);
+    - ``same_class_auc``: ``appearance_auc`` against only the false pairs whose two detections
+      have the same *true* class (a statistic, never a matcher's input): how much appearance
+      tells apart look-alikes, whatever the scene's class mix (the pooled AUC is high wherever
+      most false pairs cross classes — a car against a sign — as on CAD-V2X; DMGM's false pairs
+      are mostly one class);
     - ``position_error_median_m``: median 3-D distance (metres) between the two views' positions
       of a covisible object after both are taken to the world frame with the true camera poses;
       None when a pair has no true poses.
@@ -109,7 +115,7 @@ def dataset_regime(dataset: Iterable) -> dict:
         dataset_regime(Dataset("data/cad"))["covisible_share_of_smaller"]
     """
     sizes, covisible, shares, true_sim, false_sim, errors = [], [], [], [], [], []
-    true_image, false_image = [], []
+    true_image, false_image, same_class = [], [], []
     poses_known = True
     for pair in dataset:
         gt = np.asarray(pair.gt_pairs, dtype=np.int64).reshape(-1, 2)
@@ -123,6 +129,10 @@ def dataset_regime(dataset: Iterable) -> dict:
         is_true[gt[:, 0], gt[:, 1]] = True
         true_sim.append(sim[is_true])
         false_sim.append(sim[~is_true])
+        c1 = np.asarray(pair.view1.true_classes, dtype=object)
+        c2 = np.asarray(pair.view2.true_classes, dtype=object)
+        alike = (c1[:, None] == c2[None, :]) & ~is_true if sim.size else is_true
+        same_class.append(sim[alike])
         image = image_similarity(pair.view1.features, pair.view2.features)
         true_image.append(image[is_true])
         false_image.append(image[~is_true])
@@ -143,6 +153,7 @@ def dataset_regime(dataset: Iterable) -> dict:
         "covisible_share_of_smaller": float(np.mean(shares)) if shares else None,
         "appearance_auc": roc_auc(np.concatenate(true_sim), np.concatenate(false_sim)),
         "image_auc": roc_auc(np.concatenate(true_image), np.concatenate(false_image)),
+        "same_class_auc": roc_auc(np.concatenate(true_sim), np.concatenate(same_class)),
         "position_error_median_m": float(np.median(all_errors)) if all_errors.size else None,
     }
 

@@ -24,6 +24,7 @@ COLUMNS = (
     "covisible_share_of_smaller",
     "appearance_auc",
     "image_auc",
+    "same_class_auc",
     "position_error_median_m",
 )
 TITLES = {
@@ -33,6 +34,7 @@ TITLES = {
     "covisible_share_of_smaller": "covisible / smaller view",
     "appearance_auc": "appearance AUC",
     "image_auc": "image-only AUC",
+    "same_class_auc": "AUC vs same-class false pairs",
     "position_error_median_m": "position error (m, median)",
 }
 
@@ -72,7 +74,7 @@ def regime_markdown(path: str | Path) -> str:
                 cells.append("–")
             elif c in ("noncovisible_share", "covisible_share_of_smaller"):
                 cells.append(f"{100 * v:.0f} %")
-            elif c in ("appearance_auc", "image_auc", "position_error_median_m"):
+            elif c in ("appearance_auc", "image_auc", "same_class_auc", "position_error_median_m"):
                 cells.append(f"{v:.2f}")  # MRC's 0.06 m would read "0.1" at one decimal
             else:
                 cells.append(f"{v:.1f}")
