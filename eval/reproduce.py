@@ -54,7 +54,13 @@ from eval.core.runner import Runner
 from eval.protocol.variants import PAPER_OPTIONS
 from eval.readme_results import update_readme
 from eval.report.figures import render_all
-from eval.report.run_record import StageTimer, scenario_file, write_run_record
+from eval.report.run_record import (
+    COLD_RECORD,
+    StageTimer,
+    keep_cold_record,
+    scenario_file,
+    write_run_record,
+)
 from eval.report.tables import PAPER_CSV, write_tables
 from eval.studies.agreement import write_agreement
 from eval.studies.evaluation import (
@@ -669,6 +675,8 @@ def main(argv: list[str] | None = None) -> int:
         cache=str(args.cache),
     )
     log.info("run record: %s", record)
+    if keep_cold_record(out, json.loads(record.read_text())):
+        log.info("cold stage times: %s", out / COLD_RECORD)
     if out.resolve() == (ROOT / "results").resolve() and update_readme(ROOT / "README.md", out):
         log.info("README.md results section rewritten from %s", out)
     print()

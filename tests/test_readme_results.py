@@ -106,3 +106,14 @@ def test_agreement_is_written_from_the_tables(tmp_path):
     assert "maximin leads MOS below 35 % non-covisible (95 % interval 30–41 %) and trails" in text
     assert "no crossover with RRWHM that its interval supports" in text
     assert "RRWHM below" not in text
+
+
+def test_a_warm_run_keeps_the_last_cold_runs_stage_times(tmp_path):
+    from eval.report.run_record import cold_record, keep_cold_record
+
+    cold = {"cold_start": {"cold": True}, "wall_s": {"generate": 120.0, "total": 400.0}}
+    cold |= {"git": {"commit": "abc"}, "runs": {}}
+    assert keep_cold_record(tmp_path, cold) is not None
+    warm = {"cold_start": {"cold": False}, "wall_s": {"generate": 1.0, "total": 60.0}}
+    assert keep_cold_record(tmp_path, warm) is None
+    assert cold_record(tmp_path)["wall_s"]["generate"] == 120.0

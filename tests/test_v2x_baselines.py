@@ -490,3 +490,26 @@ def test_the_prior_row_is_the_broadcast_poses_alone(tmp_path):
             exact.broadcast_relative_pose(), exact.true_relative_pose(), atol=1e-9
         )
         assert pair.localise_preset("denied", seed=0).broadcast_relative_pose() is None
+
+
+def test_the_prior_row_is_read_off_a_matcher_that_reads_the_prior():
+    """A matcher without a prior runs under `exact` (its run shared across presets): its
+    broadcast poses are exact, so the prior row must come from a prior-reading matcher's rows."""
+    import pandas as pd
+
+    from eval.studies.v2x_table import PRIOR_ROW, v2x_table
+
+    rows = []
+    for matcher, prior_rte in (("sm", 0.0), ("pose", 3.0)):  # sm first, as in the table
+        for pair in range(6):
+            rows.append(
+                {"preset": "gnss-urban", "matcher": matcher, "seed": 0, "pair": pair}
+                | {"episode": pair // 2, "f1": 1.0, "tp": 1, "n_pred": 1, "n_gt": 1}
+                | {"time_s": 0.001, "pose_scored": True, "rte_m": 0.1, "rre_deg": 0.1}
+                | {"rte_m_6dof": 0.1, "rre_deg_6dof": 0.1, "oracle_rte_m": 0.1}
+                | {"oracle_rre_deg": 0.1, "prior_scored": True, "prior_rte_m": prior_rte}
+                | {"prior_rre_deg": 0.5}
+            )
+    table = v2x_table(pd.DataFrame(rows))
+    prior = table[table["matcher"] == PRIOR_ROW].iloc[0]
+    assert prior.rte_m_median == 3.0 and prior.success_1m_2deg == 0.0

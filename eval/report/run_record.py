@@ -101,3 +101,26 @@ def write_run_record(path: str | Path, timer: StageTimer, **content: Any) -> Pat
     path = Path(path)
     write_text(path, json.dumps(record, indent=1, default=str) + "\n")
     return path
+
+
+COLD_RECORD = "cold_run.json"
+"""The stage times of the last run that started cold, beside the run record: a later warm run
+(datasets or runs cached) leaves it as it is, so a "≤ N min cold" goal is always read off a cold
+measurement, which names its commit."""
+
+
+def keep_cold_record(results: str | Path, record: dict) -> Path | None:
+    """Write ``results/cold_run.json`` from ``record`` (a run record) when that run started cold;
+    leave it otherwise. Returns the path written, or None."""
+    if not record.get("cold_start", {}).get("cold"):
+        return None
+    keys = ("created", "command", "git", "machine", "wall_s", "runs", "cold_start", "code_version")
+    path = Path(results) / COLD_RECORD
+    write_text(path, json.dumps({k: record.get(k) for k in keys}, indent=1, default=str) + "\n")
+    return path
+
+
+def cold_record(results: str | Path) -> dict | None:
+    """The last cold run's record (:data:`COLD_RECORD`), or None when there is none."""
+    path = Path(results) / COLD_RECORD
+    return json.loads(path.read_text()) if path.is_file() else None

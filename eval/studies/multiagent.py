@@ -569,7 +569,7 @@ def _time_lines(table: pd.DataFrame, stage_s: float | None) -> list[str]:
                 scale=1.0,
                 digits=0,
                 unit=" s",
-                detail="measured in this cold run: generation and runs",
+                detail="measured in the last cold run (results/cold_run.json): generation and runs",
             ).replace(f" [{stage_s:.0f}, {stage_s:.0f}]", "")
         )
     return lines

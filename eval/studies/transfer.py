@@ -682,7 +682,7 @@ def goals(
 ) -> list[str]:
     """The study's goals, each with its figure, its 95 % interval and its verdict
     (:func:`eval.protocol.goal_verdict.goal_line`: met only when the whole interval clears the
-    bar); ``stage_s`` the transfer stage's seconds in this run, ``computed`` how many of its runs
+    bar); ``stage_s`` the transfer stage's seconds in the last cold run, ``computed`` how many of its runs
     it computed (0: all cached)."""
     out = []
     free = _row(table, SIM_ONLY, "learned")
@@ -752,9 +752,9 @@ def goals(
     if stage_s is not None and computed:
         state = verdict(stage_s, stage_s, GOAL_SECONDS, at_least=False)  # a measured time
         out.append(
-            f"training and evaluation of the learned rows: {stage_s:.0f} s in this run, "
-            f"{computed} runs computed (goal ≤ {GOAL_SECONDS} s cold; a measurement of this "
-            f"run, no sampling interval) — {state}"
+            f"training and evaluation of the learned rows: {stage_s:.0f} s in the last cold run "
+            f"(results/cold_run.json), {computed} runs computed (goal ≤ {GOAL_SECONDS} s cold; a "
+            f"measurement, no sampling interval) — {state}"
         )
     elif stage_s is not None:
         out.append(

@@ -240,12 +240,16 @@ def _intervals(per_pair: pd.DataFrame, prefix: str) -> pd.DataFrame:
 def _reference_rows(per_pair: pd.DataFrame, row: str) -> pd.DataFrame:
     """Per preset, the ``oracle`` row (the planar fit of the true matches) or the ``prior`` row
     (the broadcast poses' own error; under ``denied``: every pair a failure). Both come from one
-    matcher's outcomes (the first of the preset): the detections, hence the truth's fit and the
-    poses, are the same for every matcher of a run."""
+    matcher's outcomes: the detections, hence the truth's fit, are the same for every matcher of
+    a run; the poses only for the matchers that read the prior — one that does not is run under
+    ``exact`` with the preset's latency (the runner shares its runs across presets), so the prior
+    row is read off the first prior-reading matcher of the preset (none: off the first one)."""
     prefix = f"{row}_"
     rows = []
     for preset, group in per_pair.groupby("preset", sort=False):
-        first = group[group["matcher"] == group["matcher"].iloc[0]]
+        names = list(dict.fromkeys(group["matcher"]))
+        readers = [m for m in names if reads_prior(m)] if row == PRIOR_ROW else []
+        first = group[group["matcher"] == (readers or names)[0]]
         scored = first[first["pose_scored"].astype(bool)]
         if scored.empty:
             continue
