@@ -3,7 +3,8 @@
 A user error is bad input: a scenario file, a dataset folder, a command-line value, a path. It is
 a ``ValueError`` (``ScenarioError`` and ``DatasetError`` are), an ``OSError`` (missing file,
 permission, disk full), or an exception that says so with a true ``user_error`` attribute
-(``GenerationError``; ``eval.core.runner.RunFailed`` when every failed task failed on bad input). The
+(``GenerationError``; ``matchers.PluginError``, a plug-in matcher or fusion that broke its
+contract; ``eval.core.runner.RunFailed`` when every failed task failed on bad input). The
 CLI reports it as one line, exit status 2; anything else is a bug and keeps its traceback.
 """
 

@@ -35,6 +35,7 @@ def evaluate_matchers(
     cache: str | Path | None = None,
     workers: int = 1,
     progress: bool = False,
+    plugin_time_limit_s: float | None = None,
 ) -> pd.DataFrame:
     """Run `matchers` on each test dataset and return Table I (one row per dataset and matcher,
     the columns of ``table1.csv``: rates as fractions in [0, 1], mean and std over `runs` seeds).
@@ -44,7 +45,10 @@ def evaluate_matchers(
     (the default: everything runs here); other processes import built-ins, entry points and
     import paths themselves. val_dirs: one validation dataset per test dataset (None: no τ, the
     full assignment). out: the folder the result files go to (created). cache: the run cache
-    (default ``$CADSIM_CACHE_DIR/runs``, else ``~/.cache/cadsim/runs``).
+    (default ``$CADSIM_CACHE_DIR/runs``, else ``~/.cache/cadsim/runs``). plugin_time_limit_s:
+    seconds a plug-in matcher may take on one frame pair (default ``$CADSIM_PLUGIN_TIME_LIMIT_S``,
+    else 600); a plug-in that breaks its contract or its limit raises ``matchers.PluginError``
+    naming it (docs/extending-matchers.md).
     """
     from matchers.core.jit import cache_root
 
@@ -55,7 +59,12 @@ def evaluate_matchers(
     specs = parse_matchers(",".join(matchers))
     cache_dir = Path(cache) if cache is not None else cache_root() / "runs"
     with make_executor(workers) as executor:
-        runner = Runner(ResultCache(cache_dir), executor, progress=progress)
+        runner = Runner(
+            ResultCache(cache_dir),
+            executor,
+            progress=progress,
+            plugin_time_limit_s=plugin_time_limit_s,
+        )
         evaluate(
             entries,
             specs,

@@ -91,7 +91,7 @@ from eval.studies.spread import spread_rows
 from eval.studies.transfer import evaluate_transfer, test_sets, train_models, train_sets
 from eval.studies.v2x_table import PRESETS as V2X_PRESETS
 from eval.studies.v2x_table import evaluate_v2x
-from matchers.fusion import available_fusions
+from matchers.fusion import usable_fusions
 
 log = logging.getLogger("eval.reproduce")
 
@@ -591,14 +591,14 @@ def main(argv: list[str] | None = None) -> int:
                     "[multiagent] %s: %d matchers × %d fusions × N in %s × %d presets × %d runs",
                     MA_LABEL,
                     len(multi_named),
-                    len(available_fusions()),
+                    len(usable_fusions()),
                     sorted(MA_SUBSETS),
                     len(MA_PRESETS),
                     len(multiagent_seeds),
                 )
                 evaluate_multiagent(*multi_dirs, multi_named, multiagent_seeds, runner, out)
                 multiagent_record |= {"seeds": multiagent_seeds, "matchers": list(multi_named)}
-                multiagent_record |= {"presets": list(MA_PRESETS), "fusions": available_fusions()}
+                multiagent_record |= {"presets": list(MA_PRESETS), "fusions": usable_fusions()}
                 multiagent_record |= {"subsets": {str(n): list(v) for n, v in MA_SUBSETS.items()}}
         count("multiagent", before)
         transfer_record: dict = {}

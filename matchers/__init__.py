@@ -16,6 +16,7 @@ docs/matchers.md.
 
 from matchers.core.matching import Matching
 from matchers.core.memory_budget import ProblemTooLarge
+from matchers.core.plugin_guard import PluginError, PluginTimeout
 from matchers.core.problem import Problem
 from matchers.core.registry import (
     ENTRY_POINT_GROUP,
@@ -26,6 +27,7 @@ from matchers.core.registry import (
     required_options,
     requires,
     search_space,
+    usable,
 )
 from matchers.hypergraph.sparse_tensor import SparseTensor
 from matchers.hypergraph.tensor_build import build_tensor
@@ -34,6 +36,8 @@ from matchers.hypergraph.tensor_sharing import shared_tensors
 __all__ = [
     "ENTRY_POINT_GROUP",
     "Matching",
+    "PluginError",
+    "PluginTimeout",
     "Problem",
     "ProblemTooLarge",
     "SparseTensor",
@@ -46,4 +50,5 @@ __all__ = [
     "requires",
     "search_space",
     "shared_tensors",
+    "usable",
 ]

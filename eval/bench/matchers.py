@@ -44,10 +44,10 @@ def tensor_section(args: argparse.Namespace) -> list[Target]:
 
 def matchers_section(args: argparse.Namespace) -> list[Target]:
     from eval.validation.matcher_options import HYPERGRAPH_MATCHERS
-    from matchers import available, get
+    from matchers import get, usable
     from matchers.hypergraph.tensor_build import build_tensor
 
-    names = args.matchers or available()
+    names = args.matchers or usable()
     print(_row(["n = m", "tensor build s", *[f"{name} s" for name in names]]))
     print("|" + "---|" * (2 + len(names)))
     for n in args.sizes:

@@ -27,6 +27,7 @@ from eval.protocol.variants import PROTOCOLS
 from eval.report.tables import PAPER_CSV, write_tables
 from eval.studies.evaluation import evaluate, open_entry, parse_matchers, val_dirs
 from matchers.core.jit import cache_root
+from matchers.core.plugin_guard import DEFAULT_TIME_LIMIT_S, TIME_LIMIT_ENV, parse_time_limit
 
 # the learned matchers that `--matchers all` gains with --model (the prior one must be named)
 LEARNED_PLAIN = ("learned", "maximin_learned", "rrwm_learned")
@@ -61,7 +62,24 @@ def add_runner_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--no-progress", action="store_true", help="no progress bar (none when not a terminal)"
     )
+    parser.add_argument(
+        "--plugin-time-limit",
+        type=_seconds,
+        default=None,
+        metavar="SECONDS",
+        help="seconds a plug-in matcher or fusion (not a built-in) may take on one problem "
+        f"before the run stops naming it (default: ${TIME_LIMIT_ENV}, else "
+        f"{DEFAULT_TIME_LIMIT_S:g})",
+    )
     add_scheduler_argument(parser)
+
+
+def _seconds(text: str) -> float:
+    """argparse type of ``--plugin-time-limit``: a positive number of seconds."""
+    try:
+        return parse_time_limit(text, "--plugin-time-limit")
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc).split(": ", 1)[1]) from None
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -145,7 +163,12 @@ def run(args: argparse.Namespace) -> int:
         matchers += [MatcherSpec(n) for n in LEARNED_PLAIN]
     matchers = with_model(matchers, args.model, [e.test_dir for e in entries])
     with make_executor(args.workers, args.scheduler) as executor:
-        runner = Runner(ResultCache(args.cache), executor, progress=not args.no_progress)
+        runner = Runner(
+            ResultCache(args.cache),
+            executor,
+            progress=not args.no_progress,
+            plugin_time_limit_s=args.plugin_time_limit,
+        )
         evaluate(
             entries,
             matchers,

@@ -318,7 +318,12 @@ def run(args: argparse.Namespace) -> int:
         return _run_presets(args, entry, matchers)
     sigmas = parse_sigmas(args.sigmas)
     with make_executor(args.workers, args.scheduler) as executor:
-        runner = Runner(ResultCache(args.cache), executor, progress=not args.no_progress)
+        runner = Runner(
+            ResultCache(args.cache),
+            executor,
+            progress=not args.no_progress,
+            plugin_time_limit_s=args.plugin_time_limit,
+        )
         named = matchers if args.tune else sweep_specs(args.out, entry, matchers)
         rows = sweep_localisation(
             entry, named, range(args.runs), sigmas, runner, args.pairs, tune=args.tune
@@ -340,7 +345,12 @@ def _run_presets(args: argparse.Namespace, entry: DatasetEntry, matchers) -> int
     for _, spec, _, _ in levels:
         open_entry(args.dataset, None, localisation=spec)  # refuses a dataset without velocities
     with make_executor(args.workers, args.scheduler) as executor:
-        runner = Runner(ResultCache(args.cache), executor, progress=not args.no_progress)
+        runner = Runner(
+            ResultCache(args.cache),
+            executor,
+            progress=not args.no_progress,
+            plugin_time_limit_s=args.plugin_time_limit,
+        )
         named = sweep_specs(args.out, entry, matchers)
         rows = sweep_presets(entry, named, range(args.runs), levels, runner, args.pairs)
     write_preset_sweep(args.out, rows)

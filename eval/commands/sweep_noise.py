@@ -136,7 +136,12 @@ def run(args: argparse.Namespace) -> int:
     entry = open_entry(args.dataset, val, localisation=args.localisation)
     matchers = parse_matchers(args.matchers)
     with make_executor(args.workers, args.scheduler) as executor:
-        runner = Runner(ResultCache(args.cache), executor, progress=not args.no_progress)
+        runner = Runner(
+            ResultCache(args.cache),
+            executor,
+            progress=not args.no_progress,
+            plugin_time_limit_s=args.plugin_time_limit,
+        )
         sweep(entry, matchers, range(args.runs), rates, runner, args.out, args.pairs)
     from eval.report.figures import write_fig4
 

@@ -209,7 +209,12 @@ def run(args: argparse.Namespace) -> int:
     keeps = parse_keep(args.keep)
     val_seeds = range(args.val_runs) if args.val_runs else None
     with make_executor(args.workers, args.scheduler) as executor:
-        runner = Runner(ResultCache(args.cache), executor, progress=not args.no_progress)
+        runner = Runner(
+            ResultCache(args.cache),
+            executor,
+            progress=not args.no_progress,
+            plugin_time_limit_s=args.plugin_time_limit,
+        )
         result = sweep_regime(entry, named, range(args.runs), keeps, runner, args.pairs, val_seeds)
     for path in write_sweep(args.out, result):
         print(path)

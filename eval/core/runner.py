@@ -148,14 +148,19 @@ def _latency_only(req: RunRequest) -> RunRequest:
     return dataclasses.replace(req, localisation=f"exact+{latency:g}ms")
 
 
-def _group(missing: Sequence[RunRequest], version: str, workers: int = 1) -> list[RunTask]:
+def _group(
+    missing: Sequence[RunRequest],
+    version: str,
+    workers: int = 1,
+    plugin_time_limit_s: float | None = None,
+) -> list[RunTask]:
     """Tasks for the missing runs: one per (dataset, seed, pairs, keep, localisation), holding its
     matchers × its noise rates (rates with the same missing matchers together, so that every run
     of a task was asked for). Its runs share the reading of every frame pair, its re-detection
     plan and the hypergraph matchers' k-NN search. While there are fewer than two tasks per
     worker (one worker: one task each), the task with the most runs is split in two, by rates
     when it has several, else by matchers — interleaved halves, so that they cost about the
-    same."""
+    same. Every task carries ``plugin_time_limit_s``, the plug-ins' time limit per frame pair."""
     groups: dict[tuple, dict[float | None, list[MatcherSpec]]] = {}
     for req in missing:
         key = (
@@ -186,7 +191,9 @@ def _group(missing: Sequence[RunRequest], version: str, workers: int = 1) -> lis
             break
         blocks[widest : widest + 1] = halves
     return [
-        RunTask(k[0], k[1], k[2], rates, matchers, version, k[3], k[4], k[5], k[6])
+        RunTask(
+            k[0], k[1], k[2], rates, matchers, version, k[3], k[4], k[5], k[6], plugin_time_limit_s
+        )
         for k, matchers, rates in blocks
     ]
 
@@ -257,7 +264,10 @@ class _TaskProgress:
 
 class Runner:
     """Cache-aware execution of runs through an executor. `task_fn` computes one task (a
-    picklable module-level function; default :func:`eval.core.tasks.execute`)."""
+    picklable module-level function; default :func:`eval.core.tasks.execute`).
+    `plugin_time_limit_s`: seconds a plug-in matcher (or fusion) may take on one problem
+    (None: ``$CADSIM_PLUGIN_TIME_LIMIT_S`` of this process, else 600); it travels in every task,
+    so every executor's workers apply this value (:mod:`matchers.core.plugin_guard`)."""
 
     def __init__(
         self,
@@ -266,7 +276,15 @@ class Runner:
         version: str | None = None,
         progress: bool = True,
         task_fn: Callable[[RunTask], list[RunResult]] = execute,
+        plugin_time_limit_s: float | None = None,
     ) -> None:
+        from matchers.core.plugin_guard import parse_time_limit, time_limit_s
+
+        self.plugin_time_limit_s = (
+            time_limit_s()
+            if plugin_time_limit_s is None
+            else parse_time_limit(plugin_time_limit_s, "plugin_time_limit_s")
+        )
         self.cache = cache
         self.executor = executor
         self.task_fn = task_fn
@@ -314,7 +332,7 @@ class Runner:
         )
         self.stats = RunStats(cached=len(set(specs)) - len(missing))
         if missing:
-            tasks = _group(missing, self.version, self.executor.workers)
+            tasks = _group(missing, self.version, self.executor.workers, self.plugin_time_limit_s)
             log.info(
                 "%s: %d cached, %d to compute in %d tasks",
                 desc,

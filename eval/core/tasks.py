@@ -93,6 +93,9 @@ class RunTask:
     keep: float | None = None
     localisation: tuple[float, float] | str | None = None
     views: tuple[int, int] | None = None
+    # seconds a plug-in matcher may take on one frame pair (None: the worker's
+    # $CADSIM_PLUGIN_TIME_LIMIT_S or 600); not part of any result, so not of the specs' keys
+    plugin_time_limit_s: float | None = None
 
     def __post_init__(self) -> None:
         if not self.noise_rates or (None in self.noise_rates and len(self.noise_rates) > 1):
@@ -196,6 +199,14 @@ def matcher_function(name: str):
     return get(name)
 
 
+def harness_function(name: str, limit_s: float | None):
+    """What a task runs for matcher `name`: a built-in as it is, a plug-in under the time limit
+    `limit_s` with its results checked (``matchers.core.registry.checked``)."""
+    from matchers.core.registry import checked
+
+    return checked(name, matcher_function(name), limit_s)
+
+
 def _has_what_it_needs(fn, problem) -> bool:
     """Whether ``problem`` has every optional field matcher ``fn`` requires (``requires``)."""
     return all(getattr(problem, f, None) is not None for f in getattr(fn, "requires", ()))
@@ -215,6 +226,7 @@ def _pair_outcomes(pair, task: RunTask, functions: list) -> list[PairOutcome]:
     """Every matcher of `task` (``functions``: theirs, in order) on one frame pair, already
     re-detected at the run's noise rate; thinned and re-localised as the task says."""
     from matchers.core.discretise import canonical_scores
+    from matchers.core.plugin_guard import PluginError
     from matchers.hypergraph.tensor_sharing import shared_tensors
 
     if task.keep is not None:
@@ -231,13 +243,18 @@ def _pair_outcomes(pair, task: RunTask, functions: list) -> list[PairOutcome]:
         prior_pose = pair.broadcast_relative_pose()  # the poses alone: no detection enters
         mounts = pair.camera_extrinsics
         extrinsics = None if mounts is None else np.stack(mounts).astype(float)
+    matchings = []
     with shared_tensors():  # the hypergraph matchers of a pair share its k-NN search
-        matchings = [
-            fn(problem, seed=task.seed, threshold=None, **dict(spec.options))
-            if _has_what_it_needs(fn, problem)
-            else _declares_nothing(spec.name, problem)
-            for spec, fn in zip(task.matchers, functions, strict=True)
-        ]
+        for spec, fn in zip(task.matchers, functions, strict=True):
+            if not _has_what_it_needs(fn, problem):
+                matchings.append(_declares_nothing(spec.name, problem))
+                continue
+            try:
+                matchings.append(fn(problem, seed=task.seed, threshold=None, **dict(spec.options)))
+            except PluginError as exc:  # a plug-in broke its contract: say where
+                raise type(exc)(
+                    f"{exc} (frame pair {pair.name} of {task.dataset_dir}, seed {task.seed})"
+                ) from exc
     outcomes = []
     for matching in matchings:
         # canonical (grid) scores: τ and the ranking see the same values on every CPU, whatever
@@ -281,7 +298,7 @@ def execute(task: RunTask) -> list[RunResult]:
             f"{task.dataset_dir}: dataset checksum {dataset.checksum[:12]} differs from the task's "
             f"{task.dataset_checksum[:12]} (the dataset changed after the task was made)"
         )
-    functions = [matcher_function(m.name) for m in task.matchers]
+    functions = [harness_function(m.name, task.plugin_time_limit_s) for m in task.matchers]
     results = [RunResult(spec, task.dataset_dir) for spec in task.specs()]
     started = time.perf_counter()
     count = len(dataset) if task.limit is None else min(task.limit, len(dataset))

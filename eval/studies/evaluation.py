@@ -131,12 +131,14 @@ def parse_matchers(text: str) -> list[MatcherSpec]:
     print them). ``all``: every registered matcher that needs nothing beyond what every dataset
     gives (``matchers.requires`` empty; the localisation-prior matchers must be named) and needs
     no option (``matchers.required_options`` empty: the learned matchers need a model), paper
-    order first. An unknown name is refused with the closest known ones."""
-    from matchers.core.registry import available, required_options, requires
+    order first; an entry point that cannot be loaded is left out with a warning line. An
+    unknown name is refused with the closest known ones, a named entry point that cannot be
+    loaded in one line naming it (``matchers.PluginError``)."""
+    from matchers.core.registry import available, get, required_options, requires, usable
 
     known = list(available())
     if text.strip() == "all":
-        plain = [n for n in known if not requires(n) and not required_options(n)]
+        plain = [n for n in usable() if not requires(n) and not required_options(n)]
         names = [n for n in PAPER_ORDER if n in plain] + [n for n in plain if n not in PAPER_ORDER]
     else:
         by_lower = {n.lower(): n for n in known}
@@ -151,6 +153,8 @@ def parse_matchers(text: str) -> list[MatcherSpec]:
             raise ValueError(
                 f"--matchers: unknown {unknown or text!r}{hint}; available: {', '.join(known)}"
             )
+        for name in names:
+            get(name)  # a broken entry point: PluginError naming it, before anything runs
     return [MatcherSpec(n) for n in dict.fromkeys(names)]
 
 

@@ -67,10 +67,11 @@ TABLE_COLUMNS = [
 
 def prior_matchers() -> list[str]:
     """Registered matchers that need the localisation prior (``matchers.requires`` names it) and
-    no option (the learned matchers need a model: named with it)."""
-    from matchers.core.registry import available, required_options, requires
+    no option (the learned matchers need a model: named with it); broken entry points are left
+    out (``matchers.usable``)."""
+    from matchers.core.registry import required_options, requires, usable
 
-    return [n for n in available() if "world1" in requires(n) and not required_options(n)]
+    return [n for n in usable() if "world1" in requires(n) and not required_options(n)]
 
 
 def external_matchers(text: str = "all") -> list[MatcherSpec]:

@@ -28,7 +28,7 @@ output by construction: :func:`goals` checks it as an invariant, not as a goal.
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from itertools import combinations
 from pathlib import Path
 
@@ -61,7 +61,8 @@ from eval.protocol.pooled_bootstrap import (
     weights_for,
 )
 from eval.studies.evaluation import as_named, open_entry
-from matchers.fusion import PairwiseEvidence, available_fusions, get_fusion
+from matchers.core.plugin_guard import PluginError
+from matchers.fusion import PairwiseEvidence, checked_fusion, usable_fusions
 from matchers.fusion.universe import canonical_labels, components
 
 SCENARIO = "scenarios/cad-multi.toml"
@@ -149,7 +150,9 @@ def evaluate_multiagent(
     out_dir = Path(out_dir)
     named = as_named(matchers)
     label_of = {spec: label for label, spec in named.items()}
-    fusions = list(fusions) if fusions is not None else available_fusions()
+    fusions = list(fusions) if fusions is not None else usable_fusions()
+    limit = getattr(runner, "plugin_time_limit_s", None)  # plug-in fusions: per snapshot
+    fusions = {name: checked_fusion(name, time_limit_s=limit) for name in fusions}
     entry = open_entry(test_dir, val_dir, LABEL)
     views = sorted(set().union(*subsets.values()))
     view_pairs = list(combinations(views, 2))
@@ -219,8 +222,13 @@ def _evidence(outcomes, subset, k: int, chosen) -> PairwiseEvidence:
     return PairwiseEvidence(tuple(sizes), scores, matches)
 
 
-def _fused_rows(outcomes, subset, tau: float, fusions: Sequence[str]) -> list[dict]:
-    """Per snapshot and fusion: the counts, its episode and time."""
+def _fused_rows(
+    outcomes, subset, tau: float, fusions: Sequence[str] | Mapping[str, Callable]
+) -> list[dict]:
+    """Per snapshot and fusion: the counts, its episode and time. ``fusions``: names, or {name:
+    the callable to run} (:func:`matchers.fusion.checked_fusion`: plug-ins checked)."""
+    if not isinstance(fusions, Mapping):
+        fusions = {name: checked_fusion(name) for name in fusions}
     rows = []
     count = len(next(iter(outcomes.values())))
     for k in range(count):
@@ -228,9 +236,12 @@ def _fused_rows(outcomes, subset, tau: float, fusions: Sequence[str]) -> list[di
         truth = _truth(outcomes, subset, k)
         matcher_s = sum(per[k].time_s for per in outcomes.values())
         first = next(iter(outcomes.values()))[k]
-        for name in fusions:
+        for name, fuse in fusions.items():
             started = time.perf_counter()
-            universe = get_fusion(name)(evidence)
+            try:
+                universe = fuse(evidence)
+            except PluginError as exc:  # a plug-in broke its contract: say where
+                raise type(exc)(f"{exc} (snapshot {k}, views {tuple(subset)})") from exc
             fusion_s = time.perf_counter() - started
             counts = multiway_counts(universe, truth)
             rows.append(

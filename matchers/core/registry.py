@@ -18,7 +18,9 @@ from importlib.metadata import EntryPoint, entry_points
 
 from matchers.core.matching import Matching
 from matchers.core.memory_budget import budgeted
-from matchers.core.named_lookup import lookup
+from matchers.core.named_lookup import is_builtin, lookup
+from matchers.core.named_lookup import usable as _usable
+from matchers.core.plugin_guard import guard_matcher
 from matchers.core.search_spaces import BUILTIN_SEARCH_SPACES, check_search_space
 
 log = logging.getLogger(__name__)
@@ -161,8 +163,39 @@ def deterministic(name: str) -> bool:
 
 
 def available() -> list[str]:
-    """Sorted names of every matcher get() can return."""
+    """Sorted names of every matcher get() can return (entry points listed without importing
+    them: one that cannot be loaded is listed too; :func:`usable` leaves it out)."""
     return sorted(set(_BUILTIN) | set(_registered) | set(_entry_points()))
+
+
+def usable() -> list[str]:
+    """:func:`available` without the entry points that cannot be loaded (an import error, a
+    missing or non-callable attribute), each reported once as a warning line: what ``all``
+    means, so that one broken package does not break every other matcher. Loads every entry
+    point."""
+    return _usable(available(), "matcher", get)
+
+
+def plugin_label(name: str) -> str:
+    """``matcher 'name'`` — with its entry point's target when it is one — for messages."""
+    point = _entry_points().get(name)
+    if point is not None and name not in _BUILTIN:
+        return f"matcher {name!r} (entry point {point.value})"
+    return f"matcher {name!r}"
+
+
+def checked(name: str, fn: Matcher | None = None, time_limit_s: float | None = None) -> Matcher:
+    """The callable the harness runs for matcher ``name`` (``fn``: already looked up): a
+    built-in as it is — its results stay bit for bit what they are —, any other (a plug-in:
+    registered, entry point, import path) wrapped so that each call runs under the per-problem
+    time limit (``time_limit_s``, None: ``$CADSIM_PLUGIN_TIME_LIMIT_S`` or 600 s) and its result
+    is checked against the contract; either failure is a
+    :class:`~matchers.core.plugin_guard.PluginError` naming it
+    (:mod:`matchers.core.plugin_guard`)."""
+    fn = get(name) if fn is None else fn
+    if is_builtin(fn, _BUILTIN):
+        return fn
+    return guard_matcher(plugin_label(name), fn, time_limit_s)
 
 
 @cache

@@ -6,7 +6,9 @@ A fusion is any callable ``fusion(evidence, **options) -> Universe``: it reads e
 views' two-view matching of one snapshot (:class:`~matchers.fusion.evidence.PairwiseEvidence`)
 and assigns every detection to a universe object (:class:`~matchers.fusion.universe.Universe`).
 It may carry ``memory_bytes(evidence)`` (its working memory; checked against the per-process
-budget before it runs) and ``deterministic = True``.
+budget before it runs) and ``deterministic = True``. The harness runs a fusion that is not a
+built-in through :func:`checked_fusion`: under the per-problem time limit, its result held to the
+contract of :mod:`matchers.fusion.checks`.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from collections.abc import Callable
 from functools import cache
 from importlib.metadata import EntryPoint, entry_points
 
-from matchers.core.named_lookup import lookup
+from matchers.core.named_lookup import is_builtin, lookup, usable
 from matchers.fusion.universe import Universe
 
 ENTRY_POINT_GROUP = "cadsim.fusions"
@@ -51,8 +53,31 @@ def get_fusion(name: str) -> Fusion:
 
 
 def available_fusions() -> list[str]:
-    """Sorted names of every fusion :func:`get_fusion` can return."""
+    """Sorted names of every fusion :func:`get_fusion` can return (entry points listed without
+    importing them; :func:`usable_fusions` leaves out those that cannot be loaded)."""
     return sorted(set(_BUILTIN) | set(_registered) | set(_entry_points()))
+
+
+def usable_fusions() -> list[str]:
+    """:func:`available_fusions` without the entry points that cannot be loaded, each reported
+    once as a warning line (what every fusion of the registry means)."""
+    return usable(available_fusions(), "fusion", get_fusion)
+
+
+def checked_fusion(name: str, fn: Fusion | None = None, time_limit_s: float | None = None):
+    """The callable the harness runs for fusion ``name`` (``fn``: already looked up): a built-in
+    as it is; any other wrapped so that each call runs under the per-problem time limit
+    (``time_limit_s``, None: ``$CADSIM_PLUGIN_TIME_LIMIT_S`` or 600 s) and its result is held to
+    the contract (:func:`matchers.fusion.checks.check_universe`); a failure is a
+    :class:`~matchers.core.plugin_guard.PluginError` naming it."""
+    from matchers.fusion.checks import guard_fusion
+
+    fn = get_fusion(name) if fn is None else fn
+    if is_builtin(fn, _BUILTIN):
+        return fn
+    point = _entry_points().get(name)
+    where = f" (entry point {point.value})" if point is not None and name not in _BUILTIN else ""
+    return guard_fusion(f"fusion {name!r}{where}", fn, time_limit_s)
 
 
 @cache
