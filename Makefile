@@ -12,7 +12,7 @@ GL_PKGS := libegl1 libegl-mesa0 libgl1-mesa-dri libosmesa6 libgomp1
 export SDL_VIDEODRIVER := dummy
 export MPLBACKEND := Agg
 
-.PHONY: all venv sysdeps test bench lint format reproduce clean distclean
+.PHONY: all venv sysdeps browser test bench lint format reproduce report clean distclean
 
 all: test
 
@@ -39,6 +39,21 @@ sysdeps:
 	  fi; \
 	fi
 
+# Chromium renders the results report (results/index.html) in tests/test_report_site.py, which is
+# skipped without it. Installed when missing and we may (root + apt), as sysdeps does.
+BROWSER_PKGS := chromium
+browser:
+	@if ! dpkg -s $(BROWSER_PKGS) >/dev/null 2>&1 && ! command -v chromium >/dev/null \
+	    && ! command -v chromium-browser >/dev/null; then \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	    echo "installing $(BROWSER_PKGS) (the report's browser test)"; \
+	    (apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $(BROWSER_PKGS) >/dev/null) \
+	      || echo "warning: apt-get install $(BROWSER_PKGS) failed; the report's browser test is skipped"; \
+	  else \
+	    echo "warning: missing system package: $(BROWSER_PKGS) (install with: sudo apt-get install -y $(BROWSER_PKGS)); the report's browser test is skipped"; \
+	  fi; \
+	fi
+
 # The tests that touch numerics run a second time with numpy's AVX-512 code paths off, so that both
 # dispatch levels are exercised on every machine that has them (DESIGN §10; docs/reproducibility.md).
 NUMERIC_TESTS := tests/test_matchers_*.py tests/test_jit_kernels.py tests/test_metrics.py \
@@ -47,7 +62,7 @@ NUMERIC_TESTS := tests/test_matchers_*.py tests/test_jit_kernels.py tests/test_m
 	tests/test_localisation.py tests/test_attribute_noise.py tests/test_camera.py \
 	tests/test_validation_synthetic.py tests/test_validation_metrics.py
 
-test: venv
+test: venv browser
 	$(PY) -m pytest -q
 	@features="$$($(PY) tests/cpu_dispatch.py --avx512-features)"; \
 	if [ -n "$$features" ]; then \
@@ -70,6 +85,11 @@ format: venv
 
 reproduce: venv
 	$(PY) -m eval.reproduce
+
+# The report (results/README.md, results/index.html) and the README's results section, written
+# again from the files in results/: nothing is recomputed.
+report: venv
+	$(PY) -m eval.readme_results
 
 clean:
 	rm -rf .pytest_cache build *.egg-info

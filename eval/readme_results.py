@@ -1,26 +1,40 @@
-"""Writes the results section of README.md from a results directory, so that every number the
-README shows comes from a run of ``make reproduce`` (called at its end for the default output
-directory). The section sits between ``<!-- results:begin -->`` and ``<!-- results:end -->``.
+"""Writes the results report and the README's results section from a results directory, so that
+every number either shows comes from a run of ``make reproduce`` (called at its end). Run alone,
+``python -m eval.readme_results`` (``make report``) rewrites both from the files already there,
+recomputing nothing.
 
-It holds the regime cards beside Table I (tuned, calibrated), the paired differences with their
+- The report: ``<results>/README.md`` and the same page as ``<results>/index.html`` (figures,
+  sortable tables; :mod:`eval.report.site`), then every table and figure of the folder not
+  shown in full above them.
+- The README's section, between ``<!-- results:begin -->`` and ``<!-- results:end -->``: one
+  compact table per study (:mod:`eval.report.summary`) with links into the report.
+
+The report holds the run's stage times, the regime cards beside Table I (tuned, calibrated), the paired differences with their
 intervals, the dataset spread, the paper-protocol table, the regime sweep, Fig. 4, the qualitative
 figure, the ranking agreement with external data, the external benchmark (DMGM CAD pairs), the
 localisation sweep and "Where we agree with the paper, and where not" — statements computed from those tables
 (ranks, differences and whether their intervals exclude 0, crossovers), never typed in by hand.
-Every part is optional: a results directory without a file leaves its part out.
+Every part is optional: a results directory without a file leaves its part out, and a part whose
+files this code cannot read (another version's format) is replaced by a line saying so and the
+study's table as the run wrote it — the report is always written.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
+import logging
 import os
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
 from eval.core.result_files import write_text
+from eval.report import summary
 from eval.report.run_record import cold_record
+from eval.report.site import headings, write_site
 from eval.report.tables import PAPER_COLUMN, PAPER_NAMES, dataset_order, method_name, params_text
 from eval.studies.agreement import readme_part as agreement_readme
 from eval.studies.external import readme_part as external_readme
@@ -30,6 +44,9 @@ from eval.studies.transfer import readme_part as transfer_readme
 from eval.studies.v2x_table import readme_part as v2x_readme
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
+ROOT = Path(__file__).resolve().parents[1]
+REPORT, SITE = "README.md", "index.html"
+log = logging.getLogger(__name__)
 RIVALS = ("mos", "rrwhm")
 
 
@@ -55,7 +72,6 @@ def _interval(row) -> str:
 def _header(record: dict) -> str:
     wall = record.get("wall_s", {})
     git = record.get("git", {})
-    times = ", ".join(f"{k.replace('_', ' ')} {v:.0f} s" for k, v in wall.items() if k != "total")
     runs = record.get("runs", {}).values()
     computed = sum(r.get("computed", 0) for r in runs)
     cached = sum(r.get("cached", 0) for r in runs)
@@ -65,8 +81,8 @@ def _header(record: dict) -> str:
         f" at commit `{str(git.get('commit', '?'))[:10]}`"
         + (" (with uncommitted changes)" if git.get("dirty") else "")
         + f"; {'a cold run (no dataset, model or cached run at its start)' if cold else 'a warm run (datasets, models or runs cached at its start: its times are not cold times)'}"
-        + f"; wall time {wall.get('total', float('nan')):.0f} s ({times}; "
-        f"{computed} matcher runs computed, {cached} taken from the result cache)."
+        + f"; wall time {wall.get('total', float('nan')):.0f} s ({computed} matcher runs computed, "
+        f"{cached} taken from the result cache)."
     )
 
 
@@ -358,35 +374,74 @@ def agreement_bullets(results: Path) -> list[str]:
     return [f"- {b}" for b in bullets]
 
 
-def results_section(results: Path, readme_dir: Path) -> str:
-    """Markdown: regime cards, Table I and its companions, figures, and the agreement summary."""
-    from eval.studies.regime_cards import regime_markdown
+def _record(results: Path) -> dict:
+    """The run record, or {} when it is missing or unreadable."""
+    try:
+        record = json.loads((results / "run_record.json").read_text())
+    except (OSError, ValueError):
+        return {}
+    return record if isinstance(record, dict) else {}
 
-    results = Path(results)
-    rel = Path(os.path.relpath(results, readme_dir)).as_posix()
-    record = json.loads((results / "run_record.json").read_text())
-    cold = cold_record(results) or (record if is_cold(record) else None)
-    out = [_header(record), "", *stage_table(cold or record)]
-    if (results / "regime.csv").is_file():
-        out += [
-            "### Regime of each dataset",
+
+def _guarded(
+    name: str,
+    build: Callable[[], Iterable[str]],
+    results: Path,
+    heading: str | None = None,
+    table: str | None = None,
+) -> list[str]:
+    """``build()``'s lines; if it fails on this folder's files (written by another version of the
+    code, or incomplete), a line saying so under ``heading`` and the study's ``table`` file as
+    the run wrote it, so that the rest of the report is still written."""
+    try:
+        return list(build())
+    except Exception as error:  # any file format this code does not read
+        log.warning("results part %s left out: %s: %s", name, type(error).__name__, error)
+        if heading is None:
+            return []
+        lines = [
+            f"### {heading}",
             "",
-            regime_markdown(results / "regime.csv").strip(),
-            "",
-            "Means over test frame pairs; non-covisible share pooled over both views; appearance "
-            "AUC: how well feature similarity alone separates true from false candidate pairs "
-            "(0.5 = not at all); position error: covisible objects' 3-D disagreement after "
-            "aligning the views with the true poses.",
+            f"This part could not be summarised from this folder's files ({type(error).__name__}: "
+            f"{error}); they may come from another version of the code, and `make reproduce` "
+            "rewrites them.",
             "",
         ]
-    out += ["### Table I", "", (results / "table1.md").read_text().strip(), ""]
+        path = results / table if table else None
+        if path is not None and path.is_file():
+            lines += ["The table as the run wrote it:", "", path.read_text().strip(), ""]
+        return lines
+
+
+def _regime_part(results: Path) -> list[str]:
+    from eval.studies.regime_cards import regime_markdown
+
+    if not (results / "regime.csv").is_file():
+        return []
+    return [
+        "### Regime of each dataset",
+        "",
+        regime_markdown(results / "regime.csv").strip(),
+        "",
+        "Means over test frame pairs; non-covisible share pooled over both views; appearance "
+        "AUC: how well feature similarity alone separates true from false candidate pairs "
+        "(0.5 = not at all); position error: covisible objects' 3-D disagreement after "
+        "aligning the views with the true poses.",
+        "",
+    ]
+
+
+def _table1_part(results: Path, rel: str, record: dict) -> list[str]:
+    if not (results / "table1.md").is_file():
+        return []
+    out = ["### Table I", "", (results / "table1.md").read_text().strip(), ""]
     tuned = "tuned on the validation datasets (`tuning.csv`), " if record.get("tuning") else ""
     untuned = (
         f" The untuned table: [{rel}/table1_untuned.md]({rel}/table1_untuned.md)."
         if (results / "table1_untuned.md").is_file()
         else ""
     )
-    out += [
+    return out + [
         f"Parameters {tuned}τ each matcher's acceptance threshold, calibrated on the validation "
         "datasets (other simulation seeds), never on the test pairs. Balanced accuracy averages "
         "the covisible and the non-covisible objects' shares, so declaring nothing scores 50 on "
@@ -394,83 +449,95 @@ def results_section(results: Path, readme_dir: Path) -> str:
         "precision–recall curve swept over τ." + untuned,
         "",
     ]
-    out += agreement_readme(results, rel)
+
+
+def _paired_part(results: Path, rel: str) -> list[str]:
     paired = _csv(results / "paired_differences.csv")
-    if paired is not None and len(paired):
-        out += [
-            "### Maximin against each rival (percentage points)",
-            "",
-            paired_markdown(paired[paired["matcher_b"].isin(list(PAPER_NAMES) + ["appearance"])]),
-            "",
-            "Runs averaged per frame pair; the 95 % interval is a cluster-robust t-interval with "
-            "the simulation episode as the unit (frame pairs of one episode are correlated; "
-            "`episodes` says how many): "
-            f"[{rel}/paired_differences.csv]({rel}/paired_differences.csv).",
-            "",
-        ]
+    if paired is None or not len(paired):
+        return []
+    return [
+        "### Maximin against each rival (percentage points)",
+        "",
+        paired_markdown(paired[paired["matcher_b"].isin(list(PAPER_NAMES) + ["appearance"])]),
+        "",
+        "Runs averaged per frame pair; the 95 % interval is a cluster-robust t-interval with "
+        "the simulation episode as the unit (frame pairs of one episode are correlated; "
+        "`episodes` says how many): "
+        f"[{rel}/paired_differences.csv]({rel}/paired_differences.csv).",
+        "",
+    ]
+
+
+def _spread_part(results: Path) -> list[str]:
     spread = _csv(results / "dataset_spread.csv")
-    if spread is not None and len(spread):
-        out += [
-            "### Dataset spread",
-            "",
-            f"F1 range over {spread['generated'].nunique()} {spread['dataset'].iloc[0]} test "
-            f"datasets generated with different scenario seeds: {spread_text(spread)}.",
-            "",
-        ]
-    if (results / "table1_paper_protocol.md").is_file():
-        out += [
-            "### Under the paper's protocol",
-            "",
-            "SM, RRWM and MOS's pairwise term compare distances between box centres in the image; "
-            "every matcher reports its full Hungarian assignment (no τ); no tuning.",
-            "",
-            (results / "table1_paper_protocol.md").read_text().strip(),
-            "",
-        ]
-    if (results / "fig_regime.png").is_file():
-        sweep = record.get("regime_sweep", {})
-        out += [
-            "### Regime sweep",
-            "",
-            f"![F1 and balanced accuracy against the non-covisible share]({rel}/fig_regime.png)",
-            "",
-            "Non-covisible detections thinned (keep "
-            + ", ".join(f"{k:g}" for k in sweep.get("keep", []))
-            + f"; seeded per frame pair, validation and test alike), τ recalibrated per level on "
-            f"the thinned validation set ({_n(len(sweep.get('val_seeds', [])), 'run')}), "
-            f"{_n(len(sweep.get('seeds', [])), 'run')} on the first {sweep.get('pairs') or 'all'} "
-            f"test pairs. Crossovers: [{rel}/crossovers.csv]({rel}/crossovers.csv).",
-            "",
-        ]
-    out += external_readme(results, rel)
-    out += prior_sensitivity_readme(results, rel)
-    out += v2x_readme(results, rel)
-    # stage times reach a "≤ N min cold" goal only from a cold run (the last one: cold_run.json)
-    stages = cold.get("wall_s", {}) if cold else {}
-    multi_s = sum(stages.get(k, 0.0) for k in ("multiagent_generate", "multiagent")) or None
-    out += multiagent_readme(results, rel, multi_s)
-    transfer_runs = (cold or {}).get("runs", {}).get("transfer", {}).get("computed")
-    transfer_s = sum(stages.get(k, 0.0) for k in ("transfer_generate", "transfer")) or None
-    out += transfer_readme(results, rel, transfer_s, transfer_runs)
-    if (results / "fig_localisation.png").is_file():
-        loc = record.get("localisation_sweep", {})
-        out += [
-            "### F1 against localisation error (CAD)",
-            "",
-            f"![F1 against the observers' position error]({rel}/fig_localisation.png)",
-            "",
-            "Each observer's pose perturbed by a seeded GPS-like error (position σ per axis on "
-            "the x axis, heading σ = 0.2° per 1.2 m), drawn at read time (no re-rendering); τ "
-            "every matcher's parameters tuned again and τ calibrated per σ on the validation set "
-            "at that σ, the matchers told the stated σ (at least 0.5 m), never the error drawn; "
-            f"{_n(len(loc.get('seeds', [])), 'run')}, "
-            f"first {loc.get('pairs') or 'all'} test pairs "
-            f"([{rel}/localisation_sweep.csv]({rel}/localisation_sweep.csv)).",
-            "",
-        ]
+    if spread is None or not len(spread):
+        return []
+    return [
+        "### Dataset spread",
+        "",
+        f"F1 range over {spread['generated'].nunique()} {spread['dataset'].iloc[0]} test "
+        f"datasets generated with different scenario seeds: {spread_text(spread)}.",
+        "",
+    ]
+
+
+def _paper_protocol_part(results: Path) -> list[str]:
+    if not (results / "table1_paper_protocol.md").is_file():
+        return []
+    return [
+        "### Under the paper's protocol",
+        "",
+        "SM, RRWM and MOS's pairwise term compare distances between box centres in the image; "
+        "every matcher reports its full Hungarian assignment (no τ); no tuning.",
+        "",
+        (results / "table1_paper_protocol.md").read_text().strip(),
+        "",
+    ]
+
+
+def _regime_sweep_part(results: Path, rel: str, record: dict) -> list[str]:
+    if not (results / "fig_regime.png").is_file():
+        return []
+    sweep = record.get("regime_sweep", {})
+    return [
+        "### Regime sweep",
+        "",
+        f"![F1 and balanced accuracy against the non-covisible share]({rel}/fig_regime.png)",
+        "",
+        "Non-covisible detections thinned (keep "
+        + ", ".join(f"{k:g}" for k in sweep.get("keep", []))
+        + f"; seeded per frame pair, validation and test alike), τ recalibrated per level on "
+        f"the thinned validation set ({_n(len(sweep.get('val_seeds', [])), 'run')}), "
+        f"{_n(len(sweep.get('seeds', [])), 'run')} on the first {sweep.get('pairs') or 'all'} "
+        f"test pairs. Crossovers: [{rel}/crossovers.csv]({rel}/crossovers.csv).",
+        "",
+    ]
+
+
+def _localisation_part(results: Path, rel: str, record: dict) -> list[str]:
+    if not (results / "fig_localisation.png").is_file():
+        return []
+    loc = record.get("localisation_sweep", {})
+    return [
+        "### F1 against localisation error (CAD)",
+        "",
+        f"![F1 against the observers' position error]({rel}/fig_localisation.png)",
+        "",
+        "Each observer's pose perturbed by a seeded GPS-like error (position σ per axis on "
+        "the x axis, heading σ = 0.2° per 1.2 m), drawn at read time (no re-rendering); τ "
+        "every matcher's parameters tuned again and τ calibrated per σ on the validation set "
+        "at that σ, the matchers told the stated σ (at least 0.5 m), never the error drawn; "
+        f"{_n(len(loc.get('seeds', [])), 'run')}, "
+        f"first {loc.get('pairs') or 'all'} test pairs "
+        f"([{rel}/localisation_sweep.csv]({rel}/localisation_sweep.csv)).",
+        "",
+    ]
+
+
+def _noise_part(rel: str, record: dict) -> list[str]:
     noise = record.get("noise_sweep", {})
     rates = ", ".join(f"{r:g}" for r in noise.get("rates", []))
-    out += [
+    return [
         "### Fig. 4 — against depth noise (CAD, as in the paper, and MRC)",
         "",
         f"![Fig. 4: accuracy, precision, recall against noise rate]({rel}/fig4.png)",
@@ -479,23 +546,310 @@ def results_section(results: Path, readme_dir: Path) -> str:
         f"first {noise.get('pairs') or 'all'} test pairs; each rate re-applies noise to the "
         "stored clean depth and re-detects (no re-rendering).",
         "",
+    ]
+
+
+def _qualitative_part(rel: str) -> list[str]:
+    return [
         "### Qualitative (the paper's Fig. 3 style)",
         "",
         f"![Qualitative: RRWHM, MOS, maximin on one MRC and one CAD pair]({rel}/qualitative.png)",
         "",
         "Green: correct match, red: wrong match, yellow dashed: missed (false negative).",
+        "",
     ]
+
+
+def _agreement_part(results: Path) -> list[str]:
     bullets = agreement_bullets(results)
-    if bullets:
+    if not bullets:
+        return []
+    return [
+        "### Where we agree with the paper, and where not",
+        "",
+        "(Computed from the tables above; percent, differences in percentage points.)",
+        "",
+        *bullets,
+        "",
+    ]
+
+
+def _last_cold(results: Path, record: dict) -> dict | None:
+    """The last cold run's record (``cold_run.json``; this run's if it was cold), or None."""
+    return cold_record(results) or (record if is_cold(record) else None)
+
+
+def _run_part(results: Path, record: dict) -> list[str]:
+    if not record:
+        return []
+    out = [_header(record), ""]
+    timed = _last_cold(results, record) or record
+    if timed.get("wall_s"):
+        out += ["### Stage times", "", *stage_table(timed)]
+    return out
+
+
+def results_section(results: Path, readme_dir: Path) -> str:
+    """Markdown: the run and its stage times, regime cards, Table I and its companions, figures,
+    the agreement summary and the studies (V2X, multi-agent, transfer), links relative to
+    ``readme_dir``."""
+    return "\n".join(_sections(Path(results), Path(readme_dir))).strip()
+
+
+def _sections(results: Path, readme_dir: Path, groups: bool = False) -> list[str]:
+    """The report's lines; ``groups`` adds a ``##`` heading above each group of parts."""
+    rel = Path(os.path.relpath(results, readme_dir)).as_posix()
+    record = _record(results)
+    cold = _last_cold(results, record) or {}  # "≤ N min cold" goals: the last cold run's times
+    stages = cold.get("wall_s", {})
+    multi_s = sum(stages.get(k, 0.0) for k in ("multiagent_generate", "multiagent")) or None
+    transfer_runs = cold.get("runs", {}).get("transfer", {}).get("computed")
+    transfer_s = sum(stages.get(k, 0.0) for k in ("transfer_generate", "transfer")) or None
+
+    def part(name, build, heading=None, table=None):
+        return _guarded(name, build, results, heading, table)
+
+    plan = [
+        ("The run", [part("run", lambda: _run_part(results, record))]),
+        (
+            "The paper's benchmark",
+            [
+                part("regime", lambda: _regime_part(results)),
+                part("table1", lambda: _table1_part(results, rel, record), "Table I", "table1.md"),
+                part("paired", lambda: _paired_part(results, rel)),
+                part("spread", lambda: _spread_part(results)),
+                part("paper protocol", lambda: _paper_protocol_part(results)),
+                part("regime sweep", lambda: _regime_sweep_part(results, rel, record)),
+                part("noise", lambda: _noise_part(rel, record)),
+                part("qualitative", lambda: _qualitative_part(rel)),
+                part("agreement", lambda: _agreement_part(results)),
+            ],
+        ),
+        (
+            "External data",
+            [
+                part(
+                    "external",
+                    lambda: external_readme(results, rel),
+                    "External data: the DMGM CAD pairs",
+                    "table_external.md",
+                ),
+                part("prior sensitivity", lambda: prior_sensitivity_readme(results, rel)),
+                part(
+                    "external agreement",
+                    lambda: agreement_readme(results, rel),
+                    "Do these rankings hold on external data?",
+                ),
+            ],
+        ),
+        (
+            "Localisation and V2X",
+            [
+                part("localisation", lambda: _localisation_part(results, rel, record)),
+                part("v2x", lambda: v2x_readme(results, rel), "The V2X task", "table_v2x.md"),
+            ],
+        ),
+        (
+            "Multi-agent",
+            [
+                part(
+                    "multiagent",
+                    lambda: multiagent_readme(results, rel, multi_s),
+                    "Multi-agent matching",
+                    "table_multiagent.md",
+                )
+            ],
+        ),
+        (
+            "Transfer",
+            [
+                part(
+                    "transfer",
+                    lambda: transfer_readme(results, rel, transfer_s, transfer_runs),
+                    "Does simulation transfer?",
+                    "table_transfer.md",
+                )
+            ],
+        ),
+    ]
+    out: list[str] = []
+    for title, parts in plan:
+        lines = [line for p in parts for line in p]
+        if lines:
+            out += ([f"## {title}", ""] if groups else []) + lines
+    return out
+
+
+# Figures a results folder may hold that no part above shows, and what they show.
+FIGURE_CAPTIONS = {
+    "pr_curves.png": "Pooled precision–recall curves per dataset and matcher (test pairs)",
+    "fig_localisation_presets.png": "CAD-V2X: F1 and the pose metrics against the localisation "
+    "preset's error scale and latency",
+}
+
+
+def _appendix(results: Path, body: str, rel: str) -> list[str]:
+    """Every Markdown table and PNG figure of ``results`` that ``body`` does not show in full,
+    then a list of the folder's data files."""
+    tables = []
+    for path in sorted(results.glob("*.md")):
+        text = path.read_text().strip() if path.name != REPORT else ""
+        if text and text not in body:
+            tables += [f"### {path.name}", "", text, ""]
+    figures = []
+    for path in sorted(results.rglob("*.png")):
+        name = path.relative_to(results).as_posix()
+        if f"]({rel}/{name})" not in body:
+            caption = FIGURE_CAPTIONS.get(name, name)
+            figures += [f"### {name}", "", f"![{caption}]({rel}/{name})", ""]
+    files = [
+        f"[{p.name}]({rel}/{p.name})"
+        for p in sorted(results.iterdir())
+        if p.is_file() and p.suffix in (".csv", ".json", ".tex", ".pdf") and p.name != SITE
+    ]
+    folders = [f"`{p.name}/`" for p in sorted(results.iterdir()) if p.is_dir()]
+    out = []
+    if tables or figures:
         out += [
+            "## Every other table and figure",
             "",
-            "### Where we agree with the paper, and where not",
+            "Written by the same run, not shown in full above.",
             "",
-            "(Computed from the tables above; percent, differences in percentage points.)",
-            "",
-            *bullets,
         ]
-    return "\n".join(out)
+        out += tables + figures
+    if files or folders:
+        out += ["## Files", ""]
+        out += [f"Data: {', '.join(files)}." if files else ""]
+        out += (
+            ["", f"Per-study folders (evaluation files of each part): {', '.join(folders)}."]
+            if folders
+            else []
+        )
+        out += [""]
+    return out
+
+
+def report_markdown(results: Path) -> str:
+    """The whole report, ``<results>/README.md``: links relative to ``results``."""
+    results = Path(results)
+    docs = Path(os.path.relpath(ROOT / "docs", results)).as_posix()
+    body = _sections(results, results, groups=True)
+    text = "\n".join(body)
+    rel = "."
+    lines = [
+        "# cadsim results",
+        "",
+        "Written by `make reproduce` from the files in this folder — every number below is "
+        "read from them, none typed by hand; `make report` (`python -m eval.readme_results`) "
+        "writes this page again from the same files without recomputing anything. The same "
+        f"page with sortable tables: [{SITE}]({rel}/{SITE}). How to read the numbers, and what "
+        f"they cannot say: [docs/evaluation.md]({docs}/evaluation.md#reading-the-results).",
+        "",
+        *body,
+        *_appendix(results, text, rel),
+    ]
+    return "\n".join(lines).rstrip() + "\n"
+
+
+def _site_links(markdown: str, rel: str = ".") -> dict[str, str]:
+    """On the HTML page, a link to a Markdown table shown on it points at its section."""
+    return {
+        f"{rel}/{text}": f"#{anchor}" for text, anchor in headings(markdown) if text.endswith(".md")
+    }
+
+
+def write_report(results: Path) -> tuple[Path, Path]:
+    """Write ``<results>/README.md`` and ``<results>/index.html`` from the files in ``results``."""
+    results = Path(results)
+    markdown = report_markdown(results)
+    report = write_text(results / REPORT, markdown)
+    site = write_site(markdown, results, "cadsim results", _site_links(markdown))
+    return report, site
+
+
+def _anchor(report: str, prefix: str) -> str:
+    """``#anchor`` of the report's first heading that starts with ``prefix`` ("" if none)."""
+    return next((f"#{a}" for text, a in headings(report) if text.startswith(prefix)), "")
+
+
+# The README's compact tables: (lead, table, heading of the report section it links to, caption).
+SUMMARIES = (
+    (
+        "Table I — the paper's benchmark",
+        summary.table1,
+        "Table I",
+        "F1 in percent on each dataset's test pairs (τ and parameters chosen on validation "
+        "seeds); rank by F1 among the paper's eight methods, the paper's own rank of maximin (by "
+        "accuracy) in brackets; the interval resamples simulation episodes.",
+    ),
+    (
+        "Fig. 4 — depth noise",
+        summary.noise,
+        "Fig. 4",
+        "F1 in percent from the lowest to the highest noise rate (σ = rate · d²).",
+    ),
+    (
+        "External data — the DMGM CAD pairs",
+        summary.external,
+        "External data",
+        "Independently simulated (CARLA + SUMO), not real-world; τ and parameters from sequence "
+        "070, test on 069 + 071, sorted as the full table; *prior*: given the vehicles' noisy "
+        "GPS poses.",
+    ),
+    (
+        "V2X — CAD-V2X under each localisation preset",
+        summary.v2x,
+        "The V2X task",
+        "F1 in percent of the paper's method, two matchers without and two with the "
+        "localisation prior; every matcher, the pose metrics and the verdicts in the report.",
+    ),
+    (
+        "Multi-agent — fusing the pairwise matchings of N views",
+        summary.multiagent,
+        "Multi-agent",
+        "Pooled pairwise F1 in percent per two-view matcher and fusion (`independent`: no fusion).",
+    ),
+    (
+        "Transfer — learned matchers on external data",
+        summary.transfer,
+        "Does simulation transfer?",
+        "Pooled F1 in percent; the last row is the hand-crafted matcher each column is compared "
+        "with.",
+    ),
+)
+
+
+def summary_section(results: Path, readme_dir: Path) -> str:
+    """The README's section: the run in one line, links to the report, one compact table per
+    study (those whose files are there), each with a link to its full section."""
+    results = Path(results)
+    rel = Path(os.path.relpath(results, readme_dir)).as_posix()
+    record = _record(results)
+    report_path = results / REPORT
+    report = report_path.read_text() if report_path.is_file() else report_markdown(results)
+    git, wall = record.get("git", {}), record.get("wall_s", {})
+    run = f"From the files in `{rel}/`"
+    if record:
+        run += (
+            f": {'a cold' if is_cold(record) else 'a warm'} run at commit "
+            f"`{str(git.get('commit', '?'))[:10]}` on {str(record.get('created', '?'))[:10]}, "
+            f"{wall.get('total', float('nan')):.0f} s"
+        )
+        if wall:
+            run += f" ([stage times]({rel}/{REPORT}{_anchor(report, 'Stage times')}))"
+    run += (
+        f". The full report — every table, figure, interval and verdict — is "
+        f"[{rel}/{REPORT}]({rel}/{REPORT}); [{rel}/{SITE}]({rel}/{SITE}) is the same page with "
+        "sortable tables (open it in a browser)."
+    )
+    out = [run, ""]
+    for lead, build, heading, caption in SUMMARIES:
+        table = _guarded(lead, lambda build=build: build(results), results)
+        if not table:
+            continue
+        link = f"{rel}/{REPORT}{_anchor(report, heading)}"
+        out += [f"**{lead}** ([full]({link})). {caption}", "", *table, ""]
+    return "\n".join(out).strip()
 
 
 def update_readme(readme: Path, results: Path) -> bool:
@@ -506,6 +860,41 @@ def update_readme(readme: Path, results: Path) -> bool:
         return False
     head, rest = text.split(BEGIN, 1)
     _, tail = rest.split(END, 1)
-    body = results_section(Path(results), readme.parent)
+    body = summary_section(Path(results), readme.parent)
     write_text(readme, f"{head}{BEGIN}\n{body}\n{END}{tail}")
     return True
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m eval.readme_results",
+        description="Write the results report (README.md, index.html) and the README's results "
+        "section again from a results folder's files, recomputing nothing.",
+    )
+    parser.add_argument("--results", type=Path, default=ROOT / "results", help="default: results/")
+    parser.add_argument(
+        "--readme",
+        type=Path,
+        default=None,
+        help="README whose results section to rewrite (default: the repository's README.md "
+        "when --results is the repository's results/, else none)",
+    )
+    args = parser.parse_args(argv)
+    if not args.results.is_dir():
+        parser.error(f"{args.results}: no such folder")
+    for path in write_report(args.results):
+        print(f"wrote {path}")
+    readme = args.readme
+    if readme is None and args.results.resolve() == (ROOT / "results").resolve():
+        readme = ROOT / "README.md"
+    if readme is not None:
+        if update_readme(readme, args.results):
+            print(f"rewrote the results section of {readme}")
+        else:
+            print(f"{readme}: no {BEGIN} … {END} markers; left alone")
+    return 0
+
+
+if __name__ == "__main__":
+    logging.basicConfig(level=logging.WARNING, format="%(levelname)s: %(message)s")
+    raise SystemExit(main())

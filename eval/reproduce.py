@@ -52,7 +52,7 @@ from eval.core.executor import add_scheduler_argument, make_executor
 from eval.core.result_files import write_csv
 from eval.core.runner import Runner
 from eval.protocol.variants import PAPER_OPTIONS
-from eval.readme_results import update_readme
+from eval.readme_results import update_readme, write_report
 from eval.report.figures import render_all
 from eval.report.run_record import (
     COLD_RECORD,
@@ -677,6 +677,8 @@ def main(argv: list[str] | None = None) -> int:
     log.info("run record: %s", record)
     if keep_cold_record(out, json.loads(record.read_text())):
         log.info("cold stage times: %s", out / COLD_RECORD)
+    for path in write_report(out):  # the report: out/README.md, out/index.html
+        log.info("report written: %s", path)
     if out.resolve() == (ROOT / "results").resolve() and update_readme(ROOT / "README.md", out):
         log.info("README.md results section rewritten from %s", out)
     print()

@@ -1,8 +1,20 @@
-"""The README's results section is written from a results directory, between its markers only."""
+"""The report (``results/README.md``, ``index.html``) and the README's results section are
+written from a results directory — the README between its markers only — and a folder with
+missing or unreadable files still gets both."""
 
 import json
 
-from eval.readme_results import BEGIN, END, update_readme
+import pandas as pd
+
+from eval.readme_results import (
+    BEGIN,
+    END,
+    main,
+    report_markdown,
+    summary_section,
+    update_readme,
+    write_report,
+)
 
 
 def test_results_section_replaces_only_the_marked_part(tmp_path):
@@ -28,8 +40,18 @@ def test_results_section_replaces_only_the_marked_part(tmp_path):
     text = readme.read_text()
     assert text.startswith("# title\n\nbefore\n") and text.endswith(f"{END}\nafter\n")
     assert "old numbers" not in text
-    assert "| Maximin | 61.2 ± 0.3 |" in text and "abcdef1234" in text
-    assert "](results/fig4.png)" in text and "0, 0.01" in text and "wall time 30 s" in text
+    assert (
+        "abcdef1234" in text and "](results/README.md)" in text and "](results/index.html)" in text
+    )
+    assert "| Maximin | 61.2 ± 0.3 |" not in text  # the full tables are the report's
+
+    report, site = write_report(results)
+    assert report == results / "README.md" and site == results / "index.html"
+    full = report.read_text()
+    assert "| Maximin | 61.2 ± 0.3 |" in full and "abcdef1234" in full
+    assert "](./fig4.png)" in full and "0, 0.01" in full and "wall time 30 s" in full
+    assert "### Stage times" in full and "| evaluate | 20 | | |" in full.replace("  ", " ")
+    assert "<td>Maximin</td>" in site.read_text() and "61.2 ± 0.3" in site.read_text()
 
 
 def test_readme_without_markers_is_left_alone(tmp_path):
@@ -93,10 +115,7 @@ def test_agreement_is_written_from_the_tables(tmp_path):
             | {"share_ci_high": None, "significant": False},
         ]
     ).to_csv(results / "crossovers.csv", index=False)
-    readme = tmp_path / "README.md"
-    readme.write_text(f"{BEGIN}\n{END}\n")
-    assert update_readme(readme, results)
-    text = readme.read_text()
+    text = report_markdown(results)
     assert "### Regime of each dataset" in text and "| CAD | 17.0 | 4.8 | 71 % | 33 % |" in text
     assert "| CAD | MOS | -5.0 [-9.5, +1.2] |" in text  # the paired-differences table
     assert "maximin ranks 2 of 3 of the paper's methods by F1" in text
@@ -106,6 +125,57 @@ def test_agreement_is_written_from_the_tables(tmp_path):
     assert "maximin leads MOS below 35 % non-covisible (95 % interval 30–41 %) and trails" in text
     assert "no crossover with RRWHM that its interval supports" in text
     assert "RRWHM below" not in text
+
+    readme = tmp_path / "README.md"
+    readme.write_text(f"{BEGIN}\n{END}\n")
+    assert update_readme(readme, results)
+    compact = readme.read_text()
+    # Table I in one row per dataset: maximin, its rank, the strongest rival and the difference
+    assert "| CAD | 40.0 | 2 of 3 | MOS 45.0 | -5.0 [-9.5, +1.2] | MOS 45.0 |" in compact
+    assert "(results/README.md#table-i)" in compact
+    assert "maximin ranks" not in compact
+
+
+def test_a_part_whose_files_cannot_be_read_is_replaced_not_fatal(tmp_path):
+    """A study file in another format: its part says so and shows the run's own table; the rest
+    of the report and the README's other tables are written."""
+    results = tmp_path / "results"
+    results.mkdir()
+    (results / "table1.md").write_text("| Method | F1 |\n|---|---|\n| Maximin | 40.0 |\n")
+    (results / "table_v2x.md").write_text("| Preset | Matcher |\n|---|---|\n| exact | sm |\n")
+    pd.DataFrame([{"matcher": "sm", "preset": "exact"}]).to_csv(
+        results / "table_v2x.csv", index=False
+    )  # no metric columns at all
+    (results / "run_record.json").write_text("{not json")
+    text = report_markdown(results)
+    assert "### The V2X task" in text and "could not be summarised" in text
+    assert "| exact | sm |" in text and "| Maximin | 40.0 |" in text
+    assert "wall time" not in text  # no readable run record: no run part
+    readme = tmp_path / "README.md"
+    readme.write_text(f"{BEGIN}\n{END}\n")
+    assert update_readme(readme, results)
+    assert "V2X" not in readme.read_text()  # no compact table without F1
+
+
+def test_an_empty_results_folder_gets_a_report(tmp_path):
+    tmp_path = tmp_path / "results"
+    tmp_path.mkdir()
+    report, site = write_report(tmp_path)
+    assert report.read_text().startswith("# cadsim results")
+    assert site.read_text().startswith("<!DOCTYPE html>")
+    assert "results/README.md" in summary_section(tmp_path, tmp_path.parent)
+
+
+def test_the_command_rewrites_report_and_readme_from_the_files(tmp_path, capsys):
+    results = tmp_path / "results"
+    results.mkdir()
+    (results / "table1.md").write_text("| Method | F1 |\n|---|---|\n| Maximin | 40.0 |\n")
+    readme = tmp_path / "README.md"
+    readme.write_text(f"# x\n{BEGIN}\n{END}\n")
+    assert main(["--results", str(results), "--readme", str(readme)]) == 0
+    assert (results / "README.md").is_file() and (results / "index.html").is_file()
+    assert "(results/README.md)" in readme.read_text()
+    assert "rewrote the results section" in capsys.readouterr().out
 
 
 def test_a_warm_run_keeps_the_last_cold_runs_stage_times(tmp_path):

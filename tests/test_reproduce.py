@@ -52,6 +52,8 @@ OUTPUTS = (
     "fig_multiagent.png",
     "table_transfer.md",
     "table_transfer.csv",
+    "README.md",  # the report, and the same page in HTML
+    "index.html",
 )
 MATCHERS = ["maximin", "none", "sm"]
 
@@ -72,6 +74,7 @@ def test_tiny_reproduce_writes_every_output_and_reruns_from_cache(tmp_path, caps
 
     for name in OUTPUTS:
         assert (out / name).is_file() and (out / name).stat().st_size > 0, name
+    assert "could not be summarised" not in (out / "README.md").read_text()  # every part read
     labels = [d["label"] for d in json.loads((out / "run_record.json").read_text())["datasets"]]
     expected = [
         label

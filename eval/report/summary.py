@@ -1,0 +1,245 @@
+"""The headline results as one compact Markdown table per study, for the README's first page
+(the full tables are in the report, ``results/README.md``). Every function reads the study's CSV
+from a results directory and returns the table's lines, or ``[]`` when the file is missing or
+lacks what the table needs: a results folder written by another version of the code shortens
+the page, it never stops it being written.
+
+Nothing here picks a "best" matcher for a study whose protocol chooses on validation: the V2X,
+multi-agent and transfer tables show fixed columns (matchers, fusions, models), and the report's
+own verdict lines stay in the report.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+from eval.report.tables import PAPER_NAMES, dataset_order, method_name
+
+# The V2X matchers shown (those present in the table): the paper's method and the strongest
+# families without and with the localisation prior.
+V2X_MATCHERS = ("maximin", "mos", "freealign", "maximin_pose", "pose_refine")
+NOISE_MATCHERS = ("maximin", "mos", "rrwhm")
+
+
+def read_csv(path: Path) -> pd.DataFrame | None:
+    """The CSV at ``path`` (empty strings as missing), or None when it is absent or unreadable."""
+    if not path.is_file():
+        return None
+    try:
+        return pd.read_csv(path, keep_default_na=False, na_values=[""])
+    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError):
+        return None
+
+
+def _has(table: pd.DataFrame | None, *columns: str) -> bool:
+    return table is not None and len(table) > 0 and set(columns) <= set(table.columns)
+
+
+def pct(value: object, digits: int = 1) -> str:
+    """A fraction in percent; "–" when missing."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        return "–"
+    return "–" if pd.isna(number) else f"{100 * number:.{digits}f}"
+
+
+def _ordinal(rank: int) -> str:
+    return f"{rank}{'th' if 10 <= rank % 100 <= 20 else {1: 'st', 2: 'nd', 3: 'rd'}.get(rank % 10, 'th')}"
+
+
+def _row(cells: list[str]) -> str:
+    return "| " + " | ".join(cells) + " |"
+
+
+def table1(results: Path) -> list[str]:
+    """Per dataset: maximin's F1 and rank among the paper's methods (the paper's own rank of it
+    by accuracy beside), the strongest other paper method and maximin − it with its interval, and
+    the strongest matcher of all."""
+    results = Path(results)
+    table = read_csv(results / "table1.csv")
+    if not _has(table, "dataset", "matcher", "f1_mean"):
+        return []
+    paired = read_csv(results / "paired_differences.csv")
+    lines = [
+        "| Dataset | Maximin F1 | its rank of the paper's 8 (paper's) | best other paper method "
+        "| Maximin − it, F1 [95 % CI] | best of all matchers |",
+        "|:---|---:|---:|:---|---:|:---|",
+    ]
+    for dataset in sorted(table["dataset"].unique(), key=dataset_order):
+        rows = table[table["dataset"] == dataset].set_index("matcher")
+        paper = rows[rows.index.isin(list(PAPER_NAMES))].sort_values("f1_mean", ascending=False)
+        if "maximin" not in paper.index:
+            continue
+        ranks = list(paper.index)
+        rank = f"{ranks.index('maximin') + 1} of {len(ranks)}"
+        if "paper_accuracy_mean" in paper.columns and paper["paper_accuracy_mean"].notna().any():
+            by_paper = paper["paper_accuracy_mean"].dropna().sort_values(ascending=False)
+            if "maximin" in by_paper.index:
+                rank += f" ({list(by_paper.index).index('maximin') + 1})"
+        rivals = [m for m in ranks if m != "maximin"]
+        rival = rivals[0] if rivals else None
+        interval = "–"
+        if rival and _has(paired, "dataset", "matcher_b", "metric", "diff", "ci_low", "ci_high"):
+            hit = paired[
+                (paired["dataset"] == dataset)
+                & (paired["matcher_b"] == rival)
+                & (paired["metric"] == "f1")
+            ]
+            if len(hit):
+                r = hit.iloc[0]
+                interval = (
+                    f"{100 * r['diff']:+.1f} [{100 * r['ci_low']:+.1f}, {100 * r['ci_high']:+.1f}]"
+                )
+        best = rows["f1_mean"].idxmax()
+        lines.append(
+            _row(
+                [
+                    dataset,
+                    pct(paper.loc["maximin", "f1_mean"]),
+                    rank,
+                    f"{method_name(rival)} {pct(paper.loc[rival, 'f1_mean'])}" if rival else "–",
+                    interval,
+                    f"{method_name(best)} {pct(rows.loc[best, 'f1_mean'])}",
+                ]
+            )
+        )
+    return lines if len(lines) > 2 else []
+
+
+def noise(results: Path) -> list[str]:
+    """Per swept dataset: F1 of maximin and its two rivals at the lowest and the highest noise
+    rate, and the F1 leader at each end."""
+    runs = read_csv(Path(results) / "noise_runs.csv")
+    if not _has(runs, "dataset", "matcher", "noise_rate", "f1"):
+        return []
+    rates = sorted(runs["noise_rate"].unique())
+    if len(rates) < 2:
+        return []
+    lo, hi = rates[0], rates[-1]
+    shown = [m for m in NOISE_MATCHERS if m in set(runs["matcher"])]
+    lines = [
+        "| Dataset | "
+        + " | ".join(f"{method_name(m)} F1, {lo:g} → {hi:g}" for m in shown)
+        + f" | F1 leader at {lo:g} | at {hi:g} |",
+        "|:---|" + "---:|" * len(shown) + ":---|:---|",
+    ]
+    for dataset, rows in runs.groupby("dataset", sort=False):
+        means = rows[rows["matcher"] != "none"].groupby(["noise_rate", "matcher"])["f1"].mean()
+        cells = [f"{pct(means.get((lo, m)))} → {pct(means.get((hi, m)))}" for m in shown]
+        leaders = [
+            method_name(str(means.loc[r].idxmax())) if r in means.index else "–" for r in (lo, hi)
+        ]
+        lines.append(_row([str(dataset), *cells, *leaders]))
+    return lines
+
+
+def external(results: Path, top: int = 2) -> list[str]:
+    """The external DMGM pairs: the strongest matchers without and with the prior (pooled F1,
+    as the full table sorts them), maximin's rows and the published DMGM figure."""
+    table = read_csv(Path(results) / "table_external.csv")
+    if not _has(table, "matcher", "method", "uses_prior", "f1_pooled_mean"):
+        return []
+    table = table.assign(prior=table["uses_prior"].astype(str).str.lower() == "true")
+    source = table["source"].astype(str) if "source" in table.columns else None
+    ours = table if source is None else table[source == "ours"]
+    ours = ours[ours["matcher"] != "none"]
+    picked = []
+    for prior in (False, True):
+        rows = ours[ours["prior"] == prior].sort_values("f1_pooled_mean", ascending=False)
+        names = list(rows["matcher"][:top])
+        names += [m for m in ("maximin", "maximin_pose") if m in set(rows["matcher"])]
+        picked += [rows[rows["matcher"] == m].iloc[0] for m in dict.fromkeys(names)]
+    lines = ["| Method | prior | pooled F1 | F1 per pair |", "|:---|:---|---:|---:|"]
+    lines += [
+        _row(
+            [
+                method_name(str(r["matcher"])),
+                "yes" if r["prior"] else "no",
+                pct(r["f1_pooled_mean"]),
+                pct(r.get("f1_mean")),
+            ]
+        )
+        for r in picked
+    ]
+    if source is not None:
+        for _, r in table[source.str.startswith("published")].iterrows():
+            note = str(r["source"]).removeprefix("published").strip(" ()")
+            name = f"{r['method']}" + (f", {note}" if note else "")
+            lines.append(_row([name, "yes", pct(r["f1_pooled_mean"]), "–"]))
+    return lines if len(lines) > 2 else []
+
+
+def v2x(results: Path) -> list[str]:
+    """CAD-V2X: F1 per localisation preset of a fixed set of matchers."""
+    table = read_csv(Path(results) / "table_v2x.csv")
+    if not _has(table, "matcher", "preset", "f1_mean"):
+        return []
+    shown = [m for m in V2X_MATCHERS if m in set(table["matcher"])]
+    if not shown:
+        return []
+    f1 = table.drop_duplicates(["preset", "matcher"]).set_index(["preset", "matcher"])["f1_mean"]
+    lines = [
+        "| Preset | " + " | ".join(method_name(m) for m in shown) + " |",
+        "|:---|" + "---:|" * len(shown),
+    ]
+    for preset in dict.fromkeys(table["preset"]):
+        lines.append(_row([str(preset), *(pct(f1.get((preset, m))) for m in shown)]))
+    return lines
+
+
+def multiagent(results: Path, preset: str = "gnss-urban") -> list[str]:
+    """CAD-multi at the largest number of agents (under ``preset`` when it was run): pooled
+    pairwise F1 of every two-view matcher under every fusion."""
+    table = read_csv(Path(results) / "table_multiagent.csv")
+    if not _has(table, "n_agents", "matcher", "fusion", "preset", "f1_pooled"):
+        return []
+    high = table["n_agents"].max()
+    rows = table[table["n_agents"] == high]
+    if preset in set(rows["preset"]):
+        rows = rows[rows["preset"] == preset]
+    else:
+        rows = rows[rows["preset"] == rows["preset"].iloc[0]]
+    fusions = list(dict.fromkeys(sorted(rows["fusion"], key=lambda f: (f != "independent", f))))
+    f1 = rows.drop_duplicates(["matcher", "fusion"]).set_index(["matcher", "fusion"])["f1_pooled"]
+    lines = [
+        f"| Matcher (N = {high}, {rows['preset'].iloc[0]}) | " + " | ".join(fusions) + " |",
+        "|:---|" + "---:|" * len(fusions),
+    ]
+    for matcher in dict.fromkeys(rows["matcher"]):
+        lines.append(
+            _row([method_name(str(matcher)), *(pct(f1.get((matcher, f))) for f in fusions)])
+        )
+    return lines
+
+
+def transfer(results: Path) -> list[str]:
+    """Learned matchers on the external test set (DMGM's when present): pooled F1 per training
+    set and matcher, the hand-crafted reference the study compares each matcher with below."""
+    table = read_csv(Path(results) / "table_transfer.csv")
+    if not _has(table, "train", "test", "matcher", "f1_pooled"):
+        return []
+    tests = list(dict.fromkeys(table["test"]))
+    test = next((t for t in tests if str(t).startswith("DMGM")), tests[0])
+    rows = table[table["test"] == test]
+    matchers = list(dict.fromkeys(rows["matcher"]))
+    f1 = rows.drop_duplicates(["train", "matcher"]).set_index(["train", "matcher"])["f1_pooled"]
+    lines = [
+        f"| Trained on (tested on {test}) | " + " | ".join(matchers) + " |",
+        "|:---|" + "---:|" * len(matchers),
+    ]
+    for train in dict.fromkeys(rows["train"]):
+        lines.append(_row([str(train), *(pct(f1.get((train, m))) for m in matchers)]))
+    if _has(rows, "handcrafted", "handcrafted_f1_pooled"):
+        cells = []
+        for m in matchers:
+            ref = rows[(rows["matcher"] == m) & rows["handcrafted"].notna()]
+            cells.append(
+                f"{ref['handcrafted'].iloc[0]} {pct(ref['handcrafted_f1_pooled'].iloc[0])}"
+                if len(ref)
+                else "–"
+            )
+        lines.append(_row(["*hand-crafted reference*", *cells]))
+    return lines
