@@ -334,7 +334,7 @@ class FramePair:
             if kind == "roadside":  # a surveyed pole: its pose is exact
                 errors.append(PoseError(0.0, 0.0, 0.0))
             elif model is None:
-                errors.append(PoseError.draw(config, np.random.default_rng(seed)))
+                errors.append(config.draw_error(np.random.default_rng(seed)))
             else:
                 episode_seed = seeds[2] if len(seeds) > 2 else self.sim_seed
                 when = self.time - (latency if k else 0.0)
