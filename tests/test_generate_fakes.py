@@ -18,7 +18,7 @@ import numpy as np
 from cadsim.camera import Camera
 from cadsim.generation.pipeline import Stages
 from cadsim.render.view import RenderedView
-from cadsim.sources.base import ObserverPair, TrafficSource
+from cadsim.sources.base import ObserverPair, ObserverSet, TrafficSource
 from cadsim.world import Snapshot, WorldObject
 
 FAKE_STAGES = Stages(
@@ -116,6 +116,24 @@ class FakeSource(TrafficSource):
         )
         swapped = ObserverPair(towards.camera2, towards.camera1, "obs2", "obs1", {"junction": "J0"})
         return [away, towards, swapped]
+
+    def observer_sets(self, snapshot: Snapshot) -> list[ObserverSet]:
+        """N views (``observers`` ``count`` <= 2 vehicles, then ``roadside_units`` <= 2): the
+        two vehicles facing the scene, and roadside units 3 m up on the other two sides."""
+        count = int(self.scenario.observers.get("count", 2))
+        units = int(self.scenario.observers.get("roadside_units", 0))
+        towards = self.observer_pairs(snapshot)[1]
+        cam = self.scenario.camera
+        size = {k: cam[k] for k in ("width", "height", "hfov_deg")}
+        vehicles = [(towards.camera1, "obs1"), (towards.camera2, "obs2")][:count]
+        poles = [
+            (Camera((30.0, 0.0, 3.0), np.pi, **size), "rsu:J0:0"),
+            (Camera((0.0, 30.0, 3.0), -np.pi / 2, **size), "rsu:J0:1"),
+        ][:units]
+        views = vehicles + poles
+        kinds = ("vehicle",) * len(vehicles) + ("roadside",) * len(poles)
+        cameras, ids = tuple(c for c, _ in views), tuple(i for _, i in views)
+        return [ObserverSet(cameras, ids, kinds, {"junction": "J0"})]
 
 
 def make_source(scenario, seed: int, workdir: Path) -> FakeSource:

@@ -1,5 +1,7 @@
 """The packages' import graph has no cycle, counting imports inside functions (a lazy import that
-points back is still a cycle); only ``if TYPE_CHECKING:`` blocks are left out."""
+points back is still a cycle) and imports under ``if TYPE_CHECKING:`` (an annotation that points
+back is a dependency too: the two modules still need each other to be understood). Some tests
+below read the runtime graph, which leaves ``TYPE_CHECKING`` blocks out."""
 
 from __future__ import annotations
 
@@ -29,12 +31,12 @@ def _is_type_checking(node: ast.If) -> bool:
     )
 
 
-def _imports(tree: ast.AST):
-    """Every Import/ImportFrom node, skipping ``if TYPE_CHECKING:`` bodies."""
+def _imports(tree: ast.AST, type_checking: bool = False):
+    """Every Import/ImportFrom node; ``if TYPE_CHECKING:`` bodies only with ``type_checking``."""
     stack = [tree]
     while stack:
         node = stack.pop()
-        if isinstance(node, ast.If) and _is_type_checking(node):
+        if not type_checking and isinstance(node, ast.If) and _is_type_checking(node):
             stack.extend(node.orelse)
             continue
         if isinstance(node, ast.Import | ast.ImportFrom):
@@ -42,14 +44,15 @@ def _imports(tree: ast.AST):
         stack.extend(ast.iter_child_nodes(node))
 
 
-def import_graph() -> dict[str, set[str]]:
-    """module -> the project modules it imports (``from pkg import sub`` counts as ``pkg.sub``)."""
+def import_graph(type_checking: bool = False) -> dict[str, set[str]]:
+    """module -> the project modules it imports (``from pkg import sub`` counts as ``pkg.sub``);
+    with ``type_checking``, imports under ``if TYPE_CHECKING:`` count too."""
     modules = _modules()
     graph: dict[str, set[str]] = {}
     for name, path in modules.items():
         is_package = path.name == "__init__.py"
         deps: set[str] = set()
-        for node in _imports(ast.parse(path.read_text(), str(path))):
+        for node in _imports(ast.parse(path.read_text(), str(path)), type_checking):
             if isinstance(node, ast.Import):
                 targets = [alias.name for alias in node.names]
             else:
@@ -90,9 +93,66 @@ def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
     return None
 
 
+# Cycles known and not yet resolved (none: reader <-> multi_view and localisation -> gnss_error
+# -> pose_error -> localisation were, issue 40). Shrink it; never grow it.
+KNOWN_CYCLES: set[frozenset[str]] = set()
+
+
+def _cycles(graph: dict[str, set[str]]) -> set[frozenset[str]]:
+    """The modules of each strongly connected component of more than one module (or a
+    self-import): every set of modules that import each other in a circle."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    found = set()
+    for root in sorted(graph):
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        while work:
+            node, children = work[-1]
+            child = next(children, None)
+            if child is None:
+                work.pop()
+                if work:
+                    low[work[-1][0]] = min(low[work[-1][0]], low[node])
+                if low[node] == index[node]:
+                    members = set()
+                    while True:
+                        member = stack.pop()
+                        members.add(member)
+                        if member == node:
+                            break
+                    if len(members) > 1 or node in graph[node]:
+                        found.add(frozenset(members))
+            elif child not in index:
+                index[child] = low[child] = len(index)
+                stack.append(child)
+                work.append((child, iter(sorted(graph[child]))))
+            elif child in stack:
+                low[node] = min(low[node], index[child])
+    return found
+
+
 def test_no_import_cycles():
     cycle = find_cycle(import_graph())
     assert cycle is None, "import cycle: " + " -> ".join(cycle)
+
+
+def test_no_import_cycles_through_type_checking_imports_either():
+    graph = import_graph(type_checking=True)
+    new = _cycles(graph) - KNOWN_CYCLES
+    assert not new, "import cycles: " + "; ".join(" <-> ".join(sorted(c)) for c in new)
+    assert not KNOWN_CYCLES - _cycles(graph), "a known cycle is gone: remove it from KNOWN_CYCLES"
+
+
+def test_cycle_finder_sees_an_annotation_that_points_back():
+    assert _cycles({"a": {"b"}, "b": {"a"}, "c": {"a"}}) == {frozenset("ab")}
+    assert _cycles({"a": {"b"}, "b": set()}) == set()
+    tree = ast.parse("if TYPE_CHECKING:\n    import cadsim.world\n")
+    assert [n.names[0].name for n in _imports(tree, type_checking=True)] == ["cadsim.world"]
 
 
 def test_detector_finds_a_lazy_cycle():

@@ -78,23 +78,23 @@ def test_table_is_validated_like_every_key(tmp_path):
 def test_pose_error_is_seeded_rigid_and_scales_with_sigma():
     world = np.random.default_rng(3).normal(0, 20, (9, 3))
     pivot = np.array([5.0, -2.0, 1.6])
-    one = PoseError.draw(LocalisationConfig(1.0, 0.5), np.random.default_rng(7))
-    same = PoseError.draw(LocalisationConfig(1.0, 0.5), np.random.default_rng(7))
-    other = PoseError.draw(LocalisationConfig(1.0, 0.5), np.random.default_rng(8))
-    assert one == same and one != other
-    two = PoseError.draw(LocalisationConfig(2.0, 1.0), np.random.default_rng(7))
+    one = LocalisationConfig(1.0, 0.5).draw_error(np.random.default_rng(7))
+    same = LocalisationConfig(1.0, 0.5).draw_error(np.random.default_rng(7))
+    other = LocalisationConfig(1.0, 0.5).draw_error(np.random.default_rng(8))
+    assert isinstance(one, PoseError) and one == same and one != other
+    two = LocalisationConfig(2.0, 1.0).draw_error(np.random.default_rng(7))
     assert (two.dx, two.dy, two.dyaw) == pytest.approx((2 * one.dx, 2 * one.dy, 2 * one.dyaw))
     moved = perturbed_world(world, pivot, one)
     np.testing.assert_allclose(pdist(moved), pdist(world))  # one rigid transform per view
     np.testing.assert_array_equal(moved[:, 2], world[:, 2])  # height untouched
     # Yaw-free errors: the shift is exactly (dx, dy), and twice the sigma moves twice as far.
-    flat1 = PoseError.draw(LocalisationConfig(1.0, 0.0), np.random.default_rng(7))
-    flat2 = PoseError.draw(LocalisationConfig(2.0, 0.0), np.random.default_rng(7))
+    flat1 = LocalisationConfig(1.0, 0.0).draw_error(np.random.default_rng(7))
+    flat2 = LocalisationConfig(2.0, 0.0).draw_error(np.random.default_rng(7))
     d1 = perturbed_world(world, pivot, flat1) - world
     d2 = perturbed_world(world, pivot, flat2) - world
     np.testing.assert_allclose(d1[:, :2], np.broadcast_to([flat1.dx, flat1.dy], (9, 2)))
     np.testing.assert_allclose(d2, 2 * d1)
-    zero = PoseError.draw(LocalisationConfig(0.0, 0.0), np.random.default_rng(7))
+    zero = LocalisationConfig(0.0, 0.0).draw_error(np.random.default_rng(7))
     np.testing.assert_array_equal(perturbed_world(world, pivot, zero), world)
 
 

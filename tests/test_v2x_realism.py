@@ -261,15 +261,15 @@ def test_appearance_realism_makes_matched_pairs_look_less_alike(v2x_pair):
 
 
 def test_a_version_2_dataset_is_read_but_refused_under_a_latency_preset(v2x_pair, tmp_path):
+    from dataset_forgery import as_older_version
+
     from cadsim.dataset import Dataset
     from eval.studies.evaluation import open_entry
 
     old = tmp_path / "old"
     shutil.copytree(v2x_pair["plain"], old)
-    manifest = json.loads((old / "manifest.json").read_text())
-    manifest["format_version"] = 2
-    (old / "manifest.json").write_text(json.dumps(manifest))
-    assert len(Dataset(old)) == 3
+    as_older_version(old, 2)  # as version 2 stored it: a forged number alone is refused
+    assert len(Dataset(old, verify=True)) == 3
     open_entry(old, None, localisation="gnss-open-sky")  # no latency: read
     with pytest.raises(ValueError) as info:
         open_entry(old, None, localisation="gnss-urban")

@@ -5,6 +5,8 @@ Reading (needs neither SUMO nor pyrender)::
     from cadsim.dataset import Dataset
 
     ds = Dataset("data/cad")          # len(ds), ds[k], iteration, ds.manifest, ds.checksum
+    ds = Dataset("data/cad", verify=True)   # every record and view checked (dataset.verification)
+    ds.snapshot(k).pair(i, j)         # an N-view record's views i and j (dataset.multi_view)
     pair = ds[0]
     pair.view1.positions              # (n, 3) metres, view 1's camera frame (x right, y down, z fwd)
     pair.view1.features               # (n, d) float32; also .boxes .object_ids .true_classes .reported_classes .pixels

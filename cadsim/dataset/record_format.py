@@ -48,6 +48,9 @@ from cadsim.world import WorldObject
 FORMAT_VERSION = 5
 MULTI_VIEW_FORMAT = 6
 READABLE_VERSIONS = (2, 3, 4, 5, 6)
+MULTI_VIEW_VERSIONS = (4, MULTI_VIEW_FORMAT)  # N-view snapshots; the other versions: frame pairs
+TRUE_CLASS_VERSION = 5  # from 5 on: view{k}_true_classes (+ reported_classes), not view{k}_classes
+OBSERVER_KINDS = ("vehicle", "roadside")  # an N-view record's observers[].kind
 
 
 @dataclass(frozen=True, eq=False)

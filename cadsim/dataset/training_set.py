@@ -47,8 +47,8 @@ def training_examples(
 
 
 def dataset_records(folder: str | Path) -> set[str]:
-    """Checksums of every record of the dataset at ``folder``."""
-    return {pair.checksum for pair in Dataset(folder)}
+    """Checksums of every record of the dataset at ``folder`` (verified first)."""
+    return {pair.checksum for pair in Dataset(folder, verify=True)}
 
 
 def overlapping_records(trained_on: set[str], dirs: Iterable[str | Path]) -> dict[str, int]:

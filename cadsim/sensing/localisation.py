@@ -12,7 +12,8 @@ so the error of a whole view is one rigid ground-plane transform, as with a real
 height is not perturbed. The standard-normal draws are scaled by the sigmas, so for one seed a
 sweep over sigma scales the same error (common random numbers), and sigma 0 gives the true pose.
 
-Imports numpy only; the reader (``cadsim.dataset.reader``) seeds and applies it at read time, so a
+:meth:`LocalisationConfig.draw_error` draws it (a :class:`~cadsim.sensing.pose_error.PoseError`,
+which :func:`~cadsim.sensing.pose_error.perturbed_world` applies). Imports numpy only; the reader (``cadsim.dataset.reader``) seeds and applies it at read time, so a
 sweep over localisation error never re-renders.
 """
 
@@ -21,8 +22,11 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+import numpy as np
+
 from cadsim.config_tables import check_number, config_from_table
 from cadsim.sensing.gnss_error import model_of, parse_spec
+from cadsim.sensing.pose_error import PoseError
 
 MIN_STATED_SIGMA_M = 0.5
 """Floor of the prior's stated uncertainty (``Problem.world_sigma``), metres. With an exact pose
@@ -75,6 +79,13 @@ class LocalisationConfig:
     def latency_s(self) -> float:
         """Age of the other vehicle's message, seconds (the preset's; 0 without a preset)."""
         return 0.0 if self.preset is None else model_of(self.preset).latency_ms / 1000.0
+
+    def draw_error(self, rng: np.random.Generator) -> PoseError:
+        """One view's pose error under the i.i.d. model (module docstring): three standard
+        normals from ``rng`` (always three, whatever the sigmas), scaled by the sigmas."""
+        z = rng.standard_normal(3)
+        s = float(self.position_sigma_m)
+        return PoseError(s * z[0], s * z[1], np.radians(float(self.yaw_sigma_deg)) * z[2])
 
     def as_record(self) -> dict:
         """The ``prior`` fields a record stores (``preset`` only when one is set, so records of

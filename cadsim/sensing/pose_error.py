@@ -2,19 +2,16 @@
 
 A pose error is one rigid ground-plane transform per view: a heading error dyaw (radians, about
 the vertical through the observer's body origin) and a translation (dx, dy) in metres. Drawn by
-the i.i.d. model (:mod:`cadsim.sensing.localisation`) or the GNSS-like one
-(:mod:`cadsim.sensing.gnss_error`); applied by :func:`perturbed_world`.
+the i.i.d. model (``LocalisationConfig.draw_error``, :mod:`cadsim.sensing.localisation`) or the
+GNSS-like one (:mod:`cadsim.sensing.gnss_error`); applied by :func:`perturbed_world`. This module
+knows neither model: both import it, it imports numpy only.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from cadsim.sensing.localisation import LocalisationConfig
 
 
 @dataclass(frozen=True)
@@ -24,13 +21,6 @@ class PoseError:
     dx: float
     dy: float
     dyaw: float
-
-    @classmethod
-    def draw(cls, config: LocalisationConfig, rng: np.random.Generator) -> PoseError:
-        """Three standard normals from ``rng`` (always three, whatever the sigmas), scaled."""
-        z = rng.standard_normal(3)
-        s = float(config.position_sigma_m)
-        return cls(s * z[0], s * z[1], np.radians(float(config.yaw_sigma_deg)) * z[2])
 
 
 def perturbed_world(world: np.ndarray, pivot: np.ndarray, error: PoseError) -> np.ndarray:

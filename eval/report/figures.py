@@ -287,10 +287,19 @@ def _line_classes(pred: np.ndarray, gt: np.ndarray) -> tuple[np.ndarray, np.ndar
     return pred[in_gt], pred[~in_gt], gt[~found]
 
 
+def _verified_pair(dataset_dir: str, index: int):
+    """Pair ``index`` of the dataset at ``dataset_dir``, its record verified first (as
+    ``cadsim show`` does: the record drawn is the one its manifest vouches for)."""
+    from cadsim.dataset import Dataset
+
+    dataset = Dataset(dataset_dir)
+    dataset.verify_record(index)
+    return dataset[index]
+
+
 def write_qualitative(out_dir: str | Path) -> list[Path]:
     """The Fig. 3-style figure from ``qualitative.json``; skipped (with a log line) when the
     datasets' images are not on this machine."""
-    from cadsim.dataset import Dataset
     from cadsim.pair_drawing import (
         CORRECT,
         MISSED,
@@ -315,7 +324,7 @@ def write_qualitative(out_dir: str | Path) -> list[Path]:
     if missing:
         log.warning("qualitative figure skipped: datasets not found: %s", ", ".join(missing))
         return []
-    pairs = {d: Dataset(spec[d]["dataset_dir"])[spec[d]["pair"]] for d in datasets}
+    pairs = {d: _verified_pair(spec[d]["dataset_dir"], spec[d]["pair"]) for d in datasets}
     datasets = [d for d in datasets if pairs[d].has_images]  # imported data: no images to draw
     if not datasets:
         return []

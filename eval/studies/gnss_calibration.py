@@ -30,7 +30,7 @@ def match_disagreement(dataset_dirs: Sequence[str | Path], preset: str) -> np.nd
 
     out = []
     for path in dataset_dirs:
-        for pair in Dataset(path):
+        for pair in Dataset(path, verify=True):
             prior = pair.localise_preset(preset, seed=None).prior()
             gt = np.asarray(pair.gt_pairs, dtype=np.int64).reshape(-1, 2)
             if prior is None or not len(gt):

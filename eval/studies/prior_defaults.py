@@ -67,7 +67,7 @@ def derive(runner: Runner, calibration_dir: str | Path | None = None) -> dict:
     choices = tuning.tune_entry(entry, [MatcherSpec(n) for n in PRIOR_MATCHERS], runner)
     from cadsim.dataset import Dataset
 
-    sequences = sorted({f"{p.episode:03d}" for p in Dataset(calibration_dir)})
+    sequences = sorted({f"{p.episode:03d}" for p in Dataset(calibration_dir, verify=True)})
     matchers = {}
     for name in PRIOR_MATCHERS:
         candidates = choices[name].candidates
@@ -118,7 +118,7 @@ def write_sensitivity(out_dir: str | Path, runner: Runner, seed: int = 0) -> pd.
         return grid
     from cadsim.dataset import Dataset
 
-    test = Dataset(TEST_DIR)
+    test = Dataset(TEST_DIR, verify=True)
     labels = [f"{r.matcher}#{r.config}" for r in grid.itertuples()]
     named = {
         label: MatcherSpec.of(r.matcher, **json.loads(r.params))

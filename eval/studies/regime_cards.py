@@ -40,10 +40,10 @@ TITLES = {
 
 
 def regime_of(path: str | Path) -> dict:
-    """The regime fields of the dataset at `path` (``dataset_regime``)."""
+    """The regime fields of the dataset at `path` (``dataset_regime``), verified first."""
     from cadsim.dataset import Dataset, regime
 
-    return regime.dataset_regime(Dataset(path))
+    return regime.dataset_regime(Dataset(path, verify=True))
 
 
 def write_regime(out_dir: str | Path, datasets: Mapping[str, str | Path]) -> Path:

@@ -292,7 +292,7 @@ def _trained_already(path: Path, dirs: Sequence[Path]):
     except ValueError:
         return None
     recorded = [d.get("checksum") for d in model.training.get("datasets", [])]
-    same = recorded == [Dataset(d).checksum for d in dirs]
+    same = recorded == [Dataset(d, verify=True).checksum for d in dirs]
     same = same and model.training.get("params") == PARAMS
     return model if same and model.training.get("rounds") == ROUNDS else None
 
