@@ -419,6 +419,20 @@ def _family(name: str) -> str:
     return "with the prior" if reads_prior(name) else "without a prior"
 
 
+def chosen_row(
+    table: pd.DataFrame, preset: str, validation: Mapping[str, Mapping[str, float]] | None
+) -> tuple[str, pd.Series] | None:
+    """(name, row) of the matcher of ``preset`` with the highest validation F1 (test F1 without
+    validation figures: a table built in memory); None when the preset has no matcher row."""
+    rows = table[(table["preset"] == preset) & ~table["matcher"].isin(REFERENCE_ROWS)]
+    if rows.empty:
+        return None
+    rows = rows.set_index("matcher")
+    val = (validation or {}).get(preset) or {}
+    best = max(rows.index, key=lambda m: val.get(m, -np.inf)) if val else rows["f1_mean"].idxmax()
+    return best, rows.loc[best]
+
+
 def findings(
     table: pd.DataFrame, validation: Mapping[str, Mapping[str, float]] | None = None
 ) -> list[str]:
@@ -427,14 +441,10 @@ def findings(
     out = []
     for preset in [p for p in PRESETS if p in set(table["preset"])]:
         here = table[table["preset"] == preset].set_index("matcher")
-        rows = here.drop(index=[r for r in REFERENCE_ROWS if r in here.index])
-        if rows.empty:
+        found = chosen_row(table, preset, validation)
+        if found is None:
             continue
-        val = (validation or {}).get(preset) or {}
-        best = (
-            max(rows.index, key=lambda m: val.get(m, -np.inf)) if val else rows["f1_mean"].idxmax()
-        )
-        b = rows.loc[best]
+        best, b = found
         oracle = here.loc[ORACLE_ROW] if ORACLE_ROW in here.index else None
         ceiling = (
             f"; the oracle's {_ranged(oracle.success_1m_2deg, oracle.success_low, oracle.success_high)}"
@@ -457,18 +467,7 @@ def goals(
     (:mod:`eval.protocol.goal_verdict`); the method is the one chosen on validation."""
     out = []
 
-    def chosen(preset: str):
-        rows = table[(table["preset"] == preset) & ~table["matcher"].isin(REFERENCE_ROWS)]
-        if rows.empty:
-            return None
-        val = (validation or {}).get(preset) or {}
-        rows = rows.set_index("matcher")
-        best = (
-            max(rows.index, key=lambda m: val.get(m, -np.inf)) if val else rows["f1_mean"].idxmax()
-        )
-        return best, rows.loc[best]
-
-    urban = chosen("gnss-urban")
+    urban = chosen_row(table, "gnss-urban", validation)
     if urban is not None:
         name, row = urban
         out.append(
@@ -491,7 +490,7 @@ def goals(
                 detail=f"`{name}`; {_cell(row.share_of_oracle, digits=0)} % of the oracle's",
             )
         )
-    denied = chosen("denied")
+    denied = chosen_row(table, "denied", validation)
     if denied is not None:
         name, row = denied
         out.append(
