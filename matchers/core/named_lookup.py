@@ -51,9 +51,11 @@ def lookup(
     builtin: Mapping[str, str],
     points: Mapping[str, EntryPoint],
     available: Callable[[], list[str]],
+    families: Mapping[str, Callable[[str], Callable]] | None = None,
 ) -> Callable:
     """The ``kind`` (e.g. "matcher") called ``name``; an entry point, once loaded, is kept in
-    ``registered``. Unknown names and unimportable paths raise ValueError naming them; an entry
+    ``registered``. ``families``: prefix -> resolver for parametrised names ``prefix:rest``
+    (``windowed:sm``), asked before the import-path reading of a name with a colon. Unknown names and unimportable paths raise ValueError naming them; an entry
     point that cannot be loaded or is not callable raises PluginError naming it."""
     if name in registered:
         return registered[name]
@@ -63,6 +65,9 @@ def lookup(
         fn = _load_entry_point(name, kind, points[name])
         registered[name] = fn
         return fn
+    prefix, _, rest = name.partition(":")
+    if families and rest and prefix in families:
+        return families[prefix](rest)
     if ":" in name:  # not added to available(): an import path names itself
         try:
             fn = load(name)

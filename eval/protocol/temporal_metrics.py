@@ -1,0 +1,155 @@
+"""Temporal association metrics for matchers run on sequences (issue 41).
+
+Inputs per frame t: ``pairs[t]`` (k, 2) declared (i, j); ``true1[t]`` (n_t,) and ``true2[t]``
+(m_t,) the true object id of each detection (-1: clutter, no object). The true pairs of a frame
+are the (i, j) with ``true1[i] == true2[j] >= 0``.
+
+* **Association switches** (:func:`association_switches`): a true object o of view 1 matched at
+  t and at t + 1 to detections of *different* view-2 identities (true id; clutter is never the
+  same identity twice) while o and its partner at t are both still visible at t + 1 — counted
+  once per such (o, t), and reported per 100 covisible object-frames (the number of true pairs
+  summed over frames).
+* **Frames to the first correct association** (:func:`frames_to_first_correct`): per object
+  covisible at some frame, the frames from its first covisible frame to the first frame it is
+  correctly matched (0: at once); objects never matched correctly are counted apart.
+* **HOTA** (:func:`hota`), Luiten et al., IJCV 2021, as TrackEval computes it (PyPI ``trackeval``
+  is a fork with opencv and pycocotools as hard dependencies: docs/matchers.md); for a
+  correspondence sequence (:func:`correspondence_hota`) a "ground-truth detection" is a true
+  pair, identified by its object, and a "tracker detection" a declared pair, identified by its
+  pair of own track ids; similarity 1 when the declared pair is a true pair, else 0.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+ALPHAS = np.arange(0.05, 0.99, 0.05)  # TrackEval's 19 localisation thresholds
+_EPS = np.finfo(float).eps
+
+
+def _partner_ids(pairs, true1, true2, t):
+    """dict object id of view 1 -> identity of its view-2 partner at frame t."""
+    out = {}
+    for i, j in np.asarray(pairs, dtype=np.int64).reshape(-1, 2):
+        obj = int(true1[i])
+        if obj < 0:
+            continue
+        other = int(true2[j])
+        out[obj] = other if other >= 0 else ("clutter", t, int(j))
+    return out
+
+
+def association_switches(pairs, true1, true2) -> dict:
+    """``switches``, ``object_frames`` (covisible) and ``per_100`` (module docstring)."""
+    switches, object_frames = 0, 0
+    partners = [
+        _partner_ids(p, a, b, t)
+        for t, (p, a, b) in enumerate(zip(pairs, true1, true2, strict=True))
+    ]
+    for t in range(len(pairs)):
+        object_frames += int(len(np.intersect1d(true1[t][true1[t] >= 0], true2[t][true2[t] >= 0])))
+        if t + 1 == len(pairs):
+            break
+        visible1, visible2 = set(true1[t + 1].tolist()), set(true2[t + 1].tolist())
+        for obj, partner in partners[t].items():
+            later = partners[t + 1].get(obj)
+            stays = obj in visible1 and isinstance(partner, int) and partner in visible2
+            if later is not None and stays and later != partner:
+                switches += 1
+    per_100 = 100.0 * switches / object_frames if object_frames else 0.0
+    return {"switches": switches, "object_frames": object_frames, "per_100": per_100}
+
+
+def frames_to_first_correct(pairs, true1, true2) -> dict:
+    """``per_object`` {object: frames or None}, ``mean`` over those matched (NaN if none),
+    ``never`` (count never matched correctly)."""
+    first_seen: dict[int, int] = {}
+    first_right: dict[int, int] = {}
+    for t, (p, a, b) in enumerate(zip(pairs, true1, true2, strict=True)):
+        for obj in np.intersect1d(a[a >= 0], b[b >= 0]).tolist():
+            first_seen.setdefault(int(obj), t)
+        for i, j in np.asarray(p, dtype=np.int64).reshape(-1, 2):
+            if a[i] >= 0 and a[i] == b[j]:
+                first_right.setdefault(int(a[i]), t)
+    per_object = {
+        o: (first_right[o] - s if o in first_right else None) for o, s in first_seen.items()
+    }
+    got = [v for v in per_object.values() if v is not None]
+    return {
+        "per_object": per_object,
+        "mean": float(np.mean(got)) if got else float("nan"),
+        "never": sum(v is None for v in per_object.values()),
+    }
+
+
+def hota(gt_ids: Sequence, tracker_ids: Sequence, similarity: Sequence) -> dict:
+    """HOTA, DetA, AssA, LocA (means over :data:`ALPHAS`) of one sequence. Per frame t:
+    ``gt_ids[t]`` (g_t,) and ``tracker_ids[t]`` (k_t,) any hashable ids, ``similarity[t]``
+    (g_t, k_t) in [0, 1]. Follows TrackEval's ``HOTA.eval_sequence`` step for step: the global
+    alignment score from similarity-weighted potential matches, a per-frame Hungarian on it
+    times the similarity, then per alpha the matches with similarity >= alpha."""
+    gt_keys = {g: k for k, g in enumerate(dict.fromkeys(x for ids in gt_ids for x in ids))}
+    tr_keys = {g: k for k, g in enumerate(dict.fromkeys(x for ids in tracker_ids for x in ids))}
+    gts = [np.array([gt_keys[x] for x in ids], dtype=np.int64) for ids in gt_ids]
+    trs = [np.array([tr_keys[x] for x in ids], dtype=np.int64) for ids in tracker_ids]
+    sims = [
+        np.asarray(s, dtype=float).reshape(len(g), len(k))
+        for s, g, k in zip(similarity, gts, trs, strict=True)
+    ]
+    n_gt, n_tr = len(gt_keys), len(tr_keys)
+    total_gt, total_tr = sum(map(len, gts)), sum(map(len, trs))
+    if total_gt == 0 or total_tr == 0:
+        empty = {"HOTA": 0.0, "DetA": 0.0, "AssA": 0.0, "LocA": 1.0 if total_gt == 0 else 0.0}
+        return empty
+    potential = np.zeros((n_gt, n_tr))
+    gt_count, tr_count = np.zeros((n_gt, 1)), np.zeros((1, n_tr))
+    for g, k, s in zip(gts, trs, sims, strict=True):
+        denom = s.sum(0)[None, :] + s.sum(1)[:, None] - s
+        iou = np.where(denom > _EPS, s / np.where(denom > _EPS, denom, 1.0), 0.0)
+        potential[g[:, None], k[None, :]] += iou
+        gt_count[g] += 1
+        tr_count[0, k] += 1
+    alignment = potential / (gt_count + tr_count - potential)
+    tp, fn, fp, loc = (np.zeros(len(ALPHAS)) for _ in range(4))
+    matches = np.zeros((len(ALPHAS), n_gt, n_tr))
+    for g, k, s in zip(gts, trs, sims, strict=True):
+        if not len(g) or not len(k):
+            fp += len(k)
+            fn += len(g)
+            continue
+        rows, cols = linear_sum_assignment(-(alignment[g[:, None], k[None, :]] * s))
+        for a, alpha in enumerate(ALPHAS):
+            keep = s[rows, cols] >= alpha - _EPS
+            r, c = rows[keep], cols[keep]
+            tp[a] += len(r)
+            fn[a] += len(g) - len(r)
+            fp[a] += len(k) - len(r)
+            loc[a] += s[r, c].sum()
+            matches[a, g[r], k[c]] += 1
+    ass_a = np.array(
+        [(m * (m / np.maximum(1, gt_count + tr_count - m))).sum() for m in matches]
+    ) / np.maximum(1, tp)
+    det_a = tp / np.maximum(1, tp + fn + fp)
+    loc_a = np.maximum(1e-10, loc) / np.maximum(1e-10, tp)
+    return {
+        "HOTA": float(np.mean(np.sqrt(det_a * ass_a))),
+        "DetA": float(np.mean(det_a)),
+        "AssA": float(np.mean(ass_a)),
+        "LocA": float(np.mean(loc_a)),
+    }
+
+
+def correspondence_hota(pairs, true1, true2, tracks1, tracks2) -> dict:
+    """:func:`hota` of a matcher's declared pairs over a sequence (module docstring):
+    ``tracks1[t]``/``tracks2[t]`` the own track ids that name a declared pair over time."""
+    gt_ids, tr_ids, sims = [], [], []
+    for p, a, b, ta, tb in zip(pairs, true1, true2, tracks1, tracks2, strict=True):
+        p = np.asarray(p, dtype=np.int64).reshape(-1, 2)
+        ti, tj = np.nonzero((a[:, None] == b[None, :]) & (a[:, None] >= 0))
+        gt_ids.append([int(a[i]) for i in ti])
+        tr_ids.append([(int(ta[i]), int(tb[j])) for i, j in p])
+        sims.append((ti[:, None] == p[None, :, 0]) & (tj[:, None] == p[None, :, 1]))
+    return hota(gt_ids, tr_ids, sims)
