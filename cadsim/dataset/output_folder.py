@@ -4,7 +4,7 @@ One rule, three kinds of output (every ``--out`` of every command goes through o
 
 * a **dataset folder** (``generate``, ``import``) — :func:`check_output_folder`;
 * a **result folder** (``evaluate``, ``sweep-*``, ``table``, ``make reproduce``) —
-  :func:`check_result_folder`;
+  :func:`check_result_folder` (and their ``--cache``: :func:`check_cache_folder`);
 * a **file** (``train``'s model, ``schema``, ``show``'s figure, ``synthetic``'s tables) —
   :func:`check_output_file`.
 
@@ -52,7 +52,8 @@ _MAX_MANIFEST_BYTES = 1 << 30  # a manifest of 100,000 records is about 20 MB
 RESULT_FILES = re.compile(
     r"^(evaluation|metrics_per_pair|average_precision|table1)(_[a-z_]+)?\.(json|csv|md)$"
     r"|^(thresholds|noise_runs|regime_sweep|crossovers|localisation_sweep|localisation_presets"
-    r"|regime|dataset_spread|pr_curves)\.csv$|^(run_record|qualitative)\.json$"
+    r"|regime|dataset_spread|pr_curves|agreement)\.csv$|^(run_record|qualitative)\.json$"
+    r"|^table_[a-z0-9_]+\.(md|csv)$"
 )
 
 OutputFolderError = OutputPathError  # the name the dataset-folder rule has always raised
@@ -85,7 +86,8 @@ def check_output_folder(out: str | Path, option: str = "--out", resumable: bool 
         return path
     if not resumable:
         raise OutputFolderError(
-            f"{path}: exists and is not empty (it holds {_listing([e.name for e in entries])}); "
+            f"{path}: exists and is not an empty folder (it holds "
+            f"{_listing([e.name for e in entries])}); "
             "give a new or empty folder"
         )
     foreign = [e.name for e in entries if e.name not in _OWN and not _TEMP.match(e.name)]
@@ -152,6 +154,20 @@ def check_result_folder(out: str | Path, option: str = "--out") -> Path:
             f"{path}: not empty and not a cadsim result folder (it holds "
             f"{_listing([e.name for e in entries])}); give a new or empty folder"
         )
+    return path
+
+
+def check_cache_folder(out: str | Path, option: str = "--cache") -> Path:
+    """``out`` as a Path if the result cache may live there: a folder (new or not) that is not a
+    dataset, not inside one and not a file. (A cache's own files are written atomically by
+    ``eval.core.cache``; a link to the cache folder is allowed — caches are often moved to another
+    disk that way.)"""
+    path = _not_empty(out, option, "folder")
+    if path.exists() and not path.is_dir():
+        raise OutputPathError(f"{path}: exists and is not a folder; give a folder for the cache")
+    if path.is_dir() and _is_dataset(path):
+        raise OutputPathError(f"{path}: is a cadsim dataset; the result cache goes elsewhere")
+    _refuse_inside_a_dataset(path)
     return path
 
 
