@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import functools
 import logging
 import os
 import sys
@@ -37,9 +38,21 @@ class _LightGBMLog:
         log.debug("lightgbm: %s", msg.strip())
 
 
+@functools.cache
+def _libc():
+    try:
+        return ctypes.CDLL(None)
+    except OSError:  # pragma: no cover - no C library to flush
+        return None
+
+
 def _flush_c_streams() -> None:
-    with contextlib.suppress(Exception):
-        ctypes.CDLL(None).fflush(None)
+    """C's stdio buffers out (``fflush(NULL)``), so that nothing written before the swap lands
+    in the capture, nor anything LightGBM wrote after it."""
+    libc = _libc()
+    if libc is not None:
+        with contextlib.suppress(Exception):
+            libc.fflush(None)
 
 
 @contextlib.contextmanager
