@@ -142,7 +142,9 @@ def test_a_model_file_written_before_is_replaced(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.json"]
 
 
-@pytest.mark.parametrize("command", ["evaluate", "sweep-noise", "sweep-regime"])
+@pytest.mark.parametrize(
+    "command", ["evaluate", "sweep-noise", "sweep-regime", "sweep-localisation"]
+)
 def test_results_never_go_into_a_dataset_or_a_users_folder(command, other, tmp_path, capsys):
     test = DMGM / "test-069-071"
     common = ["--matchers", "sm", "--runs", "1", "--workers", "1", "--no-progress"]
@@ -239,3 +241,13 @@ def test_import_refuses_a_link_and_a_folder_inside_a_dataset(other, tmp_path, ca
     assert main(["import", "dmgm", src, "--out", str(other / "pairs" / "new")]) == 2
     assert "inside the cadsim dataset" in _one_line(capsys, "import")
     assert not any((tmp_path / "empty").iterdir())
+
+
+def test_table_never_writes_into_a_dataset_or_through_a_link(other, tmp_path, capsys):
+    before = _tree_state(other)
+    assert main(["table", str(other)]) == 2
+    assert "is a cadsim dataset" in _one_line(capsys, "table")
+    (tmp_path / "link").symlink_to(other)
+    assert main(["table", str(tmp_path / "link")]) == 2
+    assert "symbolic link" in _one_line(capsys, "table")
+    assert _tree_state(other) == before
