@@ -109,10 +109,17 @@ def pair_figure(color1: np.ndarray, color2: np.ndarray, *args, title: str | None
 
 
 def save_figure(fig, path: str | Path) -> Path:
-    """Write ``fig`` (format from the suffix: .png, .pdf, .svg); creates the folder."""
+    """Write ``fig`` (format from the suffix: .png, .pdf, .svg); creates the folder. Rendered in
+    memory and written atomically (``cadsim.dataset.atomic_writer``: a new temporary file renamed
+    into place, never through a link)."""
+    import io
+
+    from cadsim.dataset.atomic_writer import write_file_atomic
+
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=fig.dpi)
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format=path.suffix.lstrip(".") or "png", dpi=fig.dpi)
+    write_file_atomic(path, buffer.getvalue())
     return path
 
 

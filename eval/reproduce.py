@@ -346,7 +346,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     if not paths:
         raise SystemExit(f"no scenario files found ({', '.join(SCENARIOS)})")
-    data, out = Path(args.data), Path(args.out)
+    from eval.core.result_files import check_outputs
+
+    data, out = Path(args.data), check_outputs(args.out, args.cache)
     cold = cold_start(data, Path(args.cache))
     out.mkdir(parents=True, exist_ok=True)
     matchers = parse_matchers(args.matchers)

@@ -55,8 +55,8 @@ def synthetic_pairs(seed: int, count: int):
 @cache
 def model_path() -> str:
     """A model (both variants) trained on 30 synthetic problems, in a temporary folder."""
-    from matchers.learned_model import save_model
-    from matchers.learned_training import train_model
+    from cadsim.commands.train import save_model
+    from matchers.learned.training import train_model
 
     model = train_model(synthetic_pairs(0, 30), {"datasets": []}, rounds=40)
     path = Path(tempfile.mkdtemp(prefix="cadsim-model-")) / "synthetic.json"

@@ -235,3 +235,18 @@ def test_the_algorithms_are_what_the_matchers_folder_shows():
     below = [p for p in (ROOT / "matchers").glob("*/*.py") if p.name != "__init__.py"]
     assert len(top) <= 24 and len(below) >= 8, (top, len(below))
     assert len(list((ROOT / "eval").glob("*.py"))) <= 8
+
+
+def test_the_learned_matchers_are_one_sub_package():
+    """``matchers/learned/`` holds the learned matchers (matcher, unary, features, model, trees,
+    booster, training); it builds on the algorithms and blocks, and nothing in ``matchers``
+    imports it (the registry names it by string), so it sits on top of the folder graph."""
+    assert not list((ROOT / "matchers").glob("learned*.py"))
+    graph = folder_graph("matchers")
+    assert graph["matchers.learned"] <= {"matchers", "matchers.blocks", "matchers.core"}
+    users = {folder for folder, deps in graph.items() if "matchers.learned" in deps}
+    assert not users, users
+    from matchers import get
+
+    for name in ("learned", "learned_pose", "maximin_learned", "rrwm_learned"):
+        assert get(name).__module__.startswith("matchers.learned.")

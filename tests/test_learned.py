@@ -11,10 +11,11 @@ import numpy as np
 import pytest
 from learned_fixture import model_path, synthetic_pairs
 
+from cadsim.commands.train import save_model
 from matchers import get, required_options
-from matchers.learned_features import feature_names, pair_features
-from matchers.learned_model import load_model, save_model
-from matchers.learned_training import labels, train_model
+from matchers.learned.features import feature_names, pair_features
+from matchers.learned.model import load_model
+from matchers.learned.training import labels, train_model
 
 DMGM = Path(__file__).resolve().parents[1] / "eval" / "data" / "dmgm-cad"
 

@@ -217,7 +217,7 @@ def dmgm_model(tmp_path_factory) -> tuple[Path, Path]:
 
 def test_no_model_has_its_tau_from_a_pair_it_was_trained_on(dmgm_model):
     from cadsim.dataset.training_set import dataset_records
-    from matchers.learned_model import load_model
+    from matchers.learned.model import load_model
 
     path, tau = dmgm_model
     trained = load_model(path).training_records()

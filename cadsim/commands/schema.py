@@ -5,7 +5,8 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
+
+SCHEMA_MARKER = b'"title": "cadsim scenario file"'  # near the start of every schema written
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -17,7 +18,13 @@ def run(args: argparse.Namespace) -> int:
 
     text = json.dumps(scenario_json_schema(), indent=1, sort_keys=False) + "\n"
     if args.out:
-        Path(args.out).write_text(text, encoding="utf-8")
+        from cadsim.dataset.atomic_writer import write_file_atomic
+        from cadsim.dataset.output_folder import check_output_file, file_holds
+
+        # the output-path rule: a new file or a schema written before, never a user's file
+        own = file_holds(SCHEMA_MARKER, 4096)
+        path = check_output_file(args.out, "a scenario schema cadsim wrote", own)
+        write_file_atomic(path, text.encode("utf-8"))
         print(args.out)
     else:
         print(text, end="")

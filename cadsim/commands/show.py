@@ -22,13 +22,26 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--no-labels", action="store_true", help="no class labels on the boxes")
 
 
+FIGURE_MARKER = b"matplotlib"  # every PNG, PDF and SVG matplotlib writes names it
+
+
 def output_path(out: str | Path, record_name: str) -> Path:
     """The file ``cadsim show`` writes for ``--out``: inside an existing folder, the record's
-    name with .png; a name without a suffix gets .png (what matplotlib would write)."""
+    name with .png; a name without a suffix gets .png (what matplotlib would write). Checked by
+    the output-path rule: a new file, or a figure written before (matplotlib's), never a link, a
+    user's file or a file inside a dataset."""
+    from cadsim.dataset.output_folder import check_output_file, file_holds
+
+    if not str(out).strip():
+        raise ValueError("--out: expected a file or folder path, got an empty one")
     out = Path(out)
-    if out.is_dir():
-        return out / f"{record_name}.png"
-    return out if out.suffix else out.with_name(out.name + ".png")
+    if out.is_symlink():
+        path = out  # refused below, naming the link
+    elif out.is_dir():
+        path = out / f"{record_name}.png"
+    else:
+        path = out if out.suffix else out.with_name(out.name + ".png")
+    return check_output_file(path, "a figure cadsim drew", file_holds(FIGURE_MARKER))
 
 
 def run(args: argparse.Namespace) -> int:
@@ -43,10 +56,8 @@ def run(args: argparse.Namespace) -> int:
         from cadsim.snapshot_drawing import shared_objects, snapshot_figure
 
         snapshot = ds.snapshot(args.pair)
-        path = save_figure(
-            snapshot_figure(snapshot, labels=not args.no_labels),
-            output_path(args.out, snapshot.name),
-        )
+        path = output_path(args.out, snapshot.name)
+        path = save_figure(snapshot_figure(snapshot, labels=not args.no_labels), path)
         shared = shared_objects(snapshot)
         linked = int((np.triu(shared, 1) >= 3).sum())
         print(
@@ -56,8 +67,8 @@ def run(args: argparse.Namespace) -> int:
         )
         return 0
     pair = ds[args.pair]
-    fig = draw_pair_from_record(pair, labels=not args.no_labels)
-    path = save_figure(fig, output_path(args.out, pair.name))
+    path = output_path(args.out, pair.name)
+    path = save_figure(draw_pair_from_record(pair, labels=not args.no_labels), path)
     print(
         f"{path}: pair {pair.index} ({pair.name}), {len(pair.gt_pairs)} ground-truth pairs "
         "(record checksum verified)"

@@ -3,6 +3,12 @@
 A record is built in a temporary directory inside the dataset directory (same file system), every
 file and the directory are fsync'ed, and one ``os.replace`` moves it to ``pairs/NAME``. A killed
 writer leaves only a ``.tmp-*`` directory, which the next run removes (``remove_stale_temp``).
+
+Every file is created new (``O_CREAT | O_EXCL | O_NOFOLLOW``): a temporary name that someone made
+into a symbolic link (or any file) beforehand is never opened, so nothing is written through it;
+another random name is drawn instead. A temporary file is removed when the write fails. The final
+name is never a symbolic link or a folder (:class:`OutputPathError`); what may be replaced there
+is decided by :mod:`cadsim.dataset.output_folder`, the output-path rule of every command.
 """
 
 from __future__ import annotations
@@ -10,11 +16,19 @@ from __future__ import annotations
 import errno
 import os
 import shutil
+import stat
 import uuid
 from collections.abc import Mapping
 from pathlib import Path
 
 from cadsim.dataset.layout import EPISODES_DIR, PAIRS_DIR, TEMP_PREFIX
+
+_NEW_FILE = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0)
+_NEW_FILE |= getattr(os, "O_CLOEXEC", 0)
+
+
+class OutputPathError(ValueError):
+    """An output path a command may not write (one line naming it and why)."""
 
 
 def _fsync_dir(path: Path) -> None:
@@ -26,15 +40,24 @@ def _fsync_dir(path: Path) -> None:
 
 
 def _write_synced(path: Path, data: bytes, shown: Path | None = None) -> None:
-    """Write and fsync ``path``; an ``OSError`` (a full disk, a quota) names ``shown`` — the
-    file being written, not its temporary name — so the one-line error says where."""
+    """Create ``path`` (it must not exist, so it is never opened through a link), write and
+    fsync it; when writing fails the file is removed again. An ``OSError`` (a full disk, a
+    quota) names ``shown`` — the file being written, not its temporary name — so the one-line
+    error says where. ``FileExistsError`` (the name is taken) is raised as it is."""
     try:
-        with open(path, "wb") as f:
+        fd = os.open(path, _NEW_FILE, 0o666)
+    except FileExistsError:
+        raise
+    except OSError as exc:
+        raise OSError(exc.errno, exc.strerror or str(exc), str(shown or path)) from exc
+    try:
+        with os.fdopen(fd, "wb") as f:
             f.write(data)
             f.flush()
             os.fsync(f.fileno())
-    except OSError as exc:
-        if exc.filename is not None and shown is None:
+    except BaseException as exc:
+        Path(path).unlink(missing_ok=True)
+        if not isinstance(exc, OSError) or (exc.filename is not None and shown is None):
             raise
         raise OSError(exc.errno, exc.strerror or str(exc), str(shown or path)) from exc
 
@@ -71,18 +94,44 @@ def write_record(dataset_dir: Path, name: str, files: Mapping[str, bytes]) -> bo
             shutil.rmtree(tmp, ignore_errors=True)
 
 
+def check_replaceable(path: Path) -> None:
+    """Refuse (:class:`OutputPathError`) a final name that is a symbolic link (it is never
+    written through, nor replaced) or anything but a regular file."""
+    try:
+        mode = os.lstat(path).st_mode
+    except FileNotFoundError:
+        return
+    if stat.S_ISLNK(mode):
+        raise OutputPathError(
+            f"{path}: is a symbolic link; it is not written through — give the path of a file"
+        )
+    if not stat.S_ISREG(mode):
+        kind = "a folder" if stat.S_ISDIR(mode) else "not a regular file"
+        raise OutputPathError(f"{path}: is {kind}; give a file name")
+
+
 def write_file_atomic(path: Path, data: bytes) -> None:
-    """Replace ``path`` with ``data`` atomically (temp file in the same folder, fsync, rename)."""
+    """Replace ``path`` with ``data`` atomically: a new temporary file in the same folder (created
+    with ``O_EXCL``, never through a link), fsync, one rename; the temporary file is removed when
+    anything fails. ``path`` itself must not be a symbolic link or a folder."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.parent / f"{TEMP_PREFIX}{path.name}-{os.getpid()}-{uuid.uuid4().hex[:8]}"
+    check_replaceable(path)
+    for _ in range(100):
+        tmp = path.parent / f"{TEMP_PREFIX}{path.name}-{os.getpid()}-{uuid.uuid4().hex[:8]}"
+        try:
+            _write_synced(tmp, data, path)
+            break
+        except FileExistsError:  # the name is taken (by a link, say): never opened, draw another
+            continue
+    else:  # pragma: no cover - 100 random names all taken
+        raise OSError(errno.EEXIST, "no free temporary name", str(path))
     try:
-        _write_synced(tmp, data, path)
         os.replace(tmp, path)
         _fsync_dir(path.parent)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def remove_record(dataset_dir: Path, name: str) -> None:

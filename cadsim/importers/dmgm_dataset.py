@@ -36,6 +36,7 @@ from cadsim.dataset.checksum import dataset_checksum, record_checksum
 from cadsim.dataset.detections import ViewDetections, ground_truth_pairs
 from cadsim.dataset.encoding import json_bytes, npz_bytes
 from cadsim.dataset.manifest import FORMAT_NAME
+from cadsim.dataset.output_folder import check_output_folder
 from cadsim.dataset.record_format import FORMAT_VERSION
 from cadsim.importers import ImportFormatError
 from cadsim.importers.dmgm_pt import DmgmPair, DmgmView, iter_pairs
@@ -143,10 +144,9 @@ def _source_digest(src: Path, pair_ids: Iterable[str]) -> str:
 
 
 def _check_out(out: Path) -> None:
-    if out.exists() and (not out.is_dir() or any(out.iterdir())):
-        raise ImportFormatError(
-            out, "output exists and is not an empty folder; choose another --out"
-        )
+    """The output-path rule for a dataset folder that must be new or empty (never a link, a
+    file, a user's folder, or a folder inside another dataset)."""
+    check_output_folder(out, resumable=False)
 
 
 def _pair_count(src: Path) -> int:

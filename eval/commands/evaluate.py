@@ -20,6 +20,7 @@ from cadsim.cli import int_in
 from cadsim.limits import MAX_RUNS, MAX_WORKERS
 from eval.core.cache import ResultCache
 from eval.core.executor import add_scheduler_argument, make_executor
+from eval.core.result_files import check_outputs
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
 from eval.protocol.model_options import with_model
@@ -148,6 +149,7 @@ def _preset_spec(text: str) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    check_outputs(args.out, args.cache)
     paper = args.protocol == "paper"
     no_val = (args.no_calibration or paper) and not args.tune
     vals = [None] * len(args.datasets) if no_val else val_dirs(args.datasets, args.val)

@@ -131,6 +131,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from eval.core.result_files import check_outputs
+
+    check_outputs(args.out, args.cache)
     rates = parse_rates(args.rates)
     (val,) = val_dirs([args.dataset], [args.val] if args.val else None)
     entry = open_entry(args.dataset, val, localisation=args.localisation)

@@ -6,7 +6,6 @@ into DIR (no matcher is run, no cache is needed; the qualitative figure needs th
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
 from eval.protocol.variants import VARIANTS, variant_path
 from eval.report.figures import render_all
@@ -23,7 +22,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    out = Path(args.dir)
+    from eval.core.result_files import check_outputs
+
+    out = check_outputs(args.dir)
     evaluated = any(variant_path(out, "metrics_per_pair", v, ".csv").is_file() for v in VARIANTS)
     swept = any(
         (out / n).is_file()

@@ -19,7 +19,7 @@ def check_no_overlap(model_path: str | Path, scored_dirs: Iterable[str | Path]) 
     """The model's sha256 after checking that it loads and that none of ``scored_dirs`` holds a
     record it was trained on; ValueError in one line otherwise."""
     from cadsim.dataset.training_set import overlapping_records
-    from matchers.learned_model import load_model
+    from matchers.learned.model import load_model
 
     model = load_model(model_path)
     shared = overlapping_records(model.training_records(), scored_dirs)

@@ -63,7 +63,7 @@ from eval.report.tables import build_table
 from eval.report.threshold_format import rounded
 from eval.studies.agreement import EXTERNAL_BLOCK, pair_clusters
 from eval.studies.evaluation import chosen_specs, evaluate, open_entry, run_named, score_runs
-from matchers.learned_model import load_model
+from matchers.learned.model import load_model
 
 log = logging.getLogger(__name__)
 
@@ -283,7 +283,7 @@ def _trained_already(path: Path, dirs: Sequence[Path]):
     exactly the datasets at ``dirs`` (training is deterministic: training again would write the
     same bytes); else None."""
     from cadsim.dataset import Dataset
-    from matchers.learned_training import PARAMS, ROUNDS
+    from matchers.learned.training import PARAMS, ROUNDS
 
     if not path.is_file():
         return None

@@ -20,7 +20,6 @@ import argparse
 import logging
 import time
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -287,6 +286,9 @@ def add_arguments(group) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from eval.core.result_files import check_table_files, write_csv, write_text
+
+    outs = check_table_files(args.out, b"matcher,")
     matchers = args.matchers or list(ALL_MATCHERS)
     cfg = SceneConfig(position_noise_m=args.position_noise, prototypes=args.prototypes)
     options = {}
@@ -312,13 +314,9 @@ def run(args: argparse.Namespace) -> int:
         f"{cfg}\n\n{format_summary(summary)}\n\nran in {time.perf_counter() - t0:.0f} s\n"
     )
     print(text, flush=True)
-    for path in args.out:
-        path = Path(path)
-        path.parent.mkdir(parents=True, exist_ok=True)
+    for path in outs:
         if path.suffix == ".csv":
-            summary.to_csv(path, index=False, float_format="%.4f")
-        elif path.suffix == ".md":
-            path.write_text(text)
+            write_csv(summary, path, float_format="%.4f")
         else:
-            raise ValueError(f"--out {path}: expected a .csv or .md file name")
+            write_text(path, text)
     return 0

@@ -443,6 +443,9 @@ def run(args: argparse.Namespace) -> int:
         from eval.validation import coid_synthetic
 
         return coid_synthetic.run(args)
+    from eval.core.result_files import check_table_files, write_csv, write_text
+
+    outs = check_table_files(args.out, b"protocol,")
     if args.matchers is None:
         args.matchers = list(DEFAULT_MATCHERS)
     else:
@@ -467,14 +470,11 @@ def run(args: argparse.Namespace) -> int:
         texts.append(text)
         print(text, flush=True)
     result = pd.concat(tables, ignore_index=True)
-    for path in args.out:
-        path.parent.mkdir(parents=True, exist_ok=True)
+    for path in outs:
         if path.suffix == ".csv":
-            result.to_csv(path, index=False, float_format="%.4f")
-        elif path.suffix == ".md":
-            path.write_text("\n\n".join(texts))
+            write_csv(result, path, float_format="%.4f")
         else:
-            raise ValueError(f"--out {path}: expected a .csv or .md file name")
+            write_text(path, "\n\n".join(texts))
         log.info("wrote %s", path)
     if args.fail_on_miss and (result.verdict == "MISS").any():
         return 1

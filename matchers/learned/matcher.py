@@ -1,12 +1,12 @@
 """``learned`` and ``learned_pose``: a learned pairwise affinity — a gradient-boosted classifier's
 probability that (i, j) is a true match, from the candidate-pair features of
-:mod:`matchers.learned_features` (appearance, local context, distance consistency, class,
+:mod:`matchers.learned.features` (appearance, local context, distance consistency, class,
 depth and bearing; ``learned_pose`` adds the localisation prior) — then the shared Hungarian and
 τ, as every matcher. The classifier comes from a model file written by ``cadsim train``
-(:mod:`matchers.learned_model`): option ``model`` (its path) is required, ``model_sha256``
+(:mod:`matchers.learned.model`): option ``model`` (its path) is required, ``model_sha256``
 (optional) pins its content.
 
-Variants ``maximin_learned`` and ``rrwm_learned`` (:mod:`matchers.learned_unary`) use the same
+Variants ``maximin_learned`` and ``rrwm_learned`` (:mod:`matchers.learned.unary`) use the same
 probability as the unary term of maximin and RRWM.
 """
 
@@ -23,8 +23,8 @@ from matchers.core.memory_budget import budgeted
 from matchers.core.options import check_problem, rng_from_seed
 from matchers.core.problem import Problem
 from matchers.core.result import finish
-from matchers.learned_features import pair_features
-from matchers.learned_model import VARIANTS, load_model
+from matchers.learned.features import pair_features
+from matchers.learned.model import VARIANTS, load_model
 
 REQUIRED_OPTIONS = ("model",)
 

@@ -12,8 +12,8 @@ from collections.abc import Iterable, Sequence
 import numpy as np
 
 from matchers.core.problem import Problem
-from matchers.learned_features import feature_names, pair_features
-from matchers.learned_model import VARIANTS, LearnedModel
+from matchers.learned.features import feature_names, pair_features
+from matchers.learned.model import VARIANTS, LearnedModel
 
 ROUNDS = 200
 PARAMS = {

@@ -25,7 +25,7 @@ from matchers.core.matching import Matching
 from matchers.core.memory_budget import budgeted
 from matchers.core.options import check_problem
 from matchers.core.problem import Problem
-from matchers.learned import REQUIRED_OPTIONS, learned_probability
+from matchers.learned.matcher import REQUIRED_OPTIONS, learned_probability
 from matchers.maximin import maximin
 from matchers.rrwm import rrwm
 
