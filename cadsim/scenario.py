@@ -198,6 +198,7 @@ class Scenario:
     sampling: dict
     localisation: dict = dataclasses.field(default_factory=dict)
     appearance: dict = dataclasses.field(default_factory=dict)
+    sequence: dict | None = None
 
 
 def _set_sumo_home() -> None:
@@ -222,6 +223,7 @@ def _wheel_sumo_home() -> str | None:
 
 MAX_DISTANCE_M = 10_000.0  # distances of observers from a junction and from each other
 MAX_VEHICLE_OBSERVERS = 8  # OPV2V-style scenes hold up to 7 connected vehicles
+MAX_SEQUENCE_FRAMES = 1000  # frames of one [sequence]
 
 
 def _check_observers(t: dict, ctx: ScenarioContext, prefix: str) -> None:
@@ -378,6 +380,73 @@ SAMPLING = Table(
     }
 )
 
+SEQUENCE = Table(
+    {
+        "frames": Field(
+            int,
+            REQUIRED,
+            "frames per sequence: the start frame and its followers",
+            ge=1,
+            le=MAX_SEQUENCE_FRAMES,
+        ),
+        "interval_s": Field(
+            float,
+            REQUIRED,
+            "simulated seconds between consecutive frames of a sequence",
+            gt=0,
+            le=MAX_SIM_S,
+        ),
+        "min_frames": Field(
+            int,
+            1,
+            "a sequence cut shorter than this (an observer left) is dropped",
+            ge=1,
+            le=MAX_SEQUENCE_FRAMES,
+        ),
+        "odometry_scale_sigma": Field(
+            float,
+            0.01,
+            "odometry: per-sequence distance scale error, 1 sigma (0.01: 1 %)",
+            ge=0,
+            le=1,
+        ),
+        "odometry_heading_sigma_deg_per_m": Field(
+            float,
+            0.01,
+            "odometry: per-sequence heading drift, 1 sigma, degrees per metre",
+            ge=0,
+            le=10,
+        ),
+        "odometry_position_walk": Field(
+            float,
+            0.02,
+            "odometry: random-walk position noise, metres per sqrt(metre)",
+            ge=0,
+            le=10,
+        ),
+        "odometry_heading_walk_deg": Field(
+            float,
+            0.005,
+            "odometry: random-walk heading noise, degrees per sqrt(metre)",
+            ge=0,
+            le=10,
+        ),
+    },
+    doc="consecutive frames of each accepted observer pair (docs/scenarios.md, [sequence])",
+    when_absent="omit",
+    check=lambda t, ctx, prefix: _check_sequence(t, ctx, prefix),
+)
+
+
+def _check_sequence(t: dict, ctx: ScenarioContext, prefix: str) -> None:
+    if t["min_frames"] > t["frames"]:
+        raise ctx.error(
+            _join(prefix, "min_frames"),
+            f"is {t['min_frames']}, more than frames {t['frames']}",
+            "min_frames <= frames",
+        )
+
+
 TOP_LEVEL = {
     "name": Field(str, None, "scenario name (default: the file name without .toml)"),
     "description": Field(str, "", "free text"),
@@ -393,6 +462,7 @@ TABLES = (
     "sampling",
     "localisation",
     "appearance",
+    "sequence",
 )
 
 # kind -> schema of its [traffic] table; kinds listed in _SCHEMA_MODULES register on first use.
@@ -483,6 +553,10 @@ def load_scenario(path: str | Path) -> Scenario:
             'count = 2 and roadside_units = 0 (N-view snapshots need source = "sumo")',
         )
     sampling = validate_table(raw.get("sampling", {}), SAMPLING, ctx, "sampling")
+    sequence = None
+    if "sequence" in raw:
+        sequence = validate_table(raw["sequence"], SEQUENCE, ctx, "sequence")
+        _check_sequence_fits(sequence, traffic, observers, ctx)
     noise = dict(raw.get("noise", {}))
     detection = dict(raw.get("detection", {}))
     localisation = dict(raw.get("localisation", {}))
@@ -511,7 +585,28 @@ def load_scenario(path: str | Path) -> Scenario:
         sampling=sampling,
         localisation=localisation,
         appearance=appearance,
+        sequence=sequence,
     )
+
+
+def _check_sequence_fits(sequence: dict, traffic: dict, observers: dict, ctx) -> None:
+    """A ``[sequence]`` needs frame pairs (two views) and, with SUMO, an ``interval_s`` that is a
+    whole number of simulation steps (frames are snapshots of the simulation's steps)."""
+    if view_count(observers) != 2:
+        raise ctx.error(
+            "sequence",
+            f"asks for sequences of {view_count(observers)}-view snapshots",
+            "no [sequence] table with N-view observers (sequences are of frame pairs)",
+        )
+    step = traffic.get("step_length") if traffic.get("source") == "sumo" else None
+    if step:
+        steps = sequence["interval_s"] / step
+        if abs(steps - round(steps)) > 1e-6 or round(steps) < 1:
+            raise ctx.error(
+                "sequence.interval_s",
+                f"is {sequence['interval_s']:g}, not a multiple of traffic.step_length {step:g}",
+                f"a multiple of {step:g} s (one frame per simulation step or every few steps)",
+            )
 
 
 def _reject_non_finite(value: Any, ctx: ScenarioContext, dotted: str) -> None:

@@ -20,6 +20,7 @@ from cadsim.scenario import (
     OBSERVERS,
     REQUIRED,
     SAMPLING,
+    SEQUENCE,
     TOP_LEVEL,
     Field,
     Table,
@@ -146,7 +147,10 @@ def scenario_json_schema() -> dict:
     """The JSON Schema (draft 2020-12) of a scenario file, as parsed from TOML."""
     properties: dict[str, Any] = {key: field_schema(spec) for key, spec in TOP_LEVEL.items()}
     properties["traffic"] = traffic_schema()
-    for name, table in (("camera", CAMERA), ("observers", OBSERVERS), ("sampling", SAMPLING)):
+    for name, table in (
+        ("camera", CAMERA), ("observers", OBSERVERS), ("sampling", SAMPLING),
+        ("sequence", SEQUENCE),
+    ):  # fmt: skip
         properties[name] = table_schema(table)
     for name in ("noise", "detection", "localisation", "appearance"):
         cls = _config_class(name)

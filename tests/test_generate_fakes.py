@@ -51,6 +51,7 @@ class FakeScenario:
     noise: dict = field(default_factory=lambda: {"noise_rate": 0.01})
     detection: dict = field(default_factory=lambda: {"min_pixels": 6})
     sampling: dict = field(default_factory=lambda: {"pairs_per_episode": 2})
+    sequence: dict | None = None
 
 
 class FakeSource(TrafficSource):
@@ -66,6 +67,9 @@ class FakeSource(TrafficSource):
 
     def snapshots(self):
         assert self.started, "source used outside its context manager"
+        if self.scenario.traffic.get("moving"):
+            yield from self._moving_snapshots()
+            return
         rng = np.random.default_rng(self.seed)
         for step in range(int(self.scenario.traffic.get("snapshots", 10))):
             t = 2.0 * step
@@ -101,9 +105,81 @@ class FakeSource(TrafficSource):
             )
             yield Snapshot(time=t, objects=objects, meta={"step": step})
 
+    def _moving_snapshots(self):
+        """``traffic.moving``: one set of objects (ids kept across snapshots) moving at constant
+        velocities, observer obs1 driving along +x and obs2 along +y at ``observer_speed`` m/s
+        (obs2 gone from ``leave_at`` s on); snapshots every ``[sampling] interval`` s."""
+        traffic = self.scenario.traffic
+        rng = np.random.default_rng(self.seed)
+        n = 12
+        classes = rng.choice(list(_SIZES), size=n)
+        xy = rng.uniform(-15.0, 15.0, size=(n, 2))
+        velocity = rng.uniform(-1.0, 1.0, size=(n, 2))
+        colours = rng.integers(0, len(_PALETTE), size=n)
+        yaws = rng.uniform(-np.pi, np.pi, size=n)
+        interval = float((self.scenario.sampling or {}).get("interval", 2.0))
+        speed = float(traffic.get("observer_speed", 5.0))
+        leave_at = traffic.get("leave_at")
+        for step in range(int(traffic.get("snapshots", 10))):
+            t = interval * step
+            if FAIL_AT_TIME is not None and t >= FAIL_AT_TIME:
+                raise RuntimeError(f"injected failure at t={t}")
+            time.sleep(float(os.environ.get("CADSIM_FAKE_DELAY_S", "0")))
+            objects = [
+                WorldObject(
+                    id=f"veh{k}" if k % 3 else f"ped{k}",
+                    cls=str(c),
+                    shape="box",
+                    center=(float(x + vx * t), float(y + vy * t), _SIZES[c][2] / 2),
+                    yaw=float(yaws[k]),
+                    size=_SIZES[c],
+                    color=_PALETTE[colours[k]],
+                    velocity=(float(vx), float(vy), 0.0),
+                )
+                for k, (c, (x, y), (vx, vy)) in enumerate(zip(classes, xy, velocity, strict=True))
+            ]
+            objects.append(
+                WorldObject(
+                    "obs1",
+                    "car",
+                    "box",
+                    (-40.0 + speed * t, 0.0, 0.75),
+                    0.0,
+                    _SIZES["car"],
+                    (0, 0, 0),
+                )  # fmt: skip
+            )
+            if leave_at is None or t < float(leave_at):
+                objects.append(
+                    WorldObject(
+                        "obs2",
+                        "car",
+                        "box",
+                        (0.0, -40.0 + 0.5 * speed * t, 0.75),
+                        1.57,
+                        _SIZES["car"],
+                        (0, 0, 0),
+                    )  # fmt: skip
+                )
+            yield Snapshot(time=t, objects=objects, meta={"step": step})
+
     def observer_pairs(self, snapshot: Snapshot) -> list[ObserverPair]:
         cam = self.scenario.camera
         size = {k: cam[k] for k in ("width", "height", "hfov_deg")}
+        if self.scenario.traffic.get("moving"):
+            by_id = snapshot.by_id()
+            if "obs1" not in by_id or "obs2" not in by_id:
+                return []
+            o1, o2 = by_id["obs1"].center, by_id["obs2"].center
+            return [
+                ObserverPair(
+                    Camera((o1[0] + 2.5, o1[1], 1.6), 0.0, **size),
+                    Camera((o2[0], o2[1] + 2.5, 1.6), np.pi / 2, **size),
+                    "obs1",
+                    "obs2",
+                    {"junction": "J0"},
+                )
+            ]
         away = ObserverPair(  # looking away from each other: never acceptable
             Camera((-30.0, 0.0, 1.6), np.pi, **size), Camera((0.0, -30.0, 1.6), -np.pi / 2, **size)
         )

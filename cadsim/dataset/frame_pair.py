@@ -133,6 +133,33 @@ class FramePair:
         return float("nan") if value is None else float(value)
 
     @property
+    def sequence_id(self) -> str | None:
+        """The sequence this frame belongs to (the record name of its frame 0), or None for a
+        record that is no sequence's frame (formats before 7)."""
+        sequence = self.record.get("sequence")
+        return None if sequence is None else str(sequence["id"])
+
+    @property
+    def frame(self) -> int:
+        """0-based index of this frame in its sequence (0 for a record of no sequence)."""
+        sequence = self.record.get("sequence")
+        return 0 if sequence is None else int(sequence["frame"])
+
+    @property
+    def odometry(self) -> tuple | None:
+        """Per view (in this pair's view order) its ``OdometryPose``: the observer's pose
+        relative to its own pose at frame 0 as its dead reckoning reports it (x forward, y left,
+        metres; yaw, radians; ``cadsim.sensing.odometry``), or None (no sequence)."""
+        if self.record.get("sequence") is None:
+            return None
+        from cadsim.sensing.odometry import OdometryPose
+
+        observers = self.record["observers"]
+        return tuple(
+            OdometryPose.from_dict(observers[v - 1]["odometry"]) for v in self.view_numbers
+        )
+
+    @property
     def has_images(self) -> bool:
         """Whether the record has colour, depth and instance images (imported records do not)."""
         return layout.view_png(self.view_numbers[0]) in self._record_files

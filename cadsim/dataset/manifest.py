@@ -22,6 +22,7 @@ from cadsim.dataset.record_format import (
     FORMAT_VERSION,
     MULTI_VIEW_FORMAT,
     READABLE_VERSIONS,
+    SEQUENCE_FORMAT,
     jsonable,
 )
 from cadsim.provenance import git_state, package_versions
@@ -74,8 +75,10 @@ def generation_config(scenario, seed: int, pairs_per_episode: int, criteria: dic
     views = view_count(observers)
     if views == 2:  # frame pairs: the configuration (and so resuming) exactly as before N views
         observers = {k: v for k, v in observers.items() if k not in MULTI_VIEW_KEYS}
-    return {
-        "format_version": FORMAT_VERSION if views == 2 else MULTI_VIEW_FORMAT,
+    sequence = getattr(scenario, "sequence", None)
+    version = FORMAT_VERSION if views == 2 else MULTI_VIEW_FORMAT
+    config = {
+        "format_version": SEQUENCE_FORMAT if sequence else version,
         "scenario_sha256": hashlib.sha256(scenario.text.encode("utf-8")).hexdigest(),
         "seed": int(seed),
         "pairs_per_episode": int(pairs_per_episode),
@@ -89,6 +92,9 @@ def generation_config(scenario, seed: int, pairs_per_episode: int, criteria: dic
         "localisation": _plain(getattr(scenario, "localisation", {})),
         "appearance": _plain(getattr(scenario, "appearance", {})),
     }
+    if sequence:  # only then: the configuration of a dataset without one is as before
+        config["sequence"] = _plain(sequence)
+    return config
 
 
 def build_manifest(
@@ -103,6 +109,8 @@ def build_manifest(
     order; episodes: {episode: simulation seed} of every episode run."""
     views = view_count(config["observers"])
     extra = {} if views == 2 else {"views": views, "record_files": list(layout.record_files(views))}
+    if config.get("sequence"):
+        extra["sequences"] = len({r["sequence"] for r in records})
     return {
         "format": FORMAT_NAME,
         "format_version": config["format_version"],
@@ -221,3 +229,28 @@ def _check_fields(manifest: dict, path: Path) -> None:
             isinstance(checksum, str) and bool(_HEX64.match(checksum)),
             f"{key}.checksum", checksum, "64 hex digits",
         )  # fmt: skip
+    if manifest["format_version"] == SEQUENCE_FORMAT:
+        _check_sequences(records, need)
+
+
+def _check_sequences(records: list[dict], need) -> None:
+    """A sequence dataset's records: each names its ``sequence`` (the record name of its frame
+    0) and ``frame``; a sequence's frames are consecutive records, frames 0, 1, 2, ... in order."""
+    previous = None
+    seen = set()
+    for k, r in enumerate(records):
+        key = f"records[{k}]"
+        sequence, frame = r.get("sequence"), r.get("frame")
+        need(
+            isinstance(sequence, str) and layout.parse_record_name(sequence) is not None,
+            f"{key}.sequence", sequence, "the record name of the sequence's frame 0",
+        )  # fmt: skip
+        need(_is_int(frame) and frame >= 0, f"{key}.frame", frame, "an integer >= 0")
+        if previous is not None and previous[0] == sequence:
+            need(frame == previous[1] + 1, f"{key}.frame", frame, f"{previous[1] + 1} (in order)")
+        else:
+            need(sequence not in seen, f"{key}.sequence", sequence, "a sequence listed once")
+            need(frame == 0, f"{key}.frame", frame, "0 (a sequence starts at its frame 0)")
+            need(sequence == r["name"], f"{key}.sequence", sequence, repr(r["name"]))
+            seen.add(sequence)
+        previous = (sequence, frame)

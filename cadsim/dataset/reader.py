@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import hashlib
 from collections.abc import Iterator, Sequence
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -97,6 +98,43 @@ class Dataset(Sequence[FramePair]):
     def __iter__(self) -> Iterator[FramePair]:
         for k in range(len(self)):
             yield self[k]
+
+    @property
+    def is_sequential(self) -> bool:
+        """Whether the records are frames of sequences (format 7, a ``[sequence]`` scenario)."""
+        return self.record_layout.sequential
+
+    @cached_property
+    def _sequence_indices(self) -> list[list[int]]:
+        """Per sequence, its records' dataset indices in frame order (every record its own
+        sequence of one frame in a dataset without sequences)."""
+        if not self.is_sequential:
+            return [[k] for k in range(len(self))]
+        groups: dict[str, list[int]] = {}
+        for k, entry in enumerate(self._records):
+            groups.setdefault(entry["sequence"], []).append(k)
+        return list(groups.values())
+
+    @property
+    def sequences(self) -> int:
+        """Number of sequences (of a dataset without sequences: its records, one frame each)."""
+        return len(self._sequence_indices)
+
+    def sequence(self, k: int) -> list[FramePair]:
+        """Sequence ``k``'s frames as ``FramePair``s in time order (frame 0 first; each with
+        ``.sequence_id``, ``.frame`` and ``.odometry``). In a dataset without sequences,
+        sequence k is ``[ds[k]]``."""
+        n = self.sequences
+        if isinstance(k, bool) or not isinstance(k, int | np.integer):
+            raise TypeError(f"sequence index must be an int, got {type(k).__name__}")
+        if not -n <= k < n:
+            raise IndexError(f"sequence {k} out of range for a dataset of {n} sequences")
+        return [self[i] for i in self._sequence_indices[int(k) % n]]
+
+    def iter_sequences(self) -> Iterator[list[FramePair]]:
+        """Every sequence (:meth:`sequence`) in dataset order."""
+        for k in range(self.sequences):
+            yield self.sequence(k)
 
     def snapshot(self, k: int) -> SnapshotViews:
         """Record ``k`` as its ``n_views`` views (:class:`cadsim.dataset.multi_view.SnapshotViews`:

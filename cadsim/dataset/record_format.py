@@ -24,7 +24,14 @@ still written as version 3, byte for byte as before. Versions 5 (frame pairs) an
 snapshots) store each detection's true class as ``view{k}_true_classes`` (ground truth, for
 metrics only) and the class the view's detector reported as ``view{k}_reported_classes`` (what a
 matcher sees, ``Problem.classes1/2``); earlier versions stored only the true class, as
-``view{k}_classes``, and are read with no reported class (``Problem.classes1/2`` None). A change of the record layout bumps
+``view{k}_classes``, and are read with no reported class (``Problem.classes1/2`` None).
+Version 7 is a version-5 frame pair that is one frame of a sequence (a ``[sequence]`` scenario):
+``record.json`` adds ``sequence`` (``id``: the record name of its frame 0, ``frame``: 0-based
+index, ``frames``: the sequence's length, ``interval_s``, ``start_time`` and the odometry
+``model``) and each ``observers[]`` entry an ``odometry`` (the observer's pose relative to its
+frame-0 pose as dead reckoning reports it: ``position`` [x, y], ``yaw``, ``distance_m``) and its
+``odometry_seed``; the manifest's records carry ``sequence`` and ``frame``. Datasets without a
+``[sequence]`` are written as version 5 (or 6), byte for byte as before. A change of the record layout bumps
 ``FORMAT_VERSION``; the reader reads
 :data:`READABLE_VERSIONS` and refuses others with a message naming them (a version-2 dataset is
 read with every velocity 0, and the latency presets refuse it).
@@ -47,7 +54,8 @@ from cadsim.world import WorldObject
 
 FORMAT_VERSION = 5
 MULTI_VIEW_FORMAT = 6
-READABLE_VERSIONS = (2, 3, 4, 5, 6)
+SEQUENCE_FORMAT = 7  # frame pairs that are frames of sequences ([sequence] scenarios)
+READABLE_VERSIONS = (2, 3, 4, 5, 6, SEQUENCE_FORMAT)
 MULTI_VIEW_VERSIONS = (4, MULTI_VIEW_FORMAT)  # N-view snapshots; the other versions: frame pairs
 TRUE_CLASS_VERSION = 5  # from 5 on: view{k}_true_classes (+ reported_classes), not view{k}_classes
 OBSERVER_KINDS = ("vehicle", "roadside")  # an N-view record's observers[].kind
@@ -88,6 +96,7 @@ class PairRecord:
     view2: ViewCapture
     meta: dict = field(default_factory=dict)
     localisation: dict = field(default_factory=dict)
+    sequence: dict | None = None  # a sequence frame (format 7): id, frame, frames, ..., odometry
 
 
 def jsonable(value):
@@ -176,8 +185,17 @@ def encode_record(rec: PairRecord) -> dict[str, bytes]:
     views = (rec.view1, rec.view2)
     gt = ground_truth_pairs(rec.view1.detections, rec.view2.detections)
     ids1 = rec.view1.detections.object_ids
-    record = _head(rec, FORMAT_VERSION) | {
-        "observers": [_observer_entry(v) for v in views],
+    observers = [_observer_entry(v) for v in views]
+    head = _head(rec, FORMAT_VERSION)
+    if rec.sequence is not None:
+        sequence = dict(rec.sequence)
+        odometry, seeds = sequence.pop("odometry"), sequence.pop("odometry_seeds")
+        for entry, pose, seed in zip(observers, odometry, seeds, strict=True):
+            entry["odometry"] = pose.as_dict()
+            entry["odometry_seed"] = int(seed)
+        head = _head(rec, SEQUENCE_FORMAT) | {"sequence": jsonable(sequence)}
+    record = head | {
+        "observers": observers,
         "prior": {"kind": "pose_error", **LocalisationConfig(**rec.localisation).as_record()},
         "objects": [o.as_dict() for o in rec.objects],
         "ground_truth": [{"object_id": ids1[i], "i": int(i), "j": int(j)} for i, j in gt],

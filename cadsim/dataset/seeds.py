@@ -6,6 +6,7 @@ stream 0: simulation seed of episode e         spawn_key (0, e)
 stream 1: depth noise of (episode, slot, view) spawn_key (1, e, s, v)   v = 1 or 2
 stream 3: detector attributes of (e, s, v)     spawn_key (3, e, s, v)   (class confusion, size noise)
 stream 4: localisation error of (e, s, v)      spawn_key (4, e, s, v)
+stream 6: odometry of a sequence's view v      spawn_key (6, e, s0, v)  s0: the sequence's first slot
 
 Redraws at evaluation time (seed scheme 2). ``FramePair.redetect(rate, seed)`` and
 ``FramePair.localise(…, seed)`` / ``localise_preset(preset, seed)`` draw a *run*'s depth noise and
@@ -27,6 +28,7 @@ import numpy as np
 
 _SIM, _NOISE, _REDETECT, _ATTRIBUTES, _LOCALISATION = 0, 1, 2, 3, 4
 _RUN_EPISODE = 5  # a run's per-episode draws (the GNSS bias and drift of a redrawn prior)
+_ODOMETRY = 6  # a sequence's odometry drift, per view (cadsim.sensing.odometry)
 SEED_SCHEME = 2
 """Version of the evaluation-time seed derivation (module docstring); the run record states it."""
 NOISE_STREAM, LOCALISATION_STREAM = _NOISE, _LOCALISATION
@@ -60,6 +62,13 @@ def attribute_seed(root: int, episode: int, slot: int, view: int) -> int:
 def localisation_seed(root: int, episode: int, slot: int, view: int) -> int:
     """Seed of the localisation (pose) error of view ``view`` (1 or 2) of record (episode, slot)."""
     ss = np.random.SeedSequence(_check(root), spawn_key=(_LOCALISATION, episode, slot, view))
+    return int(ss.generate_state(1, np.uint64)[0] >> 1)
+
+
+def odometry_seed(root: int, episode: int, first_slot: int, view: int) -> int:
+    """Seed of view ``view``'s odometry over the sequence whose first frame is record
+    (episode, first_slot) (:class:`cadsim.sensing.odometry.Odometer`)."""
+    ss = np.random.SeedSequence(_check(root), spawn_key=(_ODOMETRY, episode, first_slot, view))
     return int(ss.generate_state(1, np.uint64)[0] >> 1)
 
 

@@ -49,6 +49,7 @@ from cadsim.dataset.manifest import DatasetError
 from cadsim.dataset.record_format import (
     MULTI_VIEW_VERSIONS,
     OBSERVER_KINDS,
+    SEQUENCE_FORMAT,
     TRUE_CLASS_VERSION,
 )
 from cadsim.sensing.localisation import LocalisationConfig
@@ -71,6 +72,11 @@ class RecordLayout:
     def multi_view(self) -> bool:
         """An N-view snapshot format (4, 6): ``record.json`` says ``views``."""
         return self.format_version in MULTI_VIEW_VERSIONS
+
+    @property
+    def sequential(self) -> bool:
+        """A sequence format (7): ``record.json`` says ``sequence``, observers their odometry."""
+        return self.format_version == SEQUENCE_FORMAT
 
     @property
     def class_arrays(self) -> tuple[str, ...]:
@@ -223,6 +229,13 @@ def check_record_json(
         raise DatasetError(f"{where}: observers: expected a list of {n} entries, got {count}")
     for k, observer in enumerate(observers):
         _check_observer(observer, f"{where}: observers[{k}]")
+    if expected.sequential:
+        _check_sequence(record, where, entry)
+    elif "sequence" in record:
+        raise DatasetError(
+            f"{where}: sequence: a record of format {expected.format_version} is no sequence's "
+            "frame (sequences are format 7)"
+        )
     time = record.get("time")
     if time is not None and not _is_number(time):
         raise DatasetError(f"{where}: time: expected a finite number or null, got {_shown(time)}")
@@ -235,6 +248,69 @@ def check_record_json(
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise DatasetError(f"{where}: objects[{i}]: not an object entry ({exc!r})") from None
     _check_prior(record.get("prior"), where)
+
+
+def _check_sequence(record: dict, where: Path, entry: dict | None) -> None:
+    """A sequence frame's ``sequence`` block and its observers' ``odometry`` (format 7)."""
+    sequence = record.get("sequence")
+    if not isinstance(sequence, dict):
+        raise DatasetError(f"{where}: sequence: expected an object, got {_shown(sequence)}")
+    sid, frame, frames = sequence.get("id"), sequence.get("frame"), sequence.get("frames")
+    if not (isinstance(sid, str) and layout.parse_record_name(sid) is not None):
+        raise DatasetError(f"{where}: sequence.id: expected a record name, got {_shown(sid)}")
+    if not (_is_int(frames) and frames >= 1 and _is_int(frame) and 0 <= frame < frames):
+        raise DatasetError(
+            f"{where}: sequence.frame, sequence.frames: expected integers 0 <= frame < frames, "
+            f"got {_shown(frame)}, {_shown(frames)}"
+        )
+    first = layout.parse_record_name(sid)
+    if (first[0], first[1] + frame) != (record.get("episode"), record.get("slot")):
+        raise DatasetError(
+            f"{where}: sequence.id: {sid!r} with frame {frame} is not this record's (episode "
+            f"{_shown(record.get('episode'))}, slot {_shown(record.get('slot'))})"
+        )
+    for key in ("interval_s", "start_time"):
+        if not _is_number(sequence.get(key)) or (key == "interval_s" and sequence[key] <= 0):
+            raise DatasetError(
+                f"{where}: sequence.{key}: expected a finite number"
+                f"{' > 0' if key == 'interval_s' else ''}, got {_shown(sequence.get(key))}"
+            )
+    model = sequence.get("model")
+    if not isinstance(model, dict) or not all(
+        _is_number(model.get(k)) and model[k] >= 0
+        for k in ("scale_sigma", "heading_sigma_deg_per_m", "position_walk", "heading_walk_deg")
+    ):
+        raise DatasetError(
+            f"{where}: sequence.model: expected the odometry model's four sigmas (finite "
+            f"numbers >= 0), got {_shown(model)}"
+        )
+    if entry is not None and (entry.get("sequence"), entry.get("frame")) != (sid, frame):
+        raise DatasetError(
+            f"{where}: sequence: {sid!r} frame {frame}, the manifest's record {entry['name']} "
+            f"says {_shown(entry.get('sequence'))} frame {_shown(entry.get('frame'))}"
+        )
+    for k, observer in enumerate(record["observers"]):
+        key = f"{where}: observers[{k}]"
+        odometry = observer.get("odometry")
+        position = odometry.get("position") if isinstance(odometry, dict) else None
+        fine = (
+            isinstance(position, list)
+            and len(position) == 2
+            and all(_is_number(p) for p in position)
+            and _is_number(odometry.get("yaw"))
+            and _is_number(odometry.get("distance_m"))
+            and odometry["distance_m"] >= 0
+        )
+        if not fine:
+            raise DatasetError(
+                f"{key}.odometry: expected position [x, y], yaw and distance_m >= 0 (finite "
+                f"numbers), got {_shown(odometry)}"
+            )
+        if frame == 0 and (any(position) or odometry["yaw"] or odometry["distance_m"]):
+            raise DatasetError(f"{key}.odometry: frame 0 is the origin, got {_shown(odometry)}")
+        seed = observer.get("odometry_seed")
+        if not (_is_int(seed) and seed >= 0):
+            raise DatasetError(f"{key}.odometry_seed: expected an integer >= 0, got {_shown(seed)}")
 
 
 def _check_observer(observer, key: str) -> None:

@@ -61,13 +61,20 @@ from cadsim.dataset.output_folder import check_output_folder
 from cadsim.dataset.record_format import (
     FORMAT_VERSION,
     MULTI_VIEW_FORMAT,
+    SEQUENCE_FORMAT,
     PairRecord,
     SnapshotRecord,
     ViewCapture,
     encode_record,
     encode_snapshot,
 )
-from cadsim.dataset.seeds import attribute_seed, localisation_seed, noise_seed, simulation_seed
+from cadsim.dataset.seeds import (
+    attribute_seed,
+    localisation_seed,
+    noise_seed,
+    odometry_seed,
+    simulation_seed,
+)
 from cadsim.dataset.writer_lock import exclusive_writer
 from cadsim.generation.executor import Executor, report_progress
 from cadsim.generation.executors import make_executor
@@ -75,6 +82,7 @@ from cadsim.limits import MAX_PAIRS, MAX_SEED, MAX_WORKERS
 from cadsim.observer_pose import ObserverPose
 from cadsim.render.appearance import AppearanceConfig, exposed
 from cadsim.scenario_views import view_count
+from cadsim.sensing.odometry import Odometer, OdometryModel
 
 log = logging.getLogger(__name__)
 
@@ -276,6 +284,8 @@ def _observe(stages, noise_cfg, det_cfg, renderer, snapshot, camera, exclude_id,
 def run_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
     """Run one episode: write its records ``(episode, slot)`` for slots not yet on disk, up to
     ``task.max_slots``. ``on_record()`` is called after each record written."""
+    if getattr(task.scenario, "sequence", None):
+        return run_sequence_episode(task, on_record)
     t0 = time.perf_counter()
     out = Path(task.out)
     e = task.episode
@@ -342,6 +352,218 @@ def run_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
         out / layout.EPISODES_DIR / layout.episode_summary_name(e), json_bytes(summary)
     )
     return result
+
+
+# --------------------------------------------------------------------------- sequences
+
+
+def _sequences_on_disk(out: Path, episode: int, remove_partial: bool = False):
+    """The complete sequences of ``episode`` on disk, in slot order: a list of (first slot,
+    frames, time of its last frame). A sequence is complete when its records hold frames 0 ..
+    frames-1 in consecutive slots; the first one that is not (an interrupted write) ends the
+    list, and with ``remove_partial`` its records and every later one of the episode are
+    removed (they are rewritten, identically, by the resumed episode)."""
+    records = layout.existing_records(out)
+    slots = sorted(s for (e, s) in records if e == episode)
+    complete, k = [], 0
+    while k < len(slots) and slots[k] == k and k == (complete[-1][0] + complete[-1][1] if complete else 0):  # fmt: skip
+        head = json.loads((records[(episode, k)] / layout.RECORD_JSON).read_text())
+        sequence = head.get("sequence") or {}
+        frames = int(sequence.get("frames", 0))
+        last = k + frames - 1
+        whole = (
+            frames >= 1
+            and sequence.get("frame") == 0
+            and all((episode, s) in records for s in range(k, last + 1))
+        )
+        if not whole:
+            break
+        tail = json.loads((records[(episode, last)] / layout.RECORD_JSON).read_text())
+        complete.append((k, frames, float(tail["time"])))
+        k = last + 1
+    if remove_partial:
+        for s in slots:
+            if s >= k:
+                remove_record(out, layout.record_name(episode, s))
+    return complete
+
+
+def _sequence_source_scenario(scenario):
+    """The scenario the source runs in a sequence episode: snapshots every ``interval_s``."""
+    sampling = dict(scenario.sampling or {})
+    sampling["interval"] = float(scenario.sequence["interval_s"])
+    return dataclasses.replace(scenario, sampling=sampling)
+
+
+def sequence_stride(scenario) -> int:
+    """Sequence starts are tried every this many frames (``[sampling] interval`` over
+    ``[sequence] interval_s``, rounded, at least 1)."""
+    interval = float((scenario.sampling or {}).get("interval", 2.0))
+    return max(1, round(interval / float(scenario.sequence["interval_s"])))
+
+
+def _follow(source, snapshot, pair):
+    """``pair``'s observers at ``snapshot`` (their cameras re-mounted), or None if one left."""
+    follow = getattr(source, "follow_pair", None)
+    if follow is not None:
+        return follow(snapshot, pair)
+    for candidate in source.observer_pairs(snapshot):
+        if (candidate.observer1_id, candidate.observer2_id) == (pair.observer1_id, pair.observer2_id):  # fmt: skip
+            return candidate
+    return None
+
+
+def run_sequence_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
+    """One episode of a ``[sequence]`` scenario (docs/scenarios.md, "[sequence]"). The source
+    steps every ``interval_s``; every ``sequence_stride`` frames (and after the previous
+    sequence's last frame) the candidate pairs are tried as today; an accepted pair starts a
+    sequence whose frames 1, 2, ... are the same two observers at the following snapshots
+    (recorded whatever they see) until it has ``frames`` frames or an observer has left the
+    scene. Frame k is record (episode, first slot + k); a sequence shorter than ``min_frames``
+    is dropped. Every frame is kept in memory until the sequence ends, then written in order,
+    so that what is on disk is whole sequences (resume: :func:`_sequences_on_disk`).
+    ``task.max_slots`` and ``accepted`` count sequences."""
+    t0 = time.perf_counter()
+    out = Path(task.out)
+    e = task.episode
+    sim_seed = simulation_seed(task.root_seed, e)
+    result = EpisodeResult(e, sim_seed, task.max_slots, accepted=0, exhausted=False)
+    done = _sequences_on_disk(out, e, remove_partial=True)
+    result.accepted = len(done)
+    if len(done) >= task.max_slots:
+        return result
+    slot = done[-1][0] + done[-1][1] if done else 0
+    resume_after = done[-1][2] if done else None
+    crit, scenario = task.criteria, task.scenario
+    seq = scenario.sequence
+    frames, min_frames = int(seq["frames"]), int(seq.get("min_frames", 1))
+    model = OdometryModel.from_sequence(seq)
+    stride = sequence_stride(scenario)
+    stages = {
+        name: task.stages.resolve(name)
+        for name in ("source", "noise_config", "apply_noise", "detection_config", "detect")
+    }
+    noise_cfg = stages["noise_config"](**(scenario.noise or {}))
+    det_cfg = stages["detection_config"](**(scenario.detection or {}))
+    used = _used_observers(out, e, slot) if crit.distinct_observers else set()
+    active = None  # the sequence being recorded: its pair, frames, odometers
+    last_frame_time = resume_after
+
+    def finish() -> None:
+        nonlocal active, slot, last_frame_time
+        kept, active_now = active["frames"], active
+        active = None
+        last_frame_time = active_now["times"][-1]
+        if len(kept) < min_frames:
+            return
+        first = active_now["first"]
+        for k, rec in enumerate(kept):
+            rec.sequence["frames"] = len(kept)
+            if write_record(out, layout.record_name(e, first + k), encode_record(rec)):
+                result.new_records += 1
+        slot = first + len(kept)
+        result.accepted += 1
+        used.add(_observer_key(active_now["pair"]))
+        if on_record is not None:
+            on_record()
+
+    def frame(rec: PairRecord, pair, k: int) -> PairRecord:
+        poses = (rec.view1.pose, rec.view2.pose)
+        odometry = [odo.step(p) for odo, p in zip(active["odometers"], poses, strict=True)]
+        rec = dataclasses.replace(
+            rec,
+            sequence={
+                "id": layout.record_name(e, active["first"]),
+                "frame": k,
+                "frames": frames,
+                "interval_s": float(seq["interval_s"]),
+                "start_time": active["times"][0],
+                "model": model.as_record(),
+                "odometry": odometry,
+                "odometry_seeds": active["seeds"],
+            },
+        )
+        active["frames"].append(rec)
+        return rec
+
+    source_scenario = _sequence_source_scenario(scenario)
+    with stages["source"](source_scenario, sim_seed, out / layout.WORK_DIR) as source:
+        for index, snapshot in enumerate(source.snapshots()):
+            result.snapshots += 1
+            if active is not None:
+                k = len(active["frames"])
+                pair = _follow(source, snapshot, active["pair"])
+                if pair is None:
+                    finish()  # an observer left the scene: the sequence ends short
+                else:
+                    rec = _capture_pair(
+                        task, stages, noise_cfg, det_cfg, snapshot, pair, active["first"] + k,
+                        result, active["meta"],
+                    )  # fmt: skip
+                    active["times"].append(float(snapshot.time))
+                    frame(rec, pair, k)
+                    if len(active["frames"]) >= frames:
+                        finish()
+                    if result.accepted >= task.max_slots:
+                        break
+                    continue
+            if index % stride:
+                continue
+            # Always asked at a start instant, so a source's internal state evolves the same.
+            candidates = source.observer_pairs(snapshot)
+            if result.accepted >= task.max_slots:
+                break
+            if last_frame_time is not None and snapshot.time <= last_frame_time:
+                continue  # inside the previous sequence, or before where an earlier run ended
+            for candidate_index, pair in enumerate(candidates):
+                if crit.distinct_observers and _observer_key(pair) in used:
+                    continue
+                result.candidates += 1
+                rec = _try_pair(
+                    task, stages, noise_cfg, det_cfg, snapshot, pair, candidate_index, slot,
+                    result,
+                )  # fmt: skip
+                if rec is None:
+                    continue
+                seeds = tuple(odometry_seed(task.root_seed, e, slot, v) for v in (1, 2))
+                active = {
+                    "first": slot, "pair": pair, "frames": [], "times": [float(snapshot.time)],
+                    "odometers": [Odometer(model, s, frames) for s in seeds], "seeds": seeds,
+                    "meta": rec.meta,
+                }  # fmt: skip
+                frame(rec, pair, 0)
+                if frames == 1:
+                    finish()
+                break
+            if result.accepted >= task.max_slots:
+                break
+        else:
+            if active is not None:
+                finish()  # the simulation ended: the sequence ends short
+            result.exhausted = result.accepted < task.max_slots
+    result.seconds = time.perf_counter() - t0
+    write_file_atomic(
+        out / layout.EPISODES_DIR / layout.episode_summary_name(e), json_bytes(asdict(result))
+    )
+    return result
+
+
+def _capture_pair(task, stages, noise_cfg, det_cfg, snapshot, pair, slot, result, meta) -> PairRecord:  # fmt: skip
+    """Both views of ``pair`` at ``snapshot`` as record (episode, ``slot``), without the
+    acceptance test (a sequence's later frames are recorded whatever they see)."""
+    views = [
+        _capture(task, stages, noise_cfg, det_cfg, snapshot, camera, observer, v, slot, result)
+        for v, camera, observer in (
+            (1, pair.camera1, pair.observer1_id),
+            (2, pair.camera2, pair.observer2_id),
+        )  # fmt: skip
+    ]
+    meta = dict(meta) | {"pair": dict(pair.meta), "snapshot": dict(snapshot.meta)}
+    return PairRecord(
+        task.episode, slot, simulation_seed(task.root_seed, task.episode), float(snapshot.time),
+        list(snapshot.objects), views[0], views[1], meta,
+        dict(getattr(task.scenario, "localisation", {})),
+    )  # fmt: skip
 
 
 def _taken_at(out: Path, episode: int, slots: int, time_s: float) -> int:
@@ -476,6 +698,7 @@ def _check_resume(out: Path, config: dict) -> None:
         return
     try:
         writes = FORMAT_VERSION if view_count(config["observers"]) == 2 else MULTI_VIEW_FORMAT
+        writes = SEQUENCE_FORMAT if config.get("sequence") else writes
         previous = read_manifest(out, versions=(writes,))["generation"]
     except DatasetError as exc:
         if not has_records:
@@ -501,10 +724,15 @@ def _clear_recordless(out: Path, why: str) -> None:
         shutil.rmtree(out / folder, ignore_errors=True)
 
 
-def _episode_done_on_disk(out: Path, episode: int, need: int) -> int | None:
-    """Records episode ``episode`` already provides if no simulation is needed for ``need``
-    records, else None."""
-    count, _ = _existing_prefix(out, episode)
+def _episode_done_on_disk(
+    out: Path, episode: int, need: int, sequences: bool = False
+) -> int | None:
+    """Records (``sequences``: sequences) episode ``episode`` already provides if no simulation
+    is needed for ``need`` of them, else None."""
+    if sequences:
+        count = len(_sequences_on_disk(out, episode))
+    else:
+        count, _ = _existing_prefix(out, episode)
     if count >= need:
         return count
     path = out / layout.EPISODES_DIR / layout.episode_summary_name(episode)
@@ -603,6 +831,7 @@ def _generate(
         plan.criteria, plan.config, plan.seed_source, plan.max_episodes,
     )  # fmt: skip
     _check_resume(out, config)
+    sequential = bool(getattr(scenario, "sequence", None))
     stale = remove_stale_temp(out)
     if stale:
         log.info("removed %d unfinished record(s) of an interrupted run", len(stale))
@@ -645,7 +874,7 @@ def _generate(
                 if optimistic >= n_pairs:
                     break
                 need = min(crit.pairs_per_episode, n_pairs - known)
-                on_disk = _episode_done_on_disk(out, next_episode, need)
+                on_disk = _episode_done_on_disk(out, next_episode, need, sequential)
                 if on_disk is not None:
                     done[next_episode] = on_disk
                     bump(min(on_disk, need))
@@ -687,7 +916,7 @@ def _generate(
         bar.close()
         release_renderers()  # those episodes run in this process made (one worker)
 
-    records = _finalise_records(out, n_pairs, layout.record_files(_views(scenario)))
+    records = _finalise_records(out, n_pairs, layout.record_files(_views(scenario)), sequential)
     shutil.rmtree(out / layout.WORK_DIR, ignore_errors=True)
     # The episodes that define the dataset: 0 .. the last one contributing a record.
     episodes = {e: simulation_seed(root_seed, e) for e in range(records[-1]["episode"] + 1)}
@@ -716,27 +945,44 @@ def _raise_interrupt(signum, frame) -> None:
     raise KeyboardInterrupt(f"signal {signum}")
 
 
-def _finalise_records(out: Path, n_pairs: int, files: tuple[str, ...]) -> list[dict]:
-    """The first ``n_pairs`` records in (episode, slot) order, with checksums. Records beyond
-    them (an episode asked for more pairs than turned out to be missing, or an earlier run with
-    a larger N) are removed so that the folder holds exactly the dataset."""
+def _finalise_records(
+    out: Path, n_pairs: int, files: tuple[str, ...], sequences: bool = False
+) -> list[dict]:
+    """The first ``n_pairs`` records (``sequences``: the records of the first ``n_pairs``
+    sequences) in (episode, slot) order, with checksums. Records beyond them (an episode asked
+    for more pairs than turned out to be missing, or an earlier run with a larger N) are
+    removed so that the folder holds exactly the dataset."""
     on_disk = layout.existing_records(out)
-    keep = list(on_disk)[:n_pairs]
+    if sequences:
+        frames_of = {}  # (episode, first slot) -> frames, in dataset order
+        for episode in sorted({e for e, _ in on_disk}):
+            for first, frames, _ in _sequences_on_disk(out, episode):
+                frames_of[(episode, first)] = frames
+        chosen = list(frames_of.items())[:n_pairs]
+        if len(chosen) < n_pairs:
+            raise GenerationError(f"{out}: expected {n_pairs} sequences on disk, found {len(chosen)}")  # fmt: skip
+        keep = [(e, first + k) for (e, first), n in chosen for k in range(n)]
+        n_pairs = len(keep)
+    else:
+        keep = list(on_disk)[:n_pairs]
     if len(keep) < n_pairs:
         raise GenerationError(f"{out}: expected {n_pairs} records on disk, found {len(keep)}")
-    for ident in list(on_disk)[n_pairs:]:
-        remove_record(out, layout.record_name(*ident))
+    kept = set(keep)
+    for ident in on_disk:
+        if ident not in kept:
+            remove_record(out, layout.record_name(*ident))
     entries = []
     for episode, slot in keep:
         path = on_disk[(episode, slot)]
         record = json.loads((path / layout.RECORD_JSON).read_text())
-        entries.append(
-            {
-                "name": path.name,
-                "episode": episode,
-                "slot": slot,
-                "sim_seed": int(record["sim_seed"]),
-                "checksum": record_dir_checksum(path, files),
-            }
-        )
+        entry = {
+            "name": path.name,
+            "episode": episode,
+            "slot": slot,
+            "sim_seed": int(record["sim_seed"]),
+            "checksum": record_dir_checksum(path, files),
+        }
+        if sequences:
+            entry |= {"sequence": record["sequence"]["id"], "frame": record["sequence"]["frame"]}
+        entries.append(entry)
     return entries

@@ -64,6 +64,17 @@ class TrafficSource(ABC):
     def observer_pairs(self, snapshot: Snapshot) -> list[ObserverPair]:
         """Candidate observer pairs for this snapshot, in a deterministic order."""
 
+    def follow_pair(self, snapshot: Snapshot, pair: ObserverPair) -> ObserverPair | None:
+        """``pair``'s two observers at a later ``snapshot`` (a sequence's next frame, docs/
+        scenarios.md "[sequence]"): their cameras mounted as at the pair's start, or None when
+        one has left the scene. Must not change the source's state. Default: the candidate of
+        ``observer_pairs(snapshot)`` with the same two observer ids (None if there is none)."""
+        ids = (pair.observer1_id, pair.observer2_id)
+        for candidate in self.observer_pairs(snapshot):
+            if (candidate.observer1_id, candidate.observer2_id) == ids:
+                return candidate
+        return None
+
     def observer_sets(self, snapshot: Snapshot) -> list[ObserverSet]:
         """Candidate N-view observer sets for this snapshot (``[observers] count`` vehicles plus
         ``roadside_units``), in a deterministic order; sources without N-view support raise."""

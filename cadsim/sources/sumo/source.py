@@ -27,7 +27,7 @@ import numpy as np
 
 from cadsim.scenario import Scenario, ScenarioError
 from cadsim.sources.base import ObserverPair, ObserverSet, TrafficSource
-from cadsim.sources.observer_pairs import observer_pairs
+from cadsim.sources.observer_pairs import mount_camera, observer_pairs
 from cadsim.sources.observer_sets import observer_sets
 from cadsim.sources.sumo.build import ToolFailed
 from cadsim.sources.sumo.command import sumo_run
@@ -200,6 +200,25 @@ class SumoSource(TrafficSource):
 
     def observer_pairs(self, snapshot: Snapshot) -> list[ObserverPair]:
         return observer_pairs(snapshot, self.scenario.camera, self.scenario.observers)
+
+    def follow_pair(self, snapshot: Snapshot, pair: ObserverPair) -> ObserverPair | None:
+        """The pair's two vehicles at ``snapshot``, cameras mounted as ``observer_pairs`` does
+        (aimed at the pair's junction with ``aim = "junction"``), wherever they now are (past
+        the junction too); None once either has left the simulation or the scene's radius."""
+        objects = snapshot.by_id()
+        carriers = [objects.get(pair.observer1_id), objects.get(pair.observer2_id)]
+        if any(c is None for c in carriers):
+            return None
+        look_at = None
+        if self.scenario.observers.get("aim", "heading") == "junction":
+            centres = snapshot.meta.get("junctions", {})
+            junction = pair.meta.get("junction")
+            if junction not in centres:
+                return None
+            look_at = np.asarray(centres[junction], float)[:2]
+        cam1, cam2 = (mount_camera(c, self.scenario.camera, look_at) for c in carriers)
+        meta = {"junction": pair.meta.get("junction"), "time": float(snapshot.time)}
+        return ObserverPair(cam1, cam2, pair.observer1_id, pair.observer2_id, meta)
 
     def observer_sets(self, snapshot: Snapshot) -> list[ObserverSet]:
         return observer_sets(snapshot, self.scenario.camera, self.scenario.observers)
