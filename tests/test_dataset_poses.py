@@ -101,11 +101,11 @@ def test_an_older_dataset_is_refused_in_one_line_naming_both_versions(fake_datas
         Dataset(old)
     message = str(info.value)
     assert "\n" not in message and str(old) in message
-    assert "format version 1 is older than the versions 2, 3, 4, 5 or 6" in message
+    assert "format version 1 is older than the versions 2, 3, 4, 5, 6 or 7" in message
     assert "regenerate" in message
-    manifest["format_version"] = 7
+    manifest["format_version"] = 8
     (old / "manifest.json").write_text(json.dumps(manifest))
-    with pytest.raises(DatasetError, match="version 7 is not the versions 2, 3, 4, 5 or 6"):
+    with pytest.raises(DatasetError, match="version 8 is not the versions 2, 3, 4, 5, 6 or 7"):
         Dataset(old)
 
 
