@@ -40,6 +40,7 @@ from eval.studies.agreement import readme_part as agreement_readme
 from eval.studies.external import readme_part as external_readme
 from eval.studies.multiagent import readme_part as multiagent_readme
 from eval.studies.prior_defaults import readme_part as prior_sensitivity_readme
+from eval.studies.temporal import readme_part as temporal_readme
 from eval.studies.transfer import readme_part as transfer_readme
 from eval.studies.v2x_table import readme_part as v2x_readme
 
@@ -605,6 +606,7 @@ def _sections(results: Path, readme_dir: Path, groups: bool = False) -> list[str
     multi_s = sum(stages.get(k, 0.0) for k in ("multiagent_generate", "multiagent")) or None
     transfer_runs = cold.get("runs", {}).get("transfer", {}).get("computed")
     transfer_s = sum(stages.get(k, 0.0) for k in ("transfer_generate", "transfer")) or None
+    temporal_s = sum(stages.get(k, 0.0) for k in ("temporal_generate", "temporal")) or None
 
     def part(name, build, heading=None, table=None):
         return _guarded(name, build, results, heading, table)
@@ -657,6 +659,17 @@ def _sections(results: Path, readme_dir: Path, groups: bool = False) -> list[str
                     lambda: multiagent_readme(results, rel, multi_s),
                     "Multi-agent matching",
                     "table_multiagent.md",
+                )
+            ],
+        ),
+        (
+            "Temporal",
+            [
+                part(
+                    "temporal",
+                    lambda: temporal_readme(results, rel, temporal_s),
+                    "The temporal table",
+                    "table_temporal.md",
                 )
             ],
         ),

@@ -88,6 +88,14 @@ from eval.studies.multiagent import VAL_SNAPSHOTS as MA_VAL_SNAPSHOTS
 from eval.studies.multiagent import evaluate_multiagent
 from eval.studies.prior_defaults import SENSITIVITY, write_sensitivity
 from eval.studies.spread import spread_rows
+from eval.studies.temporal import LABEL as TEMPORAL_LABEL
+from eval.studies.temporal import METHODS as TEMPORAL_METHODS
+from eval.studies.temporal import PRESETS as TEMPORAL_PRESETS
+from eval.studies.temporal import RUNS as TEMPORAL_RUNS
+from eval.studies.temporal import SCENARIO as TEMPORAL_SCENARIO
+from eval.studies.temporal import TEST_SEQUENCES as TEMPORAL_TEST
+from eval.studies.temporal import VAL_SEQUENCES as TEMPORAL_VAL
+from eval.studies.temporal import evaluate_temporal
 from eval.studies.transfer import evaluate_transfer, test_sets, train_models, train_sets
 from eval.studies.v2x_table import PRESETS as V2X_PRESETS
 from eval.studies.v2x_table import evaluate_v2x
@@ -269,6 +277,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--no-transfer",
         action="store_true",
         help="skip the learned matchers' transfer matrix (also skipped without cad-v2x)",
+    )
+    p.add_argument(
+        "--no-temporal",
+        action="store_true",
+        help=f"skip the temporal table on {TEMPORAL_SCENARIO} (also skipped without the file)",
     )
     p.add_argument("--out", default="results", help="output directory (default: results)")
     p.add_argument("--data", default="data", help="dataset directory (default: data)")
@@ -627,6 +640,25 @@ def main(argv: list[str] | None = None) -> int:
                     "train_s": {k: round(v[1], 2) for k, v in models.items()},
                 }
         count("transfer", before)
+        temporal_record: dict = {}
+        with timer.stage("temporal_generate"):
+            temporal_dirs = (
+                None if args.no_temporal else _generate_temporal(data, args, temporal_record)
+            )
+        with timer.stage("temporal"):
+            for stale in ("table_temporal.csv", "table_temporal.md", "table_temporal_gain.csv"):
+                (out / stale).unlink(missing_ok=True)
+            if temporal_dirs is not None:
+                log.info(
+                    "[temporal] %s: %d methods × windows × %d presets × %d runs",
+                    TEMPORAL_LABEL,
+                    len(TEMPORAL_METHODS),
+                    len(TEMPORAL_PRESETS),
+                    len(TEMPORAL_RUNS),
+                )
+                evaluate_temporal(*temporal_dirs, out)
+                temporal_record |= {"presets": list(TEMPORAL_PRESETS), "seeds": list(TEMPORAL_RUNS)}
+                temporal_record |= {"methods": {m: list(w) for m, w in TEMPORAL_METHODS}}
 
     with timer.stage("tables_figures"):
         markdown = write_tables(out, PAPER_CSV)
@@ -670,6 +702,7 @@ def main(argv: list[str] | None = None) -> int:
         v2x=v2x_record,
         multiagent=multiagent_record,
         transfer=transfer_record,
+        temporal=temporal_record,
         thresholds=taus,
         runs=runs,
         cold_start=cold,
@@ -751,6 +784,35 @@ def _generate_multi(data: Path, args: argparse.Namespace, record: dict) -> tuple
         log.info("[multiagent generate] %s %s: %d snapshots (seed %d)", MA_LABEL, split, n, seed)
         made = _generate(path, folder, n, None if split == "test" else seed, args)
         record[split] = {"dir": str(folder), "snapshots": n, "seed": seed}
+        record[split] |= {"new_records": made.new_records}
+    record["scenario"] = scenario_file(path) | {"path": _shown(path)}
+    return splits["test"][0], splits["val"][0]
+
+
+def _generate_temporal(
+    data: Path, args: argparse.Namespace, record: dict
+) -> tuple[Path, Path] | None:
+    """Generate the temporal table's test (scenario seed) and validation (seed +
+    VAL_SEED_OFFSET) sequences of cad-v2x-seq (:mod:`eval.studies.temporal`'s counts, capped by
+    ``--pairs``); their folders, or None without the scenario file."""
+    from cadsim.scenario import load_scenario
+
+    path = ROOT / TEMPORAL_SCENARIO
+    if not path.is_file():
+        log.warning("[temporal] skipped: no %s", TEMPORAL_SCENARIO)
+        return None
+    scenario = load_scenario(path)
+    splits = {
+        "test": (data / "cad-v2x-seq", TEMPORAL_TEST, scenario.seed),
+        "val": (data / "cad-v2x-seq-val", TEMPORAL_VAL, scenario.seed + VAL_SEED_OFFSET),
+    }
+    for split, (folder, n, seed) in splits.items():
+        n = n if args.pairs is None else min(args.pairs, n)
+        log.info(
+            "[temporal generate] %s %s: %d sequences (seed %d)", TEMPORAL_LABEL, split, n, seed
+        )
+        made = _generate(path, folder, n, None if split == "test" else seed, args)
+        record[split] = {"dir": str(folder), "sequences": n, "seed": seed}
         record[split] |= {"new_records": made.new_records}
     record["scenario"] = scenario_file(path) | {"path": _shown(path)}
     return splits["test"][0], splits["val"][0]

@@ -68,6 +68,7 @@ def test_tiny_reproduce_writes_every_output_and_reruns_from_cache(tmp_path, caps
     argv += ["--sweep-runs", "2", "--workers", "2", "--no-progress"]
     argv += ["--localisation-sigmas", "0,2", "--localisation-runs", "1"]
     argv += ["--external-runs", "1", "--external-tune-pairs", "3"]
+    argv += ["--no-temporal"]  # the temporal table: tests/test_temporal_study.py (fake sequences)
     assert reproduce.main(argv) == 0
     printed = capsys.readouterr().out
     assert "Table I" in printed and "Maximin" in printed
@@ -75,6 +76,7 @@ def test_tiny_reproduce_writes_every_output_and_reruns_from_cache(tmp_path, caps
     for name in OUTPUTS:
         assert (out / name).is_file() and (out / name).stat().st_size > 0, name
     assert "could not be summarised" not in (out / "README.md").read_text()  # every part read
+    assert not (out / "table_temporal.csv").exists()  # --no-temporal
     labels = [d["label"] for d in json.loads((out / "run_record.json").read_text())["datasets"]]
     expected = [
         label

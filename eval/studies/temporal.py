@@ -1,0 +1,629 @@
+"""The temporal table (issue 41, ``results/table_temporal.{md,csv}``): matchers that accumulate
+evidence over a window of frames, on the sequences of ``cad-v2x-seq``, under three localisation
+presets.
+
+Protocol. Each sequence (10 frames, 0.2 s apart, of the same two vehicles) becomes a
+:class:`~matchers.core.sequence_problem.SequenceProblem`: every frame's pair redrawn under the
+preset (``pair.localise_preset(preset, seed=run)``) and its ``.problem()``; each agent's own
+tracks from its own detections and odometry (:func:`matchers.tracking.hungarian.with_own_tracks`,
+never a true id); odometry and camera mounts from the pairs. Methods (:data:`METHODS`):
+``windowed:<m>`` for the two-view matchers ``consistency`` and ``pose_refine`` at W in
+{1, 3, 10} and ``temporal_pose`` at W in {1, 10}, every option at its default (nothing tuned).
+A method that reads the localisation prior declares nothing under ``denied`` (rows kept, F1 0).
+Every method runs with ``threshold=None`` (its whole Hungarian assignment) and τ is calibrated
+per (method, W, preset) on the validation split (scenario seed + 1000) with the two-view rule
+(:func:`eval.protocol.calibration.calibrate_ranked`: the τ maximising the mean per-frame F1,
+in the middle of the best interval). The test split never enters τ.
+
+Metrics. Per frame: F1 of the declared pairs at τ against ``pair.gt_pairs``;
+success@(1 m, 2°) of the planar fit of those pairs (:func:`eval.core.pose_metrics.
+matched_planar_error`, extrinsics ``pair.camera_extrinsics``, truth
+``pair.true_relative_pose()``); the ``oracle`` row is the same fit of the true pairs. Over time
+(:mod:`eval.protocol.temporal_metrics`): association switches per 100 covisible object-frames,
+mean frames to the first correct association (objects never matched counted apart), HOTA and
+AssA of the declared pairs named by their own track ids (mean over sequences). Intervals are
+episode-level cluster t-intervals (:func:`eval.protocol.cluster_interval.t_interval`; a
+sequence's episode is its simulation episode), on the per-frame values.
+
+What accumulation buys (``table_temporal_gain.csv``): per preset, the method with the best
+validation F1 at W = 10, its test F1 at W = 10 minus at W = 1, paired per frame, with its
+episode-level interval. Goals (issue 41) go through :func:`eval.protocol.goal_verdict.goal_line`.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from eval.core.pose_metrics import matched_planar_error
+from eval.core.result_files import write_csv, write_text
+from eval.protocol.calibration import calibrate_ranked
+from eval.protocol.cluster_interval import t_interval
+from eval.protocol.goal_verdict import goal_line
+from eval.protocol.metrics import RankedAssignments, pair_metrics
+from eval.protocol.temporal_metrics import (
+    association_switches,
+    correspondence_hota,
+    frames_to_first_correct,
+)
+
+log = logging.getLogger(__name__)
+
+LABEL = "CAD-V2X-Seq"
+SCENARIO = "scenarios/cad-v2x-seq.toml"
+TEST_SEQUENCES = 12
+VAL_SEQUENCES = 6
+PRESETS = ("gnss-open-sky", "gnss-urban", "denied")
+METHODS: tuple[tuple[str, tuple[int, ...]], ...] = (
+    ("windowed:consistency", (1, 3, 10)),
+    ("windowed:pose_refine", (1, 3, 10)),
+    ("temporal_pose", (1, 10)),
+)
+RUNS = (0,)
+ORACLE_ROW = "oracle"
+SUCCESS_BOUNDS = (1.0, 2.0)  # metres, degrees
+LONG = 10
+SHORT = 1
+COLUMNS = (
+    "method",
+    "window",
+    "preset",
+    "tau",
+    "val_f1",
+    "f1_mean",
+    "f1_low",
+    "f1_high",
+    "success_1m_2deg",
+    "success_low",
+    "success_high",
+    "share_of_oracle",
+    "switches_per_100",
+    "switches_low",
+    "switches_high",
+    "frames_to_first",
+    "never_matched",
+    "hota",
+    "assa",
+    "frames",
+    "sequences",
+    "episodes",
+    "ms_per_frame",
+)
+GAIN_COLUMNS = ("preset", "method", "f1_w10", "f1_w1", "diff", "ci_low", "ci_high", "episodes")
+TABLE, GAIN = "table_temporal", "table_temporal_gain"
+
+
+@dataclass
+class Sequenced:
+    """One sequence under one preset and run: the problem, the truth per frame, the frames."""
+
+    seq: object  # SequenceProblem
+    true1: list[np.ndarray]
+    true2: list[np.ndarray]
+    gt: list[np.ndarray]
+    extrinsics: list[np.ndarray | None]
+    truth: list[np.ndarray | None]
+    episode: int
+    sequence: int
+
+
+def reads_prior(method: str) -> bool:
+    """Whether ``method`` reads the localisation prior (``temporal_pose`` always does)."""
+    if method == "temporal_pose":
+        return True
+    from eval.studies.v2x_table import reads_prior as two_view_reads_prior
+
+    return two_view_reads_prior(method.partition(":")[2])
+
+
+def _true_ids(object_ids: Sequence[str], names: dict[str, int]) -> np.ndarray:
+    """Integer true id per detection (-1: clutter), consistent over one sequence via ``names``."""
+    out = []
+    for oid in object_ids:
+        if str(oid).startswith("clutter:"):
+            out.append(-1)
+        else:
+            out.append(names.setdefault(str(oid), len(names)))
+    return np.array(out, dtype=np.int64)
+
+
+def sequence_problem(frames, preset: str, seed: int, index: int = 0) -> Sequenced:
+    """The :class:`Sequenced` of one sequence's ``frames`` (FramePairs in time order) under
+    ``preset``, localisation drawn with ``seed``; own tracks from :func:`with_own_tracks`."""
+    from matchers.core.sequence_problem import SequenceProblem
+    from matchers.tracking.hungarian import with_own_tracks
+
+    pairs = [f.localise_preset(preset, seed=seed) for f in frames]
+    problems = [p.problem() for p in pairs]
+    odometry = [p.odometry for p in pairs]
+    odo = [
+        np.array([[o[v].x, o[v].y, o[v].yaw] if o else [0.0, 0.0, 0.0] for o in odometry])
+        for v in (0, 1)
+    ]
+    extrinsics = [p.camera_extrinsics for p in pairs]
+    mounts = (None, None)
+    if extrinsics[0] is not None and all(
+        f.points1.shape[1] == 3 and f.points2.shape[1] == 3 for f in problems
+    ):
+        mounts = (np.asarray(extrinsics[0][0]), np.asarray(extrinsics[0][1]))
+    placeholder1 = [np.arange(f.n1) for f in problems]  # replaced by the own tracks below
+    placeholder2 = [np.arange(f.n2) for f in problems]
+    seq = with_own_tracks(
+        SequenceProblem(problems, placeholder1, placeholder2, odo[0], odo[1], *mounts)
+    )
+    names: dict[str, int] = {}
+    true1 = [_true_ids(p.view1.object_ids, names) for p in pairs]
+    true2 = [_true_ids(p.view2.object_ids, names) for p in pairs]
+    return Sequenced(
+        seq,
+        true1,
+        true2,
+        [np.asarray(p.gt_pairs, dtype=np.int64).reshape(-1, 2) for p in pairs],
+        [None if e is None else np.stack([np.asarray(e[0]), np.asarray(e[1])]) for e in extrinsics],
+        [p.true_relative_pose() for p in pairs],
+        int(frames[0].episode),
+        index,
+    )
+
+
+def load_split(folder: Path, preset: str, seeds: Sequence[int]) -> list[tuple[int, Sequenced]]:
+    """(run seed, :class:`Sequenced`) for every sequence of the dataset at ``folder``."""
+    from cadsim.dataset import Dataset
+
+    ds = Dataset(str(folder))
+    return [
+        (seed, sequence_problem(ds.sequence(k), preset, seed, k))
+        for seed in seeds
+        for k in range(ds.sequences)
+    ]
+
+
+def run_method(method: str, window: int, item: Sequenced, seed: int, preset: str):
+    """Per frame (assigned (k, 2), assigned scores (k,)) of ``method`` at ``window`` with no
+    threshold; nothing under ``denied`` for a prior reader. Plus the seconds it took."""
+    from matchers.core.temporal_registry import get_temporal
+
+    empty = [(np.zeros((0, 2), np.int64), np.zeros(0)) for _ in item.seq.frames]
+    if preset == "denied" and reads_prior(method):
+        return empty, 0.0
+    started = time.perf_counter()
+    out = get_temporal(method)(item.seq, seed=seed, threshold=None, window=window)
+    seconds = time.perf_counter() - started
+    frames = []
+    for m in out:
+        pairs = np.asarray(m.pairs, dtype=np.int64).reshape(-1, 2)
+        scores = np.asarray(m.scores, dtype=float)
+        frames.append((pairs, scores[pairs[:, 0], pairs[:, 1]] if len(pairs) else np.zeros(0)))
+    return frames, seconds
+
+
+def calibrate_tau(outcomes: list[tuple[Sequenced, list]]) -> tuple[float, float]:
+    """(τ, mean validation F1) of one (method, W, preset) from its validation outcomes."""
+    rows = [
+        (pairs, scores, item.gt[t], item.seq.frames[t].n1, item.seq.frames[t].n2)
+        for item, frames in outcomes
+        for t, (pairs, scores) in enumerate(frames)
+    ]
+    tau, f1, _, _ = calibrate_ranked(RankedAssignments.from_frames(rows))
+    return tau, f1
+
+
+def _pose_success(item: Sequenced, t: int, pairs: np.ndarray) -> float:
+    ext, truth = item.extrinsics[t], item.truth[t]
+    if ext is None or truth is None:
+        return float("nan")
+    if len(pairs) < 2:
+        return 0.0
+    frame = item.seq.frames[t]
+    rte, rre = matched_planar_error(frame.points1, frame.points2, pairs, ext, truth)
+    if not (np.isfinite(rte) and np.isfinite(rre)):
+        return 0.0
+    return float(rte <= SUCCESS_BOUNDS[0] and rre <= SUCCESS_BOUNDS[1])
+
+
+def score_test(item: Sequenced, frames: list, tau: float, seed: int) -> tuple[list[dict], dict]:
+    """Per-frame rows and the sequence's temporal metrics of one method's test outcome at τ."""
+    declared = [pairs[scores >= tau] for pairs, scores in frames]
+    rows = []
+    for t, pairs in enumerate(declared):
+        f = item.seq.frames[t]
+        rows.append(
+            {
+                "seed": seed,
+                "sequence": item.sequence,
+                "episode": item.episode,
+                "frame": t,
+                "f1": pair_metrics(pairs, item.gt[t], f.n1, f.n2).f1,
+                "success": _pose_success(item, t, pairs),
+            }
+        )
+    switches = association_switches(declared, item.true1, item.true2)
+    first = frames_to_first_correct(declared, item.true1, item.true2)
+    h = correspondence_hota(declared, item.true1, item.true2, item.seq.tracks1, item.seq.tracks2)
+    temporal = {
+        "seed": seed,
+        "sequence": item.sequence,
+        "episode": item.episode,
+        "switches": switches["switches"],
+        "object_frames": switches["object_frames"],
+        "first": [v for v in first["per_object"].values() if v is not None],
+        "never": first["never"],
+        "objects": len(first["per_object"]),
+        "hota": h["HOTA"],
+        "assa": h["AssA"],
+    }
+    return rows, temporal
+
+
+def _interval(values, episodes, bounds=(0.0, 1.0)) -> tuple[float, float, float, int]:
+    values = np.asarray(values, dtype=float)
+    episodes = np.asarray(episodes)
+    keep = np.isfinite(values)
+    if not keep.any():
+        return float("nan"), float("nan"), float("nan"), 0
+    return t_interval(values[keep], episodes[keep], bounds=bounds)
+
+
+def _switch_interval(temporal: list[dict]) -> tuple[float, float, float]:
+    """Switches per object-frame with its episode-level interval: each covisible object-frame an
+    item (1 where a switch was counted), clustered by episode."""
+    values, episodes = [], []
+    for s in temporal:
+        n = max(s["object_frames"], s["switches"])
+        values += [1.0] * s["switches"] + [0.0] * (n - s["switches"])
+        episodes += [s["episode"]] * n
+    if not values:
+        return float("nan"), float("nan"), float("nan")
+    mean, low, high, _ = t_interval(np.array(values), np.array(episodes), bounds=(0.0, 1.0))
+    return mean, low, high
+
+
+def summarise(per_frame: pd.DataFrame, temporal: list[dict]) -> dict:
+    """One table row's metric columns from a method's per-frame rows and sequence metrics."""
+    f1, f1_low, f1_high, episodes = _interval(per_frame["f1"], per_frame["episode"])
+    success, s_low, s_high, _ = _interval(per_frame["success"], per_frame["episode"])
+    sw, sw_low, sw_high = _switch_interval(temporal)
+    first = [v for s in temporal for v in s["first"]]
+    return {
+        "f1_mean": f1,
+        "f1_low": f1_low,
+        "f1_high": f1_high,
+        "success_1m_2deg": success,
+        "success_low": s_low,
+        "success_high": s_high,
+        "switches_per_100": 100 * sw,
+        "switches_low": 100 * sw_low,
+        "switches_high": 100 * sw_high,
+        "frames_to_first": float(np.mean(first)) if first else float("nan"),
+        "never_matched": int(sum(s["never"] for s in temporal)),
+        "hota": float(np.mean([s["hota"] for s in temporal])) if temporal else float("nan"),
+        "assa": float(np.mean([s["assa"] for s in temporal])) if temporal else float("nan"),
+        "frames": len(per_frame),
+        "sequences": len({(s["seed"], s["sequence"]) for s in temporal}),
+        "episodes": episodes,
+    }
+
+
+def _oracle(items: list[tuple[int, Sequenced]], preset: str) -> tuple[dict, pd.DataFrame]:
+    rows, temporal = [], []
+    for seed, item in items:
+        frames = [(gt, np.ones(len(gt))) for gt in item.gt]
+        r, s = score_test(item, frames, 0.5, seed)
+        rows += r
+        temporal.append(s)
+    per_frame = pd.DataFrame(rows)
+    row = {"method": ORACLE_ROW, "window": 0, "preset": preset, "tau": np.nan, "val_f1": np.nan}
+    return row | summarise(per_frame, temporal) | {"ms_per_frame": np.nan}, per_frame
+
+
+def evaluate_temporal(
+    test_dir: Path,
+    val_dir: Path,
+    out: Path,
+    methods: Sequence[tuple[str, Sequence[int]]] = METHODS,
+    presets: Sequence[str] = PRESETS,
+    seeds: Sequence[int] = RUNS,
+) -> pd.DataFrame:
+    """Run the study (module docstring) and write ``out/table_temporal.{md,csv}``,
+    ``out/table_temporal_gain.csv`` and the per-frame scores ``out/temporal/per_frame.csv``.
+    Returns the table."""
+    out = Path(out)
+    rows, gains, per_frame_all = [], [], []
+    for preset in presets:
+        test = load_split(Path(test_dir), preset, seeds)
+        val = load_split(Path(val_dir), preset, seeds)
+        oracle_row, oracle_frames = _oracle(test, preset)
+        per_frame_all.append(oracle_frames.assign(method=ORACLE_ROW, window=0, preset=preset))
+        frames_by: dict[tuple[str, int], pd.DataFrame] = {}
+        for method, windows in methods:
+            for window in windows:
+                val_out = [
+                    (item, run_method(method, window, item, s, preset)[0]) for s, item in val
+                ]
+                tau, val_f1 = calibrate_tau(val_out)
+                per_frame, temporal, seconds = [], [], 0.0
+                for seed, item in test:
+                    frames, took = run_method(method, window, item, seed, preset)
+                    seconds += took
+                    r, s = score_test(item, frames, tau, seed)
+                    per_frame += r
+                    temporal.append(s)
+                table = pd.DataFrame(per_frame)
+                frames_by[(method, window)] = table
+                per_frame_all.append(table.assign(method=method, window=window, preset=preset))
+                row = {"method": method, "window": window, "preset": preset}
+                row |= {"tau": tau, "val_f1": val_f1} | summarise(table, temporal)
+                row["ms_per_frame"] = 1000 * seconds / max(len(table), 1)
+                rows.append(row)
+                log.info(
+                    "[temporal] %s %s W=%d: τ %.3f, val F1 %.3f, test F1 %.3f",
+                    preset,
+                    method,
+                    window,
+                    tau,
+                    val_f1,
+                    row["f1_mean"],
+                )
+        rows.append(oracle_row)
+        gains.append(_gain(preset, rows, frames_by))
+    table = pd.DataFrame(rows, columns=list(COLUMNS))
+    oracle = table[table["method"] == ORACLE_ROW].set_index("preset")["success_1m_2deg"]
+    ceiling = table["preset"].map(oracle).to_numpy(dtype=float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        share = np.where(ceiling > 0, table["success_1m_2deg"].to_numpy(float) / ceiling, np.nan)
+    table["share_of_oracle"] = share
+    gain = pd.DataFrame([g for g in gains if g], columns=list(GAIN_COLUMNS))
+    (out / "temporal").mkdir(parents=True, exist_ok=True)
+    write_csv(table.round(6), out / f"{TABLE}.csv")
+    write_csv(gain.round(6), out / f"{GAIN}.csv")
+    if per_frame_all:
+        write_csv(
+            pd.concat(per_frame_all, ignore_index=True).round(6), out / "temporal" / "per_frame.csv"
+        )
+    write_text(out / f"{TABLE}.md", to_markdown(table, gain) + "\n\n" + "\n".join(
+        f"- {line}." for line in goals(table, out)
+    ) + "\n")  # fmt: skip
+    return table
+
+
+def best_long(table: pd.DataFrame, preset: str) -> str | None:
+    """The method with the best validation F1 at W = 10 under ``preset`` (None: none)."""
+    rows = table[(table["preset"] == preset) & (table["window"] == LONG)]
+    rows = rows[rows["method"] != ORACLE_ROW]
+    if not len(rows):
+        return None
+    return str(rows.sort_values(["val_f1", "method"], ascending=[False, True]).iloc[0]["method"])
+
+
+def _gain(preset: str, rows: list[dict], frames_by: dict) -> dict | None:
+    table = pd.DataFrame([r for r in rows if r["preset"] == preset])
+    method = best_long(table, preset)
+    if method is None or (method, SHORT) not in frames_by:
+        return None
+    long, short = frames_by[(method, LONG)], frames_by[(method, SHORT)]
+    diff = long["f1"].to_numpy(float) - short["f1"].to_numpy(float)
+    mean, low, high, episodes = t_interval(diff, long["episode"].to_numpy(), bounds=(-1.0, 1.0))
+    return {
+        "preset": preset,
+        "method": method,
+        "f1_w10": float(long["f1"].mean()),
+        "f1_w1": float(short["f1"].mean()),
+        "diff": mean,
+        "ci_low": low,
+        "ci_high": high,
+        "episodes": episodes,
+    }
+
+
+def _pct(value: float, digits: int = 1) -> str:
+    return "–" if not np.isfinite(value) else f"{100 * value:.{digits}f}"
+
+
+def _ranged(value: float, low: float, high: float) -> str:
+    if not np.isfinite(value):
+        return "–"
+    if not (np.isfinite(low) and np.isfinite(high)):
+        return _pct(value)
+    return f"{_pct(value)} [{_pct(low)}, {_pct(high)}]"
+
+
+def _num(value: float, digits: int = 2) -> str:
+    return "–" if not np.isfinite(value) else f"{value:.{digits}f}"
+
+
+def to_markdown(table: pd.DataFrame, gain: pd.DataFrame | None = None) -> str:
+    """The table as markdown: per preset every (method, W) and the oracle row."""
+    lines = [
+        f"**{LABEL}** — temporal matchers × window W × localisation preset; F1 and success in "
+        "percent with episode-level 95 % intervals; τ per (method, W, preset) from validation; "
+        "switches per 100 covisible object-frames; frames to the first correct association "
+        "(mean over objects matched at all; never: objects never matched correctly); HOTA/AssA "
+        "of the declared pairs over the own tracks.",
+        "",
+        "| Preset | Method | W | τ | F1 [95 % CI] | success@(1 m, 2°) [95 % CI] | of oracle "
+        "| switches/100 | frames to first | never | HOTA | AssA |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for row in table.itertuples(index=False):
+        oracle = row.method == ORACLE_ROW
+        lines.append(
+            f"| `{row.preset}` | `{row.method}` | {'' if oracle else row.window} "
+            f"| {'' if oracle else _num(row.tau, 3)} "
+            f"| {_ranged(row.f1_mean, row.f1_low, row.f1_high)} "
+            f"| {_ranged(row.success_1m_2deg, row.success_low, row.success_high)} "
+            f"| {_pct(row.share_of_oracle, 0)} | {_num(row.switches_per_100)} "
+            f"| {_num(row.frames_to_first)} | {row.never_matched} | {_pct(row.hota)} "
+            f"| {_pct(row.assa)} |"
+        )
+    if gain is not None and len(gain):
+        lines += [
+            "",
+            "What accumulation buys (best method at W = 10 by validation F1; test F1 at W = 10 "
+            "minus W = 1, paired per frame, episode-level 95 % interval):",
+            "",
+            "| Preset | Method | F1 W = 10 | F1 W = 1 | difference [95 % CI] |",
+            "|---|---|---|---|---|",
+        ]
+        for g in gain.itertuples(index=False):
+            lines.append(
+                f"| `{g.preset}` | `{g.method}` | {_pct(g.f1_w10)} | {_pct(g.f1_w1)} "
+                f"| {_ranged(g.diff, g.ci_low, g.ci_high)} |"
+            )
+    return "\n".join(lines)
+
+
+def _per_frame(results: Path) -> pd.DataFrame | None:
+    path = Path(results) / "temporal" / "per_frame.csv"
+    return pd.read_csv(path) if path.is_file() else None
+
+
+def goals(table: pd.DataFrame, results: Path) -> list[str]:
+    """The issue's goal lines (each through :func:`goal_line`)."""
+    per_frame = _per_frame(results)
+    lines = []
+    denied = best_long(table, "denied")
+    if denied is not None:
+        row = _row(table, denied, LONG, "denied")
+        lines.append(
+            goal_line(
+                "`denied`, W = 10: best F1 ≥ 80",
+                row.f1_mean,
+                row.f1_low,
+                row.f1_high,
+                0.80,
+                detail=f"`{denied}`, chosen on validation",
+            )
+        )
+    urban = best_long(table, "gnss-urban")
+    if urban is not None:
+        row = _row(table, urban, LONG, "gnss-urban")
+        lines.append(
+            goal_line(
+                "`gnss-urban`, W = 10: success@(1 m, 2°) ≥ 60",
+                row.success_1m_2deg,
+                row.success_low,
+                row.success_high,
+                0.60,
+                detail=f"`{urban}`, chosen on validation",
+            )
+        )
+        if per_frame is not None:
+            mine = _frames(per_frame, urban, LONG, "gnss-urban")
+            oracle = _frames(per_frame, ORACLE_ROW, 0, "gnss-urban")
+            if mine is not None and oracle is not None and len(mine) == len(oracle):
+                diff = mine["success"].to_numpy(float) - 0.9 * oracle["success"].to_numpy(float)
+                mean, low, high, _ = _interval(diff, mine["episode"], bounds=(-1.0, 1.0))
+                lines.append(
+                    goal_line(
+                        "`gnss-urban`, W = 10: success − 0.9 × the oracle's ≥ 0",
+                        mean,
+                        low,
+                        high,
+                        0.0,
+                        detail=f"`{urban}`; share of the oracle {_pct(row.share_of_oracle, 0)} %",
+                    )
+                )
+        lines.append(
+            goal_line(
+                "`gnss-urban`, W = 10: switches ≤ 1 per 100 object-frames",
+                row.switches_per_100,
+                row.switches_low,
+                row.switches_high,
+                1.0,
+                at_least=False,
+                scale=1.0,
+                digits=2,
+                detail=f"`{urban}`",
+            )
+        )
+    gain = Path(results) / f"{GAIN}.csv"
+    if gain.is_file():
+        g = pd.read_csv(gain)
+        g = g[g["preset"] == "denied"]
+        if len(g):
+            g = g.iloc[0]
+            above = "above 0" if np.isfinite(g.ci_low) and g.ci_low > 0 else "not above 0"
+            lines.append(
+                goal_line(
+                    "`denied`: W = 10 beats W = 1 by ≥ +10 F1 points",
+                    g["diff"],
+                    g.ci_low,
+                    g.ci_high,
+                    0.10,
+                    detail=f"`{g.method}`; interval {above}",
+                )
+            )
+    return lines
+
+
+def _row(table: pd.DataFrame, method: str, window: int, preset: str):
+    rows = table[
+        (table["method"] == method) & (table["window"] == window) & (table["preset"] == preset)
+    ]
+    return next(rows.itertuples(index=False))
+
+
+def _frames(per_frame: pd.DataFrame, method: str, window: int, preset: str) -> pd.DataFrame | None:
+    rows = per_frame[
+        (per_frame["method"] == method)
+        & (per_frame["window"] == window)
+        & (per_frame["preset"] == preset)
+    ]
+    if not len(rows):
+        return None
+    return rows.sort_values(["seed", "sequence", "frame"]).reset_index(drop=True)
+
+
+def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[str]:
+    """README lines for the temporal table (none without ``table_temporal.csv``): per preset
+    what accumulation buys (one row each) and the issue's goal lines; ``seconds``: the last cold
+    run's generation + study time (a "≤ 2 min cold" line), None: not measured cold."""
+    results = Path(results)
+    path = results / f"{TABLE}.csv"
+    if not path.is_file():
+        return []
+    table = pd.read_csv(path, keep_default_na=False, na_values=[""])
+    gain_path = results / f"{GAIN}.csv"
+    gain = pd.read_csv(gain_path) if gain_path.is_file() else pd.DataFrame(columns=GAIN_COLUMNS)
+    lines = [
+        "### The temporal table",
+        "",
+        f"`{SCENARIO}`: sequences of 10 frames 0.2 s apart of the same two vehicles; each "
+        "agent's own tracks from its detections and odometry (never a true id); "
+        "`windowed:<m>` (a two-view matcher's scores averaged along the own tracks over W "
+        "frames) and `temporal_pose` (one planar motion per window), defaults only, τ per "
+        "(method, W, preset) on validation. Per preset the method with the best validation F1 "
+        "at W = 10: test F1 at W = 10 and W = 1, their paired difference (episode-level 95 % "
+        f"interval), success@(1 m, 2°) at W = 10 and the oracle's. Every row: "
+        f"[{rel}/{TABLE}.md]({rel}/{TABLE}.md).",
+        "",
+        "| Preset | Method | F1 W = 10 | F1 W = 1 | W = 10 − W = 1 [95 % CI] | success W = 10 "
+        "| oracle success |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for g in gain.itertuples(index=False):
+        mine = table[
+            (table["method"] == g.method)
+            & (table["window"] == LONG)
+            & (table["preset"] == g.preset)
+        ]
+        oracle = table[(table["method"] == ORACLE_ROW) & (table["preset"] == g.preset)]
+        success = float(mine["success_1m_2deg"].iloc[0]) if len(mine) else float("nan")
+        ceiling = float(oracle["success_1m_2deg"].iloc[0]) if len(oracle) else float("nan")
+        lines.append(
+            f"| `{g.preset}` | `{g.method}` | {_pct(g.f1_w10)} | {_pct(g.f1_w1)} "
+            f"| {_ranged(g.diff, g.ci_low, g.ci_high)} | {_pct(success)} | {_pct(ceiling)} |"
+        )
+    timing = (
+        [f"stage time (generation + study, last cold run): {seconds:.0f} s (goal ≤ 120 s)"]
+        if seconds is not None
+        else []
+    )
+    lines += ["", *[f"- {line}." for line in goals(table, results) + timing], ""]
+    return lines

@@ -1,0 +1,167 @@
+"""The temporal table (issue 41's study, ``eval/studies/temporal.py``) on a tiny fake sequence
+dataset (the fake stages of tests/test_generate_fakes.py: no SUMO, no OpenGL): the table and its
+columns, W = 1 rows equal to the two-view matcher's per-frame outcome, τ from validation only,
+goal lines through goal_verdict, the README part."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+import test_sequences as seqs
+
+from cadsim.dataset import Dataset
+from eval.protocol import goal_verdict
+from eval.protocol.metrics import pair_metrics
+from eval.studies import temporal
+from matchers.core.registry import get
+
+METHODS = (("windowed:consistency", (1, 3)), ("temporal_pose", (1, 10)))
+PRESETS = ("gnss-urban", "denied")
+
+
+@pytest.fixture(scope="module")
+def dirs(tmp_path_factory):
+    root = tmp_path_factory.mktemp("temporal")
+    scenario = seqs._scenario(frames=4)
+    seqs._generate(root / "test", scenario, pairs=4)
+    seqs._generate(root / "val", scenario, pairs=2, seed=99)
+    seqs._generate(root / "other", scenario, pairs=2, seed=7)
+    return root
+
+
+@pytest.fixture(scope="module")
+def study(dirs):
+    out = dirs / "out"
+    table = temporal.evaluate_temporal(dirs / "test", dirs / "val", out, METHODS, PRESETS)
+    return out, table
+
+
+def test_the_study_writes_the_table_with_its_columns(study):
+    out, table = study
+    csv = pd.read_csv(out / "table_temporal.csv")
+    assert list(csv.columns) == list(temporal.COLUMNS)
+    runs = sum(len(w) for _, w in METHODS)
+    assert len(csv) == len(PRESETS) * (runs + 1)  # + the oracle row per preset
+    assert set(csv["preset"]) == set(PRESETS)
+    oracle = csv[csv["method"] == temporal.ORACLE_ROW]
+    assert (oracle["f1_mean"] == 1.0).all()
+    md = (out / "table_temporal.md").read_text()
+    assert "| Preset | Method | W |" in md and "What accumulation buys" in md
+    gain = pd.read_csv(out / "table_temporal_gain.csv")
+    assert list(gain.columns) == list(temporal.GAIN_COLUMNS)
+    assert list(gain["preset"]) == list(PRESETS)
+    assert (csv["frames"] == 16).all() and (csv["sequences"] == 4).all()
+
+
+def test_a_prior_reader_declares_nothing_under_denied(study):
+    _, table = study
+    rows = table[(table["method"] == "temporal_pose") & (table["preset"] == "denied")]
+    assert len(rows) == 2 and (rows["f1_mean"] == 0).all()
+    assert (rows["success_1m_2deg"] == 0).all()
+
+
+def test_w1_rows_equal_the_two_view_matchers_per_frame_outcome(dirs, study):
+    out, table = study
+    per_frame = pd.read_csv(out / "temporal" / "per_frame.csv")
+    ds = Dataset(str(dirs / "test"))
+    base = get("consistency")
+    for preset in PRESETS:
+        row = table[
+            (table["method"] == "windowed:consistency")
+            & (table["window"] == 1)
+            & (table["preset"] == preset)
+        ].iloc[0]
+        got = per_frame[
+            (per_frame["method"] == "windowed:consistency")
+            & (per_frame["window"] == 1)
+            & (per_frame["preset"] == preset)
+        ].sort_values(["sequence", "frame"])
+        expected = []
+        for k in range(ds.sequences):
+            for pair in ds.sequence(k):
+                local = pair.localise_preset(preset, seed=0)
+                problem = local.problem()
+                m = base(problem, seed=0, threshold=None)
+                pairs = np.asarray(m.pairs, dtype=np.int64).reshape(-1, 2)
+                kept = pairs[m.scores[pairs[:, 0], pairs[:, 1]] >= row.tau]
+                expected.append(pair_metrics(kept, local.gt_pairs, problem.n1, problem.n2).f1)
+        np.testing.assert_allclose(got["f1"].to_numpy(), expected, atol=1e-6)
+
+
+def test_tau_comes_from_validation_only(dirs, study):
+    out, table = study
+    # the same validation split with another test split: every τ unchanged
+    other = temporal.evaluate_temporal(
+        dirs / "other", dirs / "val", dirs / "out-other", METHODS, PRESETS
+    )
+    key = ["method", "window", "preset"]
+    left = table[table["method"] != temporal.ORACLE_ROW].set_index(key)["tau"]
+    right = other[other["method"] != temporal.ORACLE_ROW].set_index(key)["tau"]
+    pd.testing.assert_series_equal(left.sort_index(), right.sort_index())
+    # and each τ is the calibration of the validation outcomes alone
+    for preset in PRESETS:
+        val = temporal.load_split(dirs / "val", preset, temporal.RUNS)
+        outcomes = [
+            (item, temporal.run_method("windowed:consistency", 3, item, s, preset)[0])
+            for s, item in val
+        ]
+        tau, val_f1 = temporal.calibrate_tau(outcomes)
+        row = table.set_index(key).loc[("windowed:consistency", 3, preset)]
+        assert row["tau"] == pytest.approx(tau, abs=1e-6)
+        assert row["val_f1"] == pytest.approx(val_f1, abs=1e-6)
+
+
+def test_a_planted_validation_threshold_is_the_one_applied(monkeypatch, dirs):
+    """Plant the τ calibration: the test F1 is then the F1 at the planted τ, whatever the test
+    split would prefer."""
+    monkeypatch.setattr(temporal, "calibrate_tau", lambda outcomes: (1e9, 0.5))
+    table = temporal.evaluate_temporal(
+        dirs / "test", dirs / "val", dirs / "out-planted", METHODS[:1], PRESETS[:1]
+    )
+    rows = table[table["method"] != temporal.ORACLE_ROW]
+    assert (rows["tau"] == 1e9).all() and (rows["f1_mean"] == 0).all()
+
+
+def _table(f1_low: float, f1_high: float) -> pd.DataFrame:
+    rows = []
+    for preset in ("gnss-urban", "denied"):
+        for window in (1, 10):
+            rows.append(
+                dict.fromkeys(temporal.COLUMNS, np.nan)
+                | {"method": "m", "window": window, "preset": preset, "val_f1": 0.5}
+                | {"f1_mean": 0.85, "f1_low": f1_low, "f1_high": f1_high}
+                | {"success_1m_2deg": 0.7, "success_low": 0.65, "success_high": 0.75}
+                | {"switches_per_100": 0.5, "switches_low": 0.2, "switches_high": 0.9}
+                | {"share_of_oracle": 0.9}
+            )
+    return pd.DataFrame(rows)
+
+
+def test_goal_lines_go_through_goal_verdict(monkeypatch, tmp_path):
+    calls = []
+    real = goal_verdict.goal_line
+
+    def spy(*args, **kwargs):
+        calls.append((args, kwargs))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(temporal, "goal_line", spy)
+    lines = temporal.goals(_table(0.81, 0.9), tmp_path)
+    assert len(lines) == len(calls) == 3  # no per-frame or gain files: those goals left out
+    assert lines[0].startswith("`denied`, W = 10: best F1 ≥ 80: met")
+    assert ": met" in lines[1]  # success [65, 75] ≥ 60
+    assert ": met" in lines[2]  # switches [0.2, 0.9] ≤ 1
+    crossing = temporal.goals(_table(0.79, 0.9), tmp_path)
+    assert crossing[0].startswith("`denied`, W = 10: best F1 ≥ 80: not shown")
+
+
+def test_readme_part_is_compact_and_states_the_goals(study):
+    out, _ = study
+    lines = temporal.readme_part(out, "results", seconds=42.0)
+    assert lines[0] == "### The temporal table"
+    rows = [line for line in lines if line.startswith("| `")]
+    assert 0 < len(rows) <= 6
+    text = "\n".join(lines)
+    assert "W = 10 beats W = 1" in text and "42 s" in text
+    assert temporal.readme_part(out / "missing", "results") == []
