@@ -9,7 +9,8 @@ all matchers × runs (parameters tuned and τ calibrated on validation only; the
 beside); the paper's protocol; the CAD noise sweep (re-detection on stored clean depth); the regime
 sweep on every dataset; the dataset spread; the localisation sweep on CAD (prior re-drawn per
 position error); the V2X task on cad-v2x; the multi-agent table on cad-multi
-(:mod:`eval.studies.multiagent`); the external benchmark on the shipped DMGM CAD pairs (``eval/data/dmgm-cad``,
+(:mod:`eval.studies.multiagent`); the temporal table on cad-v2x-seq (:mod:`eval.studies.temporal`,
+``--no-temporal`` skips it); the external benchmark on the shipped DMGM CAD pairs (``eval/data/dmgm-cad``,
 :mod:`eval.studies.external`) and the ranking agreement with it (:mod:`eval.studies.agreement`); tables and
 figures; run record. Ends by printing Table I beside the paper's.
 
