@@ -622,10 +622,32 @@ def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[s
             f"| `{g.preset}` | `{g.method}` | {_pct(g.f1_w10)} | {_pct(g.f1_w1)} "
             f"| {_ranged(g.diff, g.ci_low, g.ci_high)} | {_pct(success)} | {_pct(ceiling)} |"
         )
+    findings = []
+    for g in gain.itertuples(index=False):
+        if not (np.isfinite(g.ci_low) and np.isfinite(g.ci_high)):
+            verdict = "no interval (one episode)"
+        elif g.ci_low > 0:
+            verdict = "a gain, interval above 0"
+        elif g.ci_high < 0:
+            verdict = "a loss, interval below 0"
+        else:
+            verdict = "no measurable change, interval across 0"
+        findings.append(
+            f"`{g.preset}`: W = 10 against W = 1 for `{g.method}`: "
+            f"{100 * g.diff:+.1f} F1 points — {verdict}"
+        )
+    oracle = table[(table["method"] == ORACLE_ROW) & (table["preset"] == "gnss-urban")]
+    if len(oracle) and float(oracle["success_high"].iloc[0]) < 0.60:
+        o = oracle.iloc[0]
+        findings.append(
+            "the oracle's own `gnss-urban` success@(1 m, 2°) is "
+            f"{_ranged(o.success_1m_2deg, o.success_low, o.success_high)}: below the 60 bar, "
+            "which no matcher can then clear (the detections' position error caps the planar fit)"
+        )
     timing = (
         [f"stage time (generation + study, last cold run): {seconds:.0f} s (goal ≤ 120 s)"]
         if seconds is not None
         else []
     )
-    lines += ["", *[f"- {line}." for line in goals(table, results) + timing], ""]
+    lines += ["", *[f"- {line}." for line in findings + goals(table, results) + timing], ""]
     return lines
