@@ -190,6 +190,26 @@ def v2x(results: Path) -> list[str]:
     return lines
 
 
+TEMPORAL_METHODS = ("windowed:consistency", "temporal_pose")
+
+
+def temporal(results: Path) -> list[str]:
+    """CAD-V2X sequences: F1 at W = 1 and W = 10 of a fixed pair of methods, per preset."""
+    table = read_csv(Path(results) / "table_temporal.csv")
+    if not _has(table, "method", "window", "preset", "f1_mean"):
+        return []
+    shown = [m for m in TEMPORAL_METHODS if m in set(table["method"])]
+    if not shown:
+        return []
+    f1 = table.set_index(["preset", "method", "window"])["f1_mean"]
+    header = [f"{m}, W = {w}" for m in shown for w in (1, 10)]
+    lines = ["| Preset | " + " | ".join(header) + " |", "|:---|" + "---:|" * len(header)]
+    for preset in dict.fromkeys(table["preset"]):
+        cells = [pct(f1.get((preset, m, w))) for m in shown for w in (1, 10)]
+        lines.append(_row([str(preset), *cells]))
+    return lines
+
+
 def multiagent(results: Path, preset: str = "gnss-urban") -> list[str]:
     """CAD-multi at the largest number of agents (under ``preset`` when it was run): pooled
     pairwise F1 of every two-view matcher under every fusion."""
