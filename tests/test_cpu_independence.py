@@ -139,7 +139,8 @@ def test_a_small_reproduce_gives_the_same_tables_on_every_dispatch_level(tmp_pat
     args += ["--spread-runs", "1", "--sweep-runs", "1", "--localisation-sigmas", "0,2"]
     args += ["--localisation-runs", "1", "--external-runs", "1", "--external-tune-pairs", "3"]
     args += ["--workers", "1", "--no-progress", "--out", "{out}/out", "--data", "{out}/data"]
-    args += ["--cache", "{out}/cache"]
+    # the temporal study is not yet CPU-independent (docs/reproducibility.md, "Scope"): left out
+    args += ["--cache", "{out}/cache", "--no-temporal"]
     done = _run_all(args, tmp_path)
     plain = _tables(tmp_path / "plain" / "out")
     assert {"table1.csv", "regime_sweep.csv", "crossovers.csv", "noise_runs.csv"} <= set(plain)

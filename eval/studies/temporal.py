@@ -187,6 +187,7 @@ def load_split(folder: Path, preset: str, seeds: Sequence[int]) -> list[tuple[in
 def run_method(method: str, window: int, item: Sequenced, seed: int, preset: str):
     """Per frame (assigned (k, 2), assigned scores (k,)) of ``method`` at ``window`` with no
     threshold; nothing under ``denied`` for a prior reader. Plus the seconds it took."""
+    from matchers.core.discretise import canonical_scores
     from matchers.core.temporal_registry import get_temporal
 
     empty = [(np.zeros((0, 2), np.int64), np.zeros(0)) for _ in item.seq.frames]
@@ -198,7 +199,8 @@ def run_method(method: str, window: int, item: Sequenced, seed: int, preset: str
     frames = []
     for m in out:
         pairs = np.asarray(m.pairs, dtype=np.int64).reshape(-1, 2)
-        scores = np.asarray(m.scores, dtype=float)
+        # canonical (grid) scores, as the two-view runner uses: τ sees the same values on every CPU
+        scores = canonical_scores(np.asarray(m.scores, dtype=float))
         frames.append((pairs, scores[pairs[:, 0], pairs[:, 1]] if len(pairs) else np.zeros(0)))
     return frames, seconds
 
