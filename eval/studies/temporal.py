@@ -136,8 +136,7 @@ def _true_ids(object_ids: Sequence[str], names: dict[str, int]) -> np.ndarray:
 def sequence_problem(frames, preset: str, seed: int, index: int = 0) -> Sequenced:
     """The :class:`Sequenced` of one sequence's ``frames`` (FramePairs in time order) under
     ``preset``, localisation drawn with ``seed``; own tracks from :func:`with_own_tracks`."""
-    from matchers.core.sequence_problem import SequenceProblem
-    from matchers.tracking.hungarian import with_own_tracks
+    from matchers.tracking.hungarian import tracked_sequence
 
     pairs = [f.localise_preset(preset, seed=seed) for f in frames]
     problems = [p.problem() for p in pairs]
@@ -152,11 +151,7 @@ def sequence_problem(frames, preset: str, seed: int, index: int = 0) -> Sequence
         f.points1.shape[1] == 3 and f.points2.shape[1] == 3 for f in problems
     ):
         mounts = (np.asarray(extrinsics[0][0]), np.asarray(extrinsics[0][1]))
-    placeholder1 = [np.arange(f.n1) for f in problems]  # replaced by the own tracks below
-    placeholder2 = [np.arange(f.n2) for f in problems]
-    seq = with_own_tracks(
-        SequenceProblem(problems, placeholder1, placeholder2, odo[0], odo[1], *mounts)
-    )
+    seq = tracked_sequence(problems, odo[0], odo[1], *mounts)  # each agent's own tracks
     names: dict[str, int] = {}
     true1 = [_true_ids(p.view1.object_ids, names) for p in pairs]
     true2 = [_true_ids(p.view2.object_ids, names) for p in pairs]

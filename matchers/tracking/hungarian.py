@@ -90,3 +90,22 @@ def with_own_tracks(seq: SequenceProblem, gate: float = 2.0, max_age: int = 2) -
         seq.mount2,
         dict(seq.meta),
     )
+
+
+def tracked_sequence(
+    frames: list,
+    odometry1: np.ndarray,
+    odometry2: np.ndarray,
+    mount1: np.ndarray | None = None,
+    mount2: np.ndarray | None = None,
+    gate: float = 2.0,
+    max_age: int = 2,
+) -> SequenceProblem:
+    """The :class:`SequenceProblem` of per-frame ``frames`` (time order) with each agent's own
+    tracks from its detections and odometry alone (:func:`track_views`): what a vehicle can build
+    itself, never a true id. The detection indices only fill the contract's track fields until
+    :func:`with_own_tracks` replaces them."""
+    indices1 = [np.arange(f.n1) for f in frames]
+    indices2 = [np.arange(f.n2) for f in frames]
+    untracked = SequenceProblem(frames, indices1, indices2, odometry1, odometry2, mount1, mount2)
+    return with_own_tracks(untracked, gate, max_age)
