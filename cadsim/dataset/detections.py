@@ -17,6 +17,7 @@ from scipy.sparse.csgraph import connected_components
 
 _FIELDS = ("positions", "boxes", "features", "object_ids", "true_classes", "pixels")
 _REPORTED = "reported_classes"
+_HEADINGS = "headings"
 _LEGACY_TRUE = "classes"  # formats 2-4 stored only the true class, under this name
 
 
@@ -30,6 +31,8 @@ class ViewDetections:
     world: (k, 3) float64 metres (x, y horizontal, z up) or None — a stored prior.
     reported_classes: k strings, the class the view's detector reported (what a matcher may
     see), or None where the record does not say (formats before 5).
+    headings: (k,) float64 radians or None — box-only detections' headings in the view's frame
+    (``cadsim.sensing.box_features`` states the convention); camera detections leave it None.
     """
 
     positions: np.ndarray
@@ -40,6 +43,7 @@ class ViewDetections:
     pixels: np.ndarray
     world: np.ndarray | None = None
     reported_classes: list[str] | None = None
+    headings: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         k = len(self.object_ids)
@@ -60,6 +64,13 @@ class ViewDetections:
             if not np.isfinite(world).all():
                 raise ValueError("detections.world: non-finite values")
             object.__setattr__(self, "world", world)
+        if self.headings is not None:
+            headings = np.asarray(self.headings, dtype=np.float64).reshape(-1)
+            if len(headings) != k:
+                raise ValueError(f"detections.headings: {len(headings)} rows for {k} object ids")
+            if not np.isfinite(headings).all():
+                raise ValueError("detections.headings: non-finite values")
+            object.__setattr__(self, "headings", headings)
         if len(set(self.object_ids)) != k:
             raise ValueError("detections.object_ids: an object is detected twice in one view")
         object.__setattr__(self, "positions", positions)
@@ -79,14 +90,20 @@ class ViewDetections:
         """From any object with the detection adapter's fields (``cadsim.sensing.detection.Detections``);
         a detector that reports no ``reported_classes`` gives matchers no class."""
         fields = {f: getattr(det, f) for f in _FIELDS}
-        return cls(**fields, reported_classes=getattr(det, _REPORTED, None))
+        return cls(
+            **fields,
+            reported_classes=getattr(det, _REPORTED, None),
+            headings=getattr(det, _HEADINGS, None),
+        )
 
     def to_arrays(self, prefix: str) -> dict[str, np.ndarray]:
         """Arrays for an npz, keys ``PREFIX_FIELD``; strings as fixed-width unicode arrays;
-        ``PREFIX_world`` only when a prior is stored."""
+        ``PREFIX_world`` only when a prior is stored, ``PREFIX_headings`` only for boxes."""
         world = {} if self.world is None else {f"{prefix}_world": self.world}
         if self.reported_classes is not None:
             world[f"{prefix}_{_REPORTED}"] = np.array(self.reported_classes, dtype=str)
+        if self.headings is not None:
+            world[f"{prefix}_{_HEADINGS}"] = self.headings
         return world | {
             f"{prefix}_positions": self.positions,
             f"{prefix}_boxes": self.boxes,
@@ -124,6 +141,7 @@ class ViewDetections:
             reported_classes=(
                 None if reported is None else np.asarray(reported).reshape(-1).tolist()
             ),
+            headings=arrays.get(f"{prefix}_{_HEADINGS}"),
         )
 
     def take(self, rows) -> ViewDetections:
@@ -142,17 +160,21 @@ class ViewDetections:
             reported_classes=(
                 None if self.reported_classes is None else [self.reported_classes[r] for r in rows]
             ),
+            headings=None if self.headings is None else self.headings[rows],
         )
 
     def equals(self, other: ViewDetections) -> bool:
         """Exact equality of every field."""
         if (self.world is None) != (other.world is None):
             return False
+        if (self.headings is None) != (other.headings is None):
+            return False
         return (
             self.object_ids == other.object_ids
             and self.true_classes == other.true_classes
             and self.reported_classes == other.reported_classes
             and (self.world is None or np.array_equal(self.world, other.world))
+            and (self.headings is None or np.array_equal(self.headings, other.headings))
             and all(
                 np.array_equal(getattr(self, f), getattr(other, f))
                 for f in ("positions", "boxes", "features", "pixels")
