@@ -159,6 +159,13 @@ register(
 )
 register(
     lazy_section(
+        "lidar",
+        "LiDAR rays/s, a 64 x 1024 sweep, LiDAR pair vs camera pair",
+        "eval.bench.lidar:lidar_section",
+    )
+)
+register(
+    lazy_section(
         "scaleout",
         "noise sweep on the local pool vs a 2-worker Dask LocalCluster",
         "eval.bench.scaleout:scaleout_section",
