@@ -33,7 +33,7 @@ def box_view(observer: str, kind: str, pose: np.ndarray, ids: list[str]) -> BoxV
     positions, headings = boxes_in_view(camera, rows[:, :3], yaw_directions(rows[:, 3]))
     det = box_detections(positions, rows[:, 4:7], headings, ids, [BOXES[i][7] for i in ids])
     body = ObserverPose((float(pose[0, 3]), float(pose[1, 3]), 0.75), camera.yaw)
-    return BoxView(observer, kind, camera, body, det)
+    return BoxView(observer, kind, camera, body, det, rows[:, 4:7])
 
 
 def objects() -> list[WorldObject]:

@@ -5,7 +5,9 @@ Each view is a sensor (the agent's LiDAR) with a pose and its boxes. The detecti
 cadsim detection's convention with the sensor as origin (``cadsim.sensing.box_features``):
 ``positions`` the box centres in the camera-frame convention (x right, y down, z forward,
 metres), ``features`` the 48-d box feature vector of the size, ``headings`` (radians), the
-reported class, no pixel box (zeros) and no pixel count (0). ``record.json`` says so:
+reported class, no pixel box (zeros) and no pixel count (0); beside them ``view{k}_sizes``
+(k, 3) the boxes' length, width, height in metres (what the features encode; the exporters
+read it, :func:`read_box_sizes`). ``record.json`` says so:
 ``cues`` = ``BOX_CUES`` (``cadsim.dataset.cues``), and each observer entry holds ``sensor:
 "lidar"``, a ``camera`` entry that is the sensor's pose (its position, heading and pitch; no
 image is behind it) and ``pose``, the body the sensor is mounted on — so ``camera_extrinsics``
@@ -53,7 +55,8 @@ class BoxView:
     """One sensor's boxes. observer_id: the agent's id; kind: "vehicle" or "roadside"; sensor:
     the LiDAR's world pose as a :class:`~cadsim.camera.Camera` (camera-frame convention, no
     image); body: the pose of what carries it (a roadside unit: the sensor itself);
-    detections: positions, features, headings as the module docstring says; odometry: the
+    detections: positions, features, headings as the module docstring says; sizes: (k, 3)
+    length, width, height, metres; odometry: the
     body's pose relative to its sequence's frame 0 (sequence frames only)."""
 
     observer_id: str
@@ -61,6 +64,7 @@ class BoxView:
     sensor: Camera
     body: ObserverPose
     detections: ViewDetections
+    sizes: np.ndarray
     odometry: OdometryPose | None = None
 
 
@@ -161,6 +165,8 @@ def encode_box_record(rec: BoxRecord) -> dict[str, bytes]:
     arrays = {}
     for k, view in enumerate(views, start=1):
         arrays |= view.detections.to_arrays(f"view{k}")
+        sizes = np.asarray(view.sizes, dtype=np.float64).reshape(len(view.detections), 3)
+        arrays[f"view{k}_sizes"] = sizes
     return {layout.DETECTIONS_NPZ: npz_bytes(arrays), layout.RECORD_JSON: json_bytes(record)}
 
 
@@ -191,4 +197,22 @@ def box_detections(
     )
 
 
-__all__ = ["BoxRecord", "BoxView", "box_detections", "encode_box_record", "record_version"]
+def read_box_sizes(record_dir, view: int) -> np.ndarray | None:
+    """(k, 3) box sizes (metres) of view ``view`` of a record, None for a record without."""
+    from pathlib import Path
+
+    from cadsim.dataset.encoding import load_npz
+
+    what = Path(record_dir) / layout.DETECTIONS_NPZ
+    arrays = load_npz(str(what), str(what))
+    return arrays.get(f"view{int(view)}_sizes")
+
+
+__all__ = [
+    "read_box_sizes",
+    "BoxRecord",
+    "BoxView",
+    "box_detections",
+    "encode_box_record",
+    "record_version",
+]

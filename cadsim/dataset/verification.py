@@ -92,7 +92,7 @@ class RecordLayout:
         """Every array name (after ``view{k}_``) a view of this format may hold."""
         return (
             "positions", "boxes", "features", "features_scale", "object_ids",
-            *self.class_arrays, "pixels", "world", "headings",
+            *self.class_arrays, "pixels", "world", "headings", "sizes",
         )  # fmt: skip
 
 
@@ -388,7 +388,7 @@ def _check_prior(prior, where: Path) -> None:
 
 
 _VIEW_ARRAY = re.compile(r"^view([1-9][0-9]*)_([a-z_]+)$")
-_SHAPES = {"positions": 3, "boxes": 4, "world": 3}  # (k, columns)
+_SHAPES = {"positions": 3, "boxes": 4, "world": 3, "sizes": 3}  # (k, columns)
 
 
 def check_views(arrays: dict[str, np.ndarray], what: Path, expected: RecordLayout):

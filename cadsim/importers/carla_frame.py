@@ -8,14 +8,16 @@ as a rotation and a translation (or a 4×4 matrix) in the same axes. Mirroring y
 1)) makes every such transform right-handed: T_rh = F · T · F, and a point's world y is negated —
 cadsim's world (x, y horizontal, z up, counter-clockwise headings). Both directions are here:
 :func:`pose_matrix` (source → ours) and :func:`pose_angles` (ours → source), exact inverses up
-to rounding.
+to rounding; inverse trigonometry through :mod:`cadsim.portable_math` (same bytes on any CPU).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-MIRROR = np.diag([1.0, -1.0, 1.0, 1.0])
+from cadsim import portable_math as pm
+
+_SIGNS = np.outer([1.0, -1.0, 1.0, 1.0], [1.0, -1.0, 1.0, 1.0])  # F · T · F, elementwise (exact)
 
 
 def carla_matrix(pose: np.ndarray) -> np.ndarray:
@@ -37,7 +39,7 @@ def carla_matrix(pose: np.ndarray) -> np.ndarray:
 def mirrored(transform: np.ndarray) -> np.ndarray:
     """A 4×4 transform between CARLA-axis frames as the same transform between right-handed
     frames (and back: the map is its own inverse)."""
-    return MIRROR @ np.asarray(transform, dtype=np.float64) @ MIRROR
+    return np.asarray(transform, dtype=np.float64) * _SIGNS
 
 
 def pose_matrix(pose: np.ndarray) -> np.ndarray:
@@ -54,9 +56,9 @@ def pose_angles(transform: np.ndarray) -> list[float]:
     """``[x, y, z, roll, yaw, pitch]`` (metres, degrees, CARLA world) of a right-handed 4×4
     transform: the inverse of :func:`pose_matrix`."""
     m = mirrored(transform)
-    pitch = np.degrees(np.arcsin(np.clip(m[2, 0], -1.0, 1.0)))
-    yaw = np.degrees(np.arctan2(m[1, 0], m[0, 0]))
-    roll = np.degrees(np.arctan2(-m[2, 1], m[2, 2]))
+    pitch = np.degrees(pm.arcsin(float(np.clip(m[2, 0], -1.0, 1.0))))
+    yaw = np.degrees(pm.arctan2(m[1, 0], m[0, 0]))
+    roll = np.degrees(pm.arctan2(-m[2, 1], m[2, 2]))
     return [float(m[0, 3]), float(m[1, 3]), float(m[2, 3]), float(roll), float(yaw), float(pitch)]
 
 

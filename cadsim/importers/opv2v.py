@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cadsim import portable_math as pm
 from cadsim.dataset import layout
 from cadsim.dataset.box_record import BoxView, box_detections
 from cadsim.importers import ImportFormatError
@@ -42,7 +43,13 @@ from cadsim.importers.box_dataset import ImportResult, check_out, write_box_data
 from cadsim.importers.box_sequence import ImportedFrame, sequence_records
 from cadsim.importers.carla_frame import carla_matrix, mirrored, mirrored_points, pose_matrix
 from cadsim.importers.safe_read import field, matrix, number, numbers, read_yaml, rigid
-from cadsim.importers.sensor_frame import boxes_in_view, sensor_camera
+from cadsim.importers.sensor_frame import (
+    apply,
+    boxes_in_view,
+    heading_of,
+    rigid_inverse,
+    sensor_camera,
+)
 from cadsim.observer_pose import ObserverPose
 from cadsim.world import WorldObject
 
@@ -112,7 +119,7 @@ def _boxes(vehicles, path: Path) -> list[dict]:
             {
                 "id": str(int(actor)),
                 "cls": str(kind).lower()[:40] if isinstance(kind, str) else "car",
-                "centre": (m @ [*center, 1.0])[:3],
+                "centre": apply(m, [center])[0],
                 "direction": m[:3, 0],
                 "size": [2.0 * e for e in extent],
                 "speed": speed * _KMH,
@@ -147,16 +154,15 @@ def _view(agent: _Agent, prior: bool) -> tuple[BoxView, list[WorldObject]]:
     sizes = np.array([b["size"] for b in agent.boxes], dtype=float).reshape(k, 3)
     stored = None
     if prior:
-        shift = agent.predicted @ np.linalg.inv(agent.body)
-        stored = world @ shift[:3, :3].T + shift[:3, 3]
+        stored = apply(pm.matmul(agent.predicted, rigid_inverse(agent.body)), world)
     forward = agent.body[:3, 0]
     pose = ObserverPose(
-        tuple(float(v) for v in agent.body[:3, 3]), float(np.arctan2(forward[1], forward[0]))
+        tuple(float(v) for v in agent.body[:3, 3]), float(pm.arctan2(forward[1], forward[0]))
     )
     kind = "roadside" if agent.agent < 0 else "vehicle"
     det = box_detections(positions, sizes, headings, ids, classes, world=stored)
-    view = BoxView(str(agent.agent), kind, camera, pose, det)
-    yaw = np.arctan2(directions[:, 1], directions[:, 0])
+    view = BoxView(str(agent.agent), kind, camera, pose, det, sizes)
+    yaw = heading_of(directions)
     objects = [
         WorldObject(i, c, "box", tuple(w), float(y), tuple(s), (0.5, 0.5, 0.5),
                     velocity=(b["speed"] * np.cos(y), b["speed"] * np.sin(y), 0.0))

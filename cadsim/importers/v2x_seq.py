@@ -36,12 +36,19 @@ from pathlib import Path
 
 import numpy as np
 
+from cadsim import portable_math as pm
 from cadsim.dataset.box_record import BoxView, box_detections
 from cadsim.importers import ImportFormatError
 from cadsim.importers.box_dataset import ImportResult, check_out, write_box_dataset
 from cadsim.importers.box_sequence import ImportedFrame, sequence_records
 from cadsim.importers.safe_read import confined, field, number, read_json, rigid
-from cadsim.importers.sensor_frame import boxes_in_view, sensor_camera, yaw_directions
+from cadsim.importers.sensor_frame import (
+    apply,
+    boxes_in_view,
+    heading_of,
+    sensor_camera,
+    yaw_directions,
+)
 from cadsim.observer_pose import ObserverPose
 from cadsim.world import WorldObject
 
@@ -122,7 +129,7 @@ def _calibration(reader: _Reader, side: str, entry: dict, offset: tuple[float, f
         n2w = read_json(n2w_path)
         lidar_to_novatel = rigid(field(l2n, "rotation", l2n_path, "transform"), field(l2n, "translation", l2n_path, "transform"), l2n_path, "transform")  # fmt: skip
         novatel_to_world = rigid(field(n2w, "rotation", n2w_path), field(n2w, "translation", n2w_path), n2w_path, "")  # fmt: skip
-        return novatel_to_world @ lidar_to_novatel, novatel_to_world
+        return pm.matmul(novatel_to_world, lidar_to_novatel), novatel_to_world
     path = reader.side_path(side, entry, "calib_virtuallidar_to_world_path", f"calib/virtuallidar_to_world/{frame}.json")  # fmt: skip
     calib = read_json(path)
     sensor = rigid(field(calib, "rotation", path), field(calib, "translation", path), path, "")
@@ -184,19 +191,18 @@ def _view(observer: str, kind: str, sensor: np.ndarray, body: np.ndarray, boxes:
     k = len(boxes)
     centres = np.array([b["centre"] for b in boxes], dtype=float).reshape(k, 3)
     yaws = np.array([b["yaw"] for b in boxes], dtype=float)
-    world = centres @ sensor[:3, :3].T + sensor[:3, 3]
-    directions = yaw_directions(yaws) @ sensor[:3, :3].T
+    world = apply(sensor, centres)
+    directions = pm.matmul(yaw_directions(yaws), sensor[:3, :3].T)
     positions, headings = boxes_in_view(camera, world, directions)
     sizes = np.array([b["size"] for b in boxes], dtype=float).reshape(k, 3)
     ids, classes = [b["id"] for b in boxes], [b["cls"] for b in boxes]
     forward = body[:3, 0]
     pose = ObserverPose(
-        tuple(float(v) for v in body[:3, 3]), float(np.arctan2(forward[1], forward[0]))
+        tuple(float(v) for v in body[:3, 3]), float(pm.arctan2(forward[1], forward[0]))
     )
-    view = BoxView(
-        observer, kind, camera, pose, box_detections(positions, sizes, headings, ids, classes)
-    )
-    world_yaw = np.arctan2(directions[:, 1], directions[:, 0])
+    det = box_detections(positions, sizes, headings, ids, classes)
+    view = BoxView(observer, kind, camera, pose, det, sizes)
+    world_yaw = heading_of(directions)
     objects = [
         WorldObject(i, c, "box", tuple(w), float(y), tuple(s), (0.5, 0.5, 0.5))
         for i, c, w, y, s in zip(
