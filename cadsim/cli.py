@@ -31,7 +31,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "show": ("cadsim.commands.show", "draw one frame pair with boxes and ground-truth lines"),
     "schema": ("cadsim.commands.schema", "print the JSON Schema of scenario files"),
-    "import": ("cadsim.commands.import_", "write external data (DMGM CAD pairs) as a dataset"),
+    "import": (
+        "cadsim.commands.import_",
+        "write external data (DMGM, V2X-Seq, OPV2V) as a dataset",
+    ),
     "train": ("cadsim.commands.train", "train the learned matchers on training datasets"),
     "evaluate": ("eval.commands.evaluate", "run matchers on datasets (cached, parallel)"),
     "sweep-noise": (
@@ -65,6 +68,8 @@ COMMAND_EXAMPLES: dict[str, tuple[str, ...]] = {
     "schema": ("cadsim schema", "cadsim schema --out scenario.schema.json"),
     "import": (
         "cadsim import dmgm path/to/DMGM/data/cad/test --out data/dmgm --sequences 069,071",
+        "cadsim import v2x-seq path/to/V2X-Seq-SPD --out data/v2x-seq",
+        "cadsim import opv2v path/to/OPV2V/test --out data/opv2v-test",
     ),
     "train": (
         "cadsim train data/cad-train data/cad-v2x-train --out my-model.json",

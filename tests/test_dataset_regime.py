@@ -74,7 +74,7 @@ def test_position_error_uses_the_true_relative_pose():
 
 
 def test_empty_dataset_has_no_regime():
-    assert dataset_regime([]) == {"pairs": 0} | dict.fromkeys(REGIME_KEYS)
+    assert dataset_regime([]) == {"pairs": 0} | dict.fromkeys(REGIME_KEYS) | {"cues": None}
 
 
 def test_info_json_reports_the_regime(tmp_path, capsys):

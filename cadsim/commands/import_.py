@@ -1,7 +1,9 @@
 """`cadsim import FORMAT SRC --out DIR`: external data written as a frame-pair dataset.
 
-Formats: ``dmgm`` (the DMGM CAD test pairs, ``proc_s/<id>/data.pt`` + ``proc_t/<id>/data.pt``;
-docs/external-data.md). A malformed input file is one error line naming the file.
+Formats (docs/external-data.md): ``dmgm`` (the DMGM CAD test pairs, ``proc_s/<id>/data.pt`` +
+``proc_t/<id>/data.pt``), ``v2x-seq`` (V2X-Seq-SPD's cooperative frames) and ``opv2v`` (the
+OPV2V family's ``scenario/<agent>/<frame>.yaml``), the last two as box-only records. A
+malformed input file is one error line naming the file (and key), exit status 2.
 """
 
 from __future__ import annotations
@@ -14,6 +16,16 @@ def _sequences(text: str) -> list[str]:
     if not items or not all(s.isdigit() for s in items):
         raise argparse.ArgumentTypeError(f"expected comma-separated sequence numbers, got {text!r}")
     return items
+
+
+def _agents(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if not 2 <= value <= 12:
+        raise argparse.ArgumentTypeError(f"expected an integer in 2..12, got {value}")
+    return value
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -40,9 +52,54 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="store features as uint8 with a per-view scale (about 4x smaller)",
     )
     dmgm.add_argument("--no-progress", action="store_true", help="no progress bar")
+    seq = formats.add_parser(
+        "v2x-seq",
+        help="V2X-Seq-SPD cooperative frames (vehicle + roadside boxes, as sequences)",
+        description="Write V2X-Seq-SPD's cooperative frames as box-only frame pairs.",
+        epilog="examples:\n  cadsim import v2x-seq path/to/V2X-Seq-SPD --out data/v2x-seq\n"
+        "  cadsim import v2x-seq path/to/V2X-Seq-SPD --out data/v2x-seq-0010 --sequences 0010",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    seq.add_argument("src", metavar="SRC", help="folder holding cooperative/, vehicle-side/, ...")
+    seq.add_argument("--out", required=True, help="new (or empty) dataset folder")
+    seq.add_argument(
+        "--sequences",
+        type=_sequences,
+        default=None,
+        help="only these cooperative sequences, e.g. 0010,0011 (default: all)",
+    )
+    opv2v = formats.add_parser(
+        "opv2v",
+        help="OPV2V / V2XSet / V2V4Real labels (scenario/<agent>/<frame>.yaml)",
+        description="Write OPV2V-layout labels as box-only records (every frame's agents).",
+        epilog="examples:\n  cadsim import opv2v path/to/OPV2V/test --out data/opv2v-test\n"
+        "  cadsim import opv2v path/to/V2XSet/test --out data/v2xset-3 --agents 3",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    opv2v.add_argument("src", metavar="SRC", help="a split folder or one scenario folder")
+    opv2v.add_argument("--out", required=True, help="new (or empty) dataset folder")
+    opv2v.add_argument(
+        "--agents",
+        type=_agents,
+        default=None,
+        help="views per record (default: the fewest agents of any frame)",
+    )
+    opv2v.add_argument(
+        "--no-prior",
+        action="store_true",
+        help="ignore predicted_ego_pos (no stored prior; localisation presets draw one)",
+    )
+    opv2v.add_argument(
+        "--prior-sigma",
+        type=float,
+        default=None,
+        help="stated uncertainty of the stored prior, metres (default 1.0)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.format in ("v2x-seq", "opv2v"):
+        return _run_boxes(args)
     from cadsim.importers.dmgm_dataset import import_dmgm
 
     result = import_dmgm(
@@ -50,4 +107,26 @@ def run(args: argparse.Namespace) -> int:
     )
     per_sequence = ", ".join(f"{s}: {n}" for s, n in result.sequences.items())
     print(f"{result.out}: {result.pairs} pairs ({per_sequence}), checksum {result.checksum[:16]}")
+    return 0
+
+
+def _run_boxes(args: argparse.Namespace) -> int:
+    import math
+
+    if args.format == "v2x-seq":
+        from cadsim.importers.v2x_seq import import_v2x_seq
+
+        result = import_v2x_seq(args.src, args.out, args.sequences)
+    else:
+        from cadsim.importers.opv2v import DEFAULT_PRIOR_SIGMA_M, import_opv2v
+
+        sigma = DEFAULT_PRIOR_SIGMA_M if args.prior_sigma is None else args.prior_sigma
+        if not (math.isfinite(sigma) and sigma > 0):
+            raise ValueError(f"--prior-sigma: expected a finite number > 0, got {sigma}")
+        result = import_opv2v(args.src, args.out, args.agents, not args.no_prior, sigma)
+    kind = "frame pairs" if result.views == 2 else f"{result.views}-view snapshots"
+    print(
+        f"{result.out}: {result.records} {kind} in {len(result.episodes)} episodes, box-only, "
+        f"checksum {result.checksum[:16]}"
+    )
     return 0

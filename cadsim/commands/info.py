@@ -163,6 +163,7 @@ def _text(s: dict) -> str:
         f"  object depth (m)        {depth}",
         f"  class mix               {mix}",
         f"  regime                  {_regime_text(s['regime'])}",
+        f"  cues for matchers       {s['regime'].get('cues') or '-'}",
         "",
         f"  {'pair':>4}  {'name':<12} {'n1':>3} {'n2':>3} {'cov':>3}  {'depth1 (m)':>12}  {'depth2 (m)':>12}",
     ]

@@ -24,6 +24,7 @@ import numpy as np
 
 from cadsim.camera import Camera
 from cadsim.dataset import layout
+from cadsim.dataset.cues import CAMERA_CUES, record_cues
 from cadsim.dataset.detections import ViewDetections, ground_truth_pairs
 from cadsim.dataset.encoding import decode_png, load_npz
 from cadsim.dataset.manifest import DatasetError
@@ -160,6 +161,16 @@ class FramePair:
         )
 
     @property
+    def cues(self) -> tuple[str, ...]:
+        """What the detections carry for matchers (``cadsim.dataset.cues``): camera records
+        ``position, class, appearance, pixels``; box-only records ``position, class, size,
+        heading`` (features = the box feature vector, no pixels). A pair built in memory
+        without a record: the camera cues."""
+        if not (self.path / layout.RECORD_JSON).is_file():
+            return CAMERA_CUES
+        return record_cues(self.record)
+
+    @property
     def has_images(self) -> bool:
         """Whether the record has colour, depth and instance images (imported records do not)."""
         return layout.view_png(self.view_numbers[0]) in self._record_files
@@ -278,10 +289,12 @@ class FramePair:
     def problem(self):
         """The matching problem as ``matchers.Problem``: positions (metres, each camera's frame)
         and features of both views, the box centres in pixels (``pixels1``/``pixels2``, for
-        matchers that compare objects in the image), and the localisation prior (world positions
-        + stated sigma, :meth:`prior`) when the record has one."""
+        matchers that compare objects in the image; None for box-only records, which have no
+        image, :attr:`cues`), and the localisation prior (world positions + stated sigma,
+        :meth:`prior`) when the record has one."""
         from matchers.core.problem import Problem
 
+        pixels = "pixels" in self.cues
         prior = self.prior()
         world1, world2, sigma = (None, None, None) if prior is None else prior
         loc = self.localisation
@@ -296,8 +309,8 @@ class FramePair:
                 "noise_rate": self.noise_rate,
                 "localisation": None if loc is None else dataclasses.asdict(loc[0]),
             },
-            pixels1=_box_centres(self.view1.boxes),
-            pixels2=_box_centres(self.view2.boxes),
+            pixels1=_box_centres(self.view1.boxes) if pixels else None,
+            pixels2=_box_centres(self.view2.boxes) if pixels else None,
             world1=world1,
             world2=world2,
             world_sigma=sigma,

@@ -17,6 +17,7 @@ import numpy as np
 from scipy.stats import rankdata
 
 from cadsim import portable_math as pm
+from cadsim.dataset.cues import CAMERA_CUES
 
 REGIME_KEYS = (
     "objects_per_view",
@@ -108,6 +109,10 @@ def dataset_regime(dataset: Iterable) -> dict:
       of a covisible object after both are taken to the world frame with the true camera poses;
       None when a pair has no true poses.
 
+    Beside them ``cues``: what the detections carry (comma-separated) for matchers (``cadsim.dataset.cues``; the
+    first pair's, camera cues for pairs without a record) — box-only data has no pixels and
+    its "appearance" is the box size, so its AUCs measure how well size tells objects apart.
+
     Every value is None for an empty dataset. Example::
 
         from cadsim.dataset import Dataset
@@ -117,7 +122,10 @@ def dataset_regime(dataset: Iterable) -> dict:
     sizes, covisible, shares, true_sim, false_sim, errors = [], [], [], [], [], []
     true_image, false_image, same_class = [], [], []
     poses_known = True
+    cues = None
     for pair in dataset:
+        if cues is None:
+            cues = ", ".join(getattr(pair, "cues", None) or CAMERA_CUES)
         gt = np.asarray(pair.gt_pairs, dtype=np.int64).reshape(-1, 2)
         n1, n2 = len(pair.view1.positions), len(pair.view2.positions)
         sizes += [n1, n2]
@@ -142,7 +150,7 @@ def dataset_regime(dataset: Iterable) -> dict:
             if poses_known:
                 errors.append(err)
     if not covisible:
-        return {"pairs": 0} | dict.fromkeys(REGIME_KEYS)
+        return {"pairs": 0} | dict.fromkeys(REGIME_KEYS) | {"cues": None}
     total = float(sum(sizes))
     all_errors = np.concatenate(errors) if poses_known and errors else np.zeros(0)
     return {
@@ -155,6 +163,7 @@ def dataset_regime(dataset: Iterable) -> dict:
         "image_auc": roc_auc(np.concatenate(true_image), np.concatenate(false_image)),
         "same_class_auc": roc_auc(np.concatenate(true_sim), np.concatenate(same_class)),
         "position_error_median_m": float(np.median(all_errors)) if all_errors.size else None,
+        "cues": cues,
     }
 
 

@@ -43,6 +43,7 @@ import numpy as np
 from cadsim.camera import Camera
 from cadsim.dataset import layout
 from cadsim.dataset.checksum import record_checksum
+from cadsim.dataset.cues import cue_problem
 from cadsim.dataset.detections import ViewDetections
 from cadsim.dataset.encoding import load_npz
 from cadsim.dataset.manifest import DatasetError
@@ -91,7 +92,7 @@ class RecordLayout:
         """Every array name (after ``view{k}_``) a view of this format may hold."""
         return (
             "positions", "boxes", "features", "features_scale", "object_ids",
-            *self.class_arrays, "pixels", "world",
+            *self.class_arrays, "pixels", "world", "headings", "sizes",
         )  # fmt: skip
 
 
@@ -248,6 +249,8 @@ def check_record_json(
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise DatasetError(f"{where}: objects[{i}]: not an object entry ({exc!r})") from None
     _check_prior(record.get("prior"), where)
+    if "cues" in record and (problem := cue_problem(record["cues"])) is not None:
+        raise DatasetError(f"{where}: cues: {problem}")
 
 
 def _check_sequence(record: dict, where: Path, entry: dict | None) -> None:
@@ -385,7 +388,7 @@ def _check_prior(prior, where: Path) -> None:
 
 
 _VIEW_ARRAY = re.compile(r"^view([1-9][0-9]*)_([a-z_]+)$")
-_SHAPES = {"positions": 3, "boxes": 4, "world": 3}  # (k, columns)
+_SHAPES = {"positions": 3, "boxes": 4, "world": 3, "sizes": 3}  # (k, columns)
 
 
 def check_views(arrays: dict[str, np.ndarray], what: Path, expected: RecordLayout):
@@ -446,6 +449,14 @@ def _check_view(arrays: dict[str, np.ndarray], prefix: str, what: Path) -> ViewD
             )
         if not np.isfinite(arr).all():
             raise DatasetError(f"{what}: {prefix}_{name}: non-finite values (NaN or inf)")
+    headings = arrays.get(f"{prefix}_headings")
+    if headings is not None and (
+        headings.shape != (k,) or headings.dtype.kind != "f" or not np.isfinite(headings).all()
+    ):
+        raise DatasetError(
+            f"{what}: {prefix}_headings: expected ({k},) finite floats, got {headings.shape} "
+            f"{headings.dtype}"
+        )
     features = arrays[f"{prefix}_features"]
     scale = arrays.get(f"{prefix}_features_scale")
     kinds = "u" if scale is not None else "f"

@@ -1,0 +1,111 @@
+"""Writing imported box-only frames as a dataset: the one writer of ``cadsim import v2x-seq``
+and ``cadsim import opv2v``.
+
+The same guarantee as the DMGM importer (:mod:`cadsim.importers.dmgm_dataset`): the output
+folder must be new or empty (``check_output_folder``), every record is written through the
+atomic record writer, and the manifest — the only thing that makes the folder a dataset — is
+written last, so an interrupted or refused import leaves no dataset, only record folders that
+no reader opens. Records are :class:`~cadsim.dataset.box_record.BoxRecord`; the whole import is
+read and checked before the first record is written, so a malformed input leaves the folder as
+it was. Must not import matchers or eval.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from cadsim.dataset import layout
+from cadsim.dataset.atomic_writer import write_file_atomic, write_record
+from cadsim.dataset.box_record import RECORD_FILES, BoxRecord, encode_box_record, record_version
+from cadsim.dataset.checksum import dataset_checksum, record_checksum
+from cadsim.dataset.encoding import json_bytes
+from cadsim.dataset.manifest import FORMAT_NAME
+from cadsim.dataset.output_folder import check_output_folder
+from cadsim.provenance import git_state, package_versions
+
+
+@dataclass(frozen=True)
+class ImportResult:
+    """What an import wrote: the dataset folder, records per episode, views, its checksum."""
+
+    out: Path
+    episodes: dict[int, int]
+    views: int
+    checksum: str
+
+    @property
+    def records(self) -> int:
+        return sum(self.episodes.values())
+
+
+def check_out(out: str | Path) -> Path:
+    """The output rule: a new or empty folder, never a link, a file or inside a dataset."""
+    return check_output_folder(out, resumable=False)
+
+
+def write_box_dataset(
+    out: str | Path, records: Sequence[BoxRecord], scenario: str, source: dict
+) -> ImportResult:
+    """Write ``records`` (in (episode, slot) order, one view count) as a dataset at ``out``
+    (checked with :func:`check_out` first); ``source`` goes to the manifest's ``source``."""
+    out = check_out(out)
+    if not records:
+        raise ValueError("no records to write")
+    views = len(records[0].views)
+    sequential = records[0].sequence is not None
+    version = record_version(views, sequential)
+    entries = []
+    for rec in sorted(records, key=lambda r: (r.episode, r.slot)):
+        if len(rec.views) != views or (rec.sequence is not None) != sequential:
+            raise ValueError("every record of a dataset has the same views and sequence kind")
+        files = encode_box_record(rec)
+        name = layout.record_name(rec.episode, rec.slot)
+        write_record(out, name, files)
+        entry = {
+            "name": name,
+            "episode": int(rec.episode),
+            "slot": int(rec.slot),
+            "sim_seed": int(rec.sim_seed),
+            "checksum": record_checksum(files),
+        }
+        if sequential:
+            entry |= {"sequence": rec.sequence["id"], "frame": int(rec.sequence["frame"])}
+        entries.append(entry)
+    episodes: dict[int, int] = {}
+    for entry in entries:
+        episodes[entry["episode"]] = episodes.get(entry["episode"], 0) + 1
+    checksum = dataset_checksum(e["checksum"] for e in entries)
+    manifest = {
+        "format": FORMAT_NAME,
+        "format_version": version,
+        "complete": True,
+        "record_files": list(RECORD_FILES),
+        **({"views": views} if views > 2 else {}),
+        "scenario": {"path": None, "name": scenario, "text": ""},
+        "seeds": {
+            "root": None,
+            "root_from": "imported",
+            "derivation": "none: imported data (episode = the source's scenario or sequence)",
+            "episodes": {str(e): e for e in sorted(episodes)},
+        },
+        "generation": {
+            "format_version": version,
+            "imported": True,
+            "cues": "boxes",
+            "noise": {},
+            "detection": {},
+        },
+        "source": source,
+        "versions": package_versions(("numpy", "PyYAML", "cadsim")),
+        "git": git_state(),
+        "pairs": len(entries),
+        "records": entries,
+        "checksum": checksum,
+    }
+    write_file_atomic(out / layout.MANIFEST, json_bytes(manifest))
+    return ImportResult(out, dict(sorted(episodes.items())), views, checksum)
+
+
+__all__ = ["ImportResult", "check_out", "write_box_dataset"]

@@ -1,0 +1,176 @@
+"""Reading a foreign dataset's text files without trusting them: the importers' one reader of
+JSON and YAML, and of the paths those files name.
+
+- YAML through PyYAML's safe loader only (no ``!!python/...`` tag constructs anything), after
+  walking its events: nesting deeper than :data:`MAX_DEPTH` or more than :data:`MAX_ALIASES`
+  aliases is refused before anything is built;
+- JSON with the standard parser, ``NaN`` / ``Infinity`` refused, nesting deeper than
+  :data:`MAX_DEPTH` refused before parsing;
+- every file at most :data:`MAX_BYTES`, and every number an importer uses finite and within
+  :data:`MAX_MAGNITUDE` (:func:`number`);
+- every path confined to the folder given on the command line (:func:`confined`): no absolute
+  path, no ``..``, no link that leads outside.
+
+Every refusal is an :class:`~cadsim.importers.ImportFormatError`: one line naming the file and
+the key. Imports only numpy and PyYAML.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path, PurePosixPath
+
+import numpy as np
+
+from cadsim.importers import ImportFormatError
+
+MAX_BYTES = 64 * 2**20
+MAX_DEPTH = 32
+MAX_ALIASES = 1000
+MAX_MAGNITUDE = 1e7
+"""Largest coordinate, size or angle an importer accepts (metres or degrees): Earth-scale."""
+
+
+def confined(root: Path, relative: str, where: Path | None = None, key: str = "") -> Path:
+    """``root / relative`` if it names a file inside ``root`` (no absolute path, no ``..``,
+    no backslash, no link out); ``where``/``key`` name the file and key that gave the path."""
+    source = where if where is not None else root
+    named = f"{key}: " if key else ""
+    if not isinstance(relative, str) or not relative or "\\" in relative or "\0" in relative:
+        raise ImportFormatError(
+            source, f"{named}expected a relative path, got {str(relative)[:60]!r}"
+        )
+    pure = PurePosixPath(relative)
+    if pure.is_absolute() or ".." in pure.parts:
+        raise ImportFormatError(source, f"{named}path {relative[:60]!r} leaves {root}")
+    path = Path(root, *pure.parts)
+    try:
+        inside = path.resolve().is_relative_to(Path(root).resolve())
+    except (OSError, RuntimeError):
+        inside = False
+    if not inside:
+        raise ImportFormatError(source, f"{named}path {relative[:60]!r} leads outside {root}")
+    return path
+
+
+def _text(path: Path) -> str:
+    try:
+        if not path.is_file():
+            raise ImportFormatError(path, "missing file")
+        if path.stat().st_size > MAX_BYTES:
+            raise ImportFormatError(path, f"larger than {MAX_BYTES // 2**20} MiB")
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise ImportFormatError(path, "not UTF-8 text") from None
+    except OSError as exc:
+        raise ImportFormatError(path, f"unreadable ({exc.strerror})") from None
+
+
+def _json_depth(text: str) -> int:
+    """Largest bracket nesting of ``text`` (brackets inside strings count too: an upper bound)."""
+    codes = np.frombuffer(text.encode("utf-8"), dtype=np.uint8)
+    step = np.isin(codes, (91, 123)).astype(np.int64) - np.isin(codes, (93, 125))
+    return int(np.cumsum(step).max(initial=0))
+
+
+def _refuse_constant(name: str):
+    raise ValueError(f"non-finite number {name}")
+
+
+def read_json(path: Path):
+    """The parsed JSON file at ``path`` (limits of the module docstring)."""
+    text = _text(path)
+    if _json_depth(text) > MAX_DEPTH:
+        raise ImportFormatError(path, f"nested deeper than {MAX_DEPTH} levels")
+    try:
+        return json.loads(text, parse_constant=_refuse_constant)
+    except (ValueError, RecursionError) as exc:
+        raise ImportFormatError(path, f"not valid JSON ({str(exc).splitlines()[0][:80]})") from None
+
+
+def read_yaml(path: Path):
+    """The parsed YAML file at ``path`` through the safe loader (limits of the docstring)."""
+    import yaml
+
+    text = _text(path)
+    try:
+        depth = aliases = 0
+        for event in yaml.parse(text, Loader=yaml.SafeLoader):
+            if isinstance(event, yaml.CollectionStartEvent):
+                depth += 1
+                if depth > MAX_DEPTH:
+                    raise ImportFormatError(path, f"nested deeper than {MAX_DEPTH} levels")
+            elif isinstance(event, yaml.CollectionEndEvent):
+                depth -= 1
+            elif isinstance(event, yaml.AliasEvent):
+                aliases += 1
+                if aliases > MAX_ALIASES:
+                    raise ImportFormatError(path, f"more than {MAX_ALIASES} aliases")
+        return yaml.load(text, Loader=yaml.SafeLoader)  # noqa: S506 (the safe loader)
+    except yaml.YAMLError as exc:
+        problem = str(getattr(exc, "problem", None) or exc).splitlines()[0][:80]
+        raise ImportFormatError(path, f"not safe YAML ({problem})") from None
+    except RecursionError:
+        raise ImportFormatError(path, f"nested deeper than {MAX_DEPTH} levels") from None
+
+
+def field(mapping, key: str, path: Path, where: str = ""):
+    """``mapping[key]``, or a one-line error naming ``path`` and the dotted key."""
+    dotted = f"{where}.{key}" if where else key
+    if not isinstance(mapping, dict):
+        raise ImportFormatError(path, f"{where or 'top level'}: expected a mapping")
+    if key not in mapping:
+        raise ImportFormatError(path, f"{dotted}: missing")
+    return mapping[key]
+
+
+def number(value, path: Path, key: str, limit: float = MAX_MAGNITUDE) -> float:
+    """``value`` as a float if it is a finite number (not a bool, not a string) of magnitude
+    at most ``limit``."""
+    ok = isinstance(value, int | float) and not isinstance(value, bool)
+    if ok:
+        try:
+            value = float(value)
+        except OverflowError:
+            ok = False
+    if not ok or not math.isfinite(value) or abs(value) > limit:
+        raise ImportFormatError(
+            path, f"{key}: expected a finite number within ±{limit:g}, got {str(value)[:40]}"
+        )
+    return value
+
+
+def numbers(values, path: Path, key: str, count: int, limit: float = MAX_MAGNITUDE) -> list[float]:
+    """A list of exactly ``count`` numbers (:func:`number` each)."""
+    if not isinstance(values, list | tuple) or len(values) != count:
+        raise ImportFormatError(
+            path, f"{key}: expected a list of {count} numbers, got {str(values)[:60]}"
+        )
+    return [number(v, path, f"{key}[{k}]", limit) for k, v in enumerate(values)]
+
+
+def matrix(values, path: Path, key: str, rows: int, columns: int) -> np.ndarray:
+    """A rows × columns nested list of numbers (a column vector may be nested or flat)."""
+    flat = values
+    if isinstance(values, list | tuple) and all(isinstance(r, list | tuple) for r in values):
+        flat = [v for r in values for v in r]
+    return np.array(numbers(flat, path, key, rows * columns)).reshape(rows, columns)
+
+
+__all__ = [
+    "MAX_BYTES", "MAX_DEPTH", "MAX_MAGNITUDE", "confined", "field", "matrix", "number",
+    "numbers", "read_json", "read_yaml",
+]  # fmt: skip
+
+
+def rigid(rotation, translation, path: Path, key: str) -> np.ndarray:
+    """4×4 transform of a 3×3 ``rotation`` (nested list) and a 3-vector ``translation`` (flat
+    or a column); refused unless the rotation is orthonormal with determinant +1 (±1e-3)."""
+    r = matrix(rotation, path, f"{key}.rotation", 3, 3)
+    t = matrix(translation, path, f"{key}.translation", 3, 1).ravel()
+    if not np.allclose(r @ r.T, np.eye(3), atol=1e-3) or np.linalg.det(r) < 0:
+        raise ImportFormatError(path, f"{key}.rotation: not a rotation matrix")
+    out = np.eye(4)
+    out[:3, :3], out[:3, 3] = r, t
+    return out
