@@ -199,6 +199,8 @@ class Scenario:
     localisation: dict = dataclasses.field(default_factory=dict)
     appearance: dict = dataclasses.field(default_factory=dict)
     sequence: dict | None = None
+    sensor: str = "camera"
+    lidar: dict = dataclasses.field(default_factory=dict)
 
 
 def _set_sumo_home() -> None:
@@ -452,6 +454,12 @@ TOP_LEVEL = {
     "description": Field(str, "", "free text"),
     "seed": Field(int, 0, "base seed of every random choice", ge=0),
     "pairs": Field(int, 50, "number of frame pairs in a dataset", ge=1, le=MAX_PAIRS),
+    "sensor": Field(
+        str,
+        "camera",
+        "what every observer senses: camera images, a LiDAR ([lidar]) or both",
+        choices=("camera", "lidar", "both"),
+    ),
 }
 TABLES = (
     "traffic",
@@ -463,6 +471,7 @@ TABLES = (
     "localisation",
     "appearance",
     "sequence",
+    "lidar",
 )
 
 # kind -> schema of its [traffic] table; kinds listed in _SCHEMA_MODULES register on first use.
@@ -479,6 +488,7 @@ _CONFIG_CLASSES: dict[str, tuple[str, str]] = {
     "detection": ("cadsim.sensing.detection", "DetectionConfig"),
     "localisation": ("cadsim.sensing.localisation", "LocalisationConfig"),
     "appearance": ("cadsim.render.appearance", "AppearanceConfig"),
+    "lidar": ("cadsim.sensing.lidar.beam_pattern", "LidarConfig"),
 }
 
 
@@ -561,11 +571,14 @@ def load_scenario(path: str | Path) -> Scenario:
     detection = dict(raw.get("detection", {}))
     localisation = dict(raw.get("localisation", {}))
     appearance = dict(raw.get("appearance", {}))
+    lidar = dict(raw.get("lidar", {}))
+    _check_sensor(top["sensor"], "lidar" in raw, view_count(observers), sequence, ctx)
     for key, table in (
         ("noise", noise),
         ("detection", detection),
         ("localisation", localisation),
         ("appearance", appearance),
+        ("lidar", lidar),
     ):
         config_class = _config_class(key)
         if config_class is not None:
@@ -586,7 +599,27 @@ def load_scenario(path: str | Path) -> Scenario:
         localisation=localisation,
         appearance=appearance,
         sequence=sequence,
+        sensor=top["sensor"],
+        lidar=lidar,
     )
+
+
+def _check_sensor(sensor: str, has_lidar: bool, views: int, sequence, ctx) -> None:
+    """A ``[lidar]`` table only with a LiDAR (``sensor`` "lidar" or "both"), and LiDAR records
+    are frame pairs without a ``[sequence]`` (the record formats that carry points)."""
+    if has_lidar and sensor == "camera":
+        raise ctx.error(
+            "lidar",
+            'is given but sensor is "camera"',
+            'sensor = "lidar" or "both" (or no [lidar] table)',
+        )
+    if sensor != "camera" and (views != 2 or sequence is not None):
+        key = "sequence" if sequence is not None else "observers"
+        raise ctx.error(
+            key,
+            f'is set with sensor = "{sensor}"',
+            "frame pairs without [sequence] (LiDAR records are two-view records)",
+        )
 
 
 def _check_sequence_fits(sequence: dict, traffic: dict, observers: dict, ctx) -> None:

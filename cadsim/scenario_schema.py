@@ -152,7 +152,7 @@ def scenario_json_schema() -> dict:
         ("sequence", SEQUENCE),
     ):  # fmt: skip
         properties[name] = table_schema(table)
-    for name in ("noise", "detection", "localisation", "appearance"):
+    for name in ("noise", "detection", "localisation", "appearance", "lidar"):
         cls = _config_class(name)
         properties[name] = dataclass_schema(cls) if cls is not None else {"type": "object"}
     return {

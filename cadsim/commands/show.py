@@ -20,6 +20,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "(the image is then named after the record, e.g. e00000_s01.png)",
     )
     parser.add_argument("--no-labels", action="store_true", help="no class labels on the boxes")
+    parser.add_argument(
+        "--lidar",
+        action="store_true",
+        help="draw the LiDAR points from above with the LiDAR boxes (records of a scenario "
+        "with sensor = both; LiDAR-only records are always drawn so)",
+    )
 
 
 FIGURE_MARKER = b"matplotlib"  # every PNG, PDF and SVG matplotlib writes names it
@@ -68,7 +74,15 @@ def run(args: argparse.Namespace) -> int:
         return 0
     pair = ds[args.pair]
     path = output_path(args.out, pair.name)
-    path = save_figure(draw_pair_from_record(pair, labels=not args.no_labels), path)
+    if pair.lidar is not None and (args.lidar or not pair.has_images):
+        from cadsim.lidar_drawing import lidar_figure
+
+        figure = lidar_figure(pair, labels=not args.no_labels)
+    elif args.lidar:
+        raise ValueError(f"--lidar: record {pair.name} has no LiDAR points")
+    else:
+        figure = draw_pair_from_record(pair, labels=not args.no_labels)
+    path = save_figure(figure, path)
     print(
         f"{path}: pair {pair.index} ({pair.name}), {len(pair.gt_pairs)} ground-truth pairs "
         "(record checksum verified)"

@@ -245,6 +245,23 @@ class FramePair:
     def gt_pairs(self) -> np.ndarray:
         return ground_truth_pairs(self.view1, self.view2)
 
+    @cached_property
+    def lidar(self):
+        """The two views' LiDAR sweeps (:class:`cadsim.dataset.lidar_points.LidarView`: points in
+        each LiDAR's frame, its pose, the objects hit as ground truth), or None when the record
+        has no ``lidar.npz``."""
+        if layout.LIDAR_NPZ not in self._record_files:
+            return None
+        from cadsim.dataset.lidar_points import check_lidar_arrays, read_lidar_view
+
+        what = str(self.path / layout.LIDAR_NPZ)
+        arrays = self._npz(layout.LIDAR_NPZ)
+        try:
+            check_lidar_arrays(arrays, max(self.view_numbers), len(self.record["objects"]), what)
+        except ValueError as exc:
+            raise DatasetError(str(exc).splitlines()[0]) from None
+        return tuple(read_lidar_view(arrays, v) for v in self.view_numbers)
+
     def _png(self, name: str) -> np.ndarray:
         return decode_png(self._file(name).read_bytes(), str(self.path / name))
 

@@ -32,6 +32,8 @@ INSTANCE_NPZ = "instance.npz"
 DETECTIONS_NPZ = "detections.npz"
 RECORD_JSON = "record.json"
 RECORD_FILES = (VIEW1_PNG, VIEW2_PNG, DEPTH_NPZ, INSTANCE_NPZ, DETECTIONS_NPZ, RECORD_JSON)
+LIDAR_NPZ = "lidar.npz"  # the views' LiDAR points (records of scenarios with a LiDAR)
+IMAGELESS_FILES = (DETECTIONS_NPZ, RECORD_JSON)
 MAX_VIEWS = 12  # vehicles (<= 8) + roadside units (<= 4)
 
 
@@ -40,9 +42,13 @@ def view_png(view: int) -> str:
     return f"view{int(view)}.png"
 
 
-def record_files(views: int) -> tuple[str, ...]:
-    """The files of a record with ``views`` views (2: :data:`RECORD_FILES`)."""
-    return (*(view_png(v) for v in range(1, views + 1)), *RECORD_FILES[2:])
+def record_files(views: int, sensor: str = "camera") -> tuple[str, ...]:
+    """The files of a record with ``views`` views (2: :data:`RECORD_FILES`); ``sensor``
+    "lidar": detections, record and points only; "both": the camera files and the points."""
+    if sensor == "lidar":
+        return (*IMAGELESS_FILES, LIDAR_NPZ)
+    camera = (*(view_png(v) for v in range(1, views + 1)), *RECORD_FILES[2:])
+    return (*camera, LIDAR_NPZ) if sensor == "both" else camera
 
 
 _RECORD_NAME = re.compile(r"^e(\d{5,})_s(\d{2,})$")

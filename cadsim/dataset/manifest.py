@@ -94,6 +94,10 @@ def generation_config(scenario, seed: int, pairs_per_episode: int, criteria: dic
     }
     if sequence:  # only then: the configuration of a dataset without one is as before
         config["sequence"] = _plain(sequence)
+    sensor = getattr(scenario, "sensor", "camera")
+    if sensor != "camera":  # likewise: camera datasets' configuration is unchanged
+        config["sensor"] = sensor
+        config["lidar"] = _plain(getattr(scenario, "lidar", {}))
     return config
 
 
@@ -109,6 +113,8 @@ def build_manifest(
     order; episodes: {episode: simulation seed} of every episode run."""
     views = view_count(config["observers"])
     extra = {} if views == 2 else {"views": views, "record_files": list(layout.record_files(views))}
+    if config.get("sensor", "camera") != "camera":
+        extra["record_files"] = list(layout.record_files(views, config["sensor"]))
     if config.get("sequence"):
         extra["sequences"] = len({r["sequence"] for r in records})
     return {

@@ -41,13 +41,16 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
+from cadsim import portable_math as pm
 from cadsim.camera import Camera
 from cadsim.dataset import layout
 from cadsim.dataset.detections import ViewDetections, ground_truth_pairs
 from cadsim.dataset.encoding import json_bytes, npz_bytes, png_bytes
+from cadsim.dataset.lidar_points import view_arrays as lidar_view_arrays
 from cadsim.observer_pose import ObserverPose
 from cadsim.sensing.localisation import LocalisationConfig
 from cadsim.world import WorldObject
@@ -79,6 +82,10 @@ class ViewCapture:
     attribute_seed: int
     pose: ObserverPose
     localisation_seed: int = 0
+    lidar: Any = None
+    """A :class:`~cadsim.sensing.lidar.observe.LidarObservation` when the scenario has a LiDAR
+    (``sensor`` "lidar": ``color``, ``depth``, ``instance`` are None and ``detections`` are its
+    boxes; "both": the camera's as always, the LiDAR's points and boxes go to ``lidar.npz``)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -138,21 +145,33 @@ class SnapshotRecord:
     localisation: dict = field(default_factory=dict)
 
 
+def _lidar_camera(pose: np.ndarray) -> Camera:
+    """A level LiDAR (4×4 LiDAR → world) as a camera pose: its optical axis the LiDAR's x."""
+    return Camera(tuple(float(v) for v in pose[:3, 3]), float(pm.arctan2(pose[1, 0], pose[0, 0])))
+
+
 def _observer_entry(view: ViewCapture) -> dict:
-    return {
+    lidar_only = view.lidar is not None and view.color is None
+    entry = {
         "id": view.observer_id,
-        "camera": view.camera.as_dict(),
+        "camera": (_lidar_camera(view.lidar.pose) if lidar_only else view.camera).as_dict(),
         "pose": view.pose.as_dict(),
         "noise_seed": int(view.noise_seed),
         "attribute_seed": int(view.attribute_seed),
         "localisation_seed": int(view.localisation_seed),
     }
+    if view.lidar is not None:
+        entry["sensor"] = "lidar" if lidar_only else "camera+lidar"
+        entry["lidar"] = {"pattern": view.lidar.scan.pattern.name}
+    return entry
 
 
 def _files(views: tuple[ViewCapture, ...], record: dict) -> dict[str, bytes]:
     """The record's files: colour, depth, instance maps and detections of ``views`` (numbered
     from 1) and ``record.json``, after checking every image's shape and type."""
     numbered = list(enumerate(views, start=1))
+    if all(v.lidar is not None and v.color is None for v in views):
+        return _lidar_files(numbered, record)
     for k, v in numbered:
         hw = (v.camera.height, v.camera.width)
         _check_image(f"view{k} colour", v.color, hw, np.uint8)
@@ -161,11 +180,36 @@ def _files(views: tuple[ViewCapture, ...], record: dict) -> dict[str, bytes]:
     detections = {}
     for k, v in numbered:
         detections |= v.detections.to_arrays(f"view{k}")
-    return {
+    files = {
         **{layout.view_png(k): png_bytes(v.color) for k, v in numbered},
         layout.DEPTH_NPZ: npz_bytes({f"depth{k}": v.depth for k, v in numbered}),
         layout.INSTANCE_NPZ: npz_bytes({f"instance{k}": v.instance for k, v in numbered}),
         layout.DETECTIONS_NPZ: npz_bytes(detections),
+        layout.RECORD_JSON: json_bytes(record),
+    }
+    if any(v.lidar is not None for v in views):  # sensor = "both": the points and boxes beside
+        points = {}
+        for k, v in numbered:
+            obs = v.lidar
+            points |= lidar_view_arrays(k, obs.scan, obs.pose, (obs.boxes, obs.ids))
+        files[layout.LIDAR_NPZ] = npz_bytes(points)
+    return files
+
+
+def _lidar_files(numbered: list[tuple[int, ViewCapture]], record: dict) -> dict[str, bytes]:
+    """A LiDAR-only record's files: the boxes as box-only detections (``cues`` =
+    ``BOX_CUES``, ``view{k}_sizes``; ``cadsim.dataset.box_record``), the points, the record."""
+    from cadsim.sensing.box_features import BOX_CUES
+
+    detections, points = {}, {}
+    for k, v in numbered:
+        detections |= v.detections.to_arrays(f"view{k}")
+        detections[f"view{k}_sizes"] = np.asarray(v.lidar.boxes.sizes, dtype=np.float64)
+        points |= lidar_view_arrays(k, v.lidar.scan, v.lidar.pose)
+    record = {**record, "cues": list(BOX_CUES)}
+    return {
+        layout.DETECTIONS_NPZ: npz_bytes(detections),
+        layout.LIDAR_NPZ: npz_bytes(points),
         layout.RECORD_JSON: json_bytes(record),
     }
 

@@ -127,7 +127,8 @@ def record_layout(manifest: dict, path: Path) -> RecordLayout:
         )
     allowed = layout.record_files(views)
     imageless = (layout.DETECTIONS_NPZ, layout.RECORD_JSON)
-    if sorted(files) not in (sorted(allowed), sorted(imageless)):
+    with_points = [sorted(layout.record_files(views, s)) for s in ("lidar", "both")]
+    if sorted(files) not in (sorted(allowed), sorted(imageless), *with_points):
         raise DatasetError(
             f"{where}: record_files {list(files)} must include {layout.DETECTIONS_NPZ} and name "
             f"only files of {list(allowed)}: all of them, or {list(imageless)} alone (records "
@@ -193,7 +194,20 @@ def check_record(
             if view.world is None:
                 raise DatasetError(f"{what}: view{v}_world: missing (the record's prior is stored)")
     _check_images(record_dir, files, record["observers"], expected)
+    if layout.LIDAR_NPZ in files:
+        _check_points(record_dir, files[layout.LIDAR_NPZ], expected, len(record["objects"]))
     return views
+
+
+def _check_points(record_dir: Path, data: bytes, expected: RecordLayout, objects: int) -> None:
+    """``lidar.npz`` holds each view's bounded sweep (``cadsim.dataset.lidar_points``)."""
+    from cadsim.dataset.lidar_points import check_lidar_arrays
+
+    what = record_dir / layout.LIDAR_NPZ
+    try:
+        check_lidar_arrays(load_npz(data, str(what)), expected.views, objects, str(what))
+    except ValueError as exc:
+        raise DatasetError(str(exc).splitlines()[0]) from None
 
 
 def check_record_json(

@@ -579,9 +579,22 @@ def _taken_at(out: Path, episode: int, slots: int, time_s: float) -> int:
 def _capture(task, stages, noise_cfg, det_cfg, snapshot, camera, observer, view, slot, result):  # fmt: skip
     """Render, noise and detect view ``view`` (1-based; its seeds are (episode, slot, view)'s)
     of ``camera``, carried by ``observer`` ("" for none). The view's capture."""
-    renderer = _renderer(task.stages, camera.width, camera.height)
     seed = noise_seed(task.root_seed, task.episode, slot, view)
     attr_seed = attribute_seed(task.root_seed, task.episode, slot, view)
+    sensor = getattr(task.scenario, "sensor", "camera")
+    lidar = None
+    if sensor != "camera":
+        t = time.perf_counter()
+        lidar = _lidar_observation(task, snapshot, camera, observer, seed, slot, view)
+        result.render_seconds += time.perf_counter() - t
+    if sensor == "lidar":
+        result.views += 1
+        return ViewCapture(
+            camera, observer, None, None, None, lidar.detections, seed, attr_seed,
+            _observer_pose(snapshot, camera, observer),
+            localisation_seed(task.root_seed, task.episode, slot, view), lidar,
+        )  # fmt: skip
+    renderer = _renderer(task.stages, camera.width, camera.height)
     t = time.perf_counter()
     appearance = _appearance(task.scenario)
     if hasattr(renderer, "set_lighting"):  # the episode's light (the default without a table)
@@ -596,12 +609,28 @@ def _capture(task, stages, noise_cfg, det_cfg, snapshot, camera, observer, view,
     )  # fmt: skip
     result.render_seconds += time.perf_counter() - t
     result.views += 1
-    carrier = snapshot.by_id().get(observer) if observer else None
-    pose = ObserverPose.of_carrier(carrier) if carrier else ObserverPose.of_camera(camera)
     return ViewCapture(
         camera, observer, rendered.color, rendered.depth, rendered.instance, det, seed,
-        attr_seed, pose, localisation_seed(task.root_seed, task.episode, slot, view),
+        attr_seed, _observer_pose(snapshot, camera, observer),
+        localisation_seed(task.root_seed, task.episode, slot, view), lidar,
     )  # fmt: skip
+
+
+def _observer_pose(snapshot, camera, observer: str) -> ObserverPose:
+    """The true pose of what carries ``camera`` (``observer`` "" for none: the camera's own)."""
+    carrier = snapshot.by_id().get(observer) if observer else None
+    return ObserverPose.of_carrier(carrier) if carrier else ObserverPose.of_camera(camera)
+
+
+def _lidar_observation(task, snapshot, camera, observer, seed, slot, view):
+    """The view's LiDAR sweep and boxes (``cadsim.sensing.lidar.observe``), seeded by the
+    view's noise seed on the LiDAR's own stream."""
+    from cadsim.sensing.lidar.beam_pattern import LidarConfig
+    from cadsim.sensing.lidar.observe import observe
+
+    config = LidarConfig(**(getattr(task.scenario, "lidar", None) or {}))
+    tag = f"{task.episode}-{slot}-{view}"
+    return observe(snapshot, camera, observer, config, seed, tag)
 
 
 def _try_pair(
@@ -916,7 +945,8 @@ def _generate(
         bar.close()
         release_renderers()  # those episodes run in this process made (one worker)
 
-    records = _finalise_records(out, n_pairs, layout.record_files(_views(scenario)), sequential)
+    files = layout.record_files(_views(scenario), getattr(scenario, "sensor", "camera"))
+    records = _finalise_records(out, n_pairs, files, sequential)
     shutil.rmtree(out / layout.WORK_DIR, ignore_errors=True)
     # The episodes that define the dataset: 0 .. the last one contributing a record.
     episodes = {e: simulation_seed(root_seed, e) for e in range(records[-1]["episode"] + 1)}

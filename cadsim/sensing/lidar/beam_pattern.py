@@ -38,7 +38,9 @@ from cadsim.config_tables import check_number, config_from_table
 
 MAX_CHANNELS = 512
 MAX_AZIMUTH_STEPS = 8192
-MAX_RANGE_M = 262.0  # what a uint16 range in 4 mm steps holds (cadsim.sensing.lidar.point_record)
+RANGE_STEP_M = 0.004
+"""Stored ranges are whole multiples of this (metres): the distance unit of Hesai's packets."""
+MAX_RANGE_M = 262.0  # what a uint16 range in 4 mm steps holds (cadsim.dataset.lidar_points)
 
 
 def _uniform(lo_deg: float, hi_deg: float, n: int) -> tuple[float, ...]:

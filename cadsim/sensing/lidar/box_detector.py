@@ -4,7 +4,12 @@ Pipeline (each step its own module): road plane fitted and ground points dropped
 (``ground_removal``), the rest clustered on a bird's-eye grid (``clustering``), each cluster's
 minimum-area rectangle fitted (``box_fit``), a class given by its size and the box completed to
 that class's size away from the sensor (``size_classes``); clusters no class fits (walls,
-buildings, curbs) are dropped. Input: points (n, 3) in the LiDAR frame (x forward, y left, z up,
+buildings, curbs) are dropped. So are clusters *cut by the field of view* — a point within
+``FOV_MARGIN_DEG`` of the top channel, so their true height is unknown — that would be a pole,
+a truck, a bus, or a van shorter than ``CUT_MIN_LENGTH_M`` on the ground: such clusters are
+mostly pieces of building walls seen between occluders or at grazing angles, and the real poles,
+buses and trucks near the sensor (whose tops the field of view cuts) are lost with them — a
+detector that sizes objects by their points must see their tops. Input: points (n, 3) in the LiDAR frame (x forward, y left, z up,
 metres) — a :class:`~cadsim.sensing.lidar.raycast.LidarScan`'s ``points``, never its object
 tags. Output: :class:`LidarBoxes`, in the LiDAR frame; :meth:`LidarBoxes.to_view_detections`
 turns them into what matchers see (camera-frame convention, box feature vector, headings,
@@ -16,6 +21,7 @@ give; docs/lidar.md reports them measured, they are not tuned to a target.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,6 +38,8 @@ from cadsim.sensing.lidar.ground_removal import remove_ground
 from cadsim.sensing.lidar.size_classes import class_from_size, complete_box
 
 MIN_HEIGHT_ABOVE_ROAD_M = 0.2
+FOV_MARGIN_DEG = 0.25
+CUT_MIN_LENGTH_M = 7.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,11 +83,13 @@ class LidarBoxes:
 def detect_boxes(
     points: np.ndarray,
     sensor_height_m: float,
+    top_elevation_deg: float | None = None,
     cell_m: float = CELL_M,
     min_points: int = MIN_POINTS,
 ) -> LidarBoxes:
     """Boxes in ``points`` (n, 3) LiDAR frame, metres; ``sensor_height_m``: the mount's nominal
-    height above the road (module docstring).
+    height above the road; ``top_elevation_deg``: the sensor's highest channel (None: no
+    field-of-view cut is applied), both from the sensor's specification (module docstring).
 
     >>> import numpy as np
     >>> detect_boxes(np.zeros((0, 3)), 1.75).classes
@@ -95,6 +105,10 @@ def detect_boxes(
     if len(p):
         above, plane = remove_ground(p, sensor_height_m, MIN_HEIGHT_ABOVE_ROAD_M)
         rows = np.flatnonzero(above)
+        cut = np.zeros(len(p), dtype=bool)
+        if top_elevation_deg is not None:
+            slope = math.tan(math.radians(float(top_elevation_deg) - FOV_MARGIN_DEG))
+            cut = p[:, 2] >= slope * np.sqrt(p[:, 0] * p[:, 0] + p[:, 1] * p[:, 1])
         labels = cluster_points(p[rows], cell_m, min_points)
         order = np.argsort(labels, kind="stable")
         labels_sorted = labels[order]
@@ -104,6 +118,8 @@ def detect_boxes(
             fitted = fit_box(p[members], plane)
             cls = class_from_size(fitted.size)
             if cls is None:
+                continue
+            if cut[members].any() and (cls in ("pole", "truck", "bus") or (cls == "van" and fitted.size[0] < CUT_MIN_LENGTH_M)):  # fmt: skip
                 continue
             box = complete_box(fitted, cls)
             point_box[members] = len(classes)

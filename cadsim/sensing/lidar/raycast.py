@@ -21,12 +21,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cadsim.sensing.lidar.beam_pattern import BeamPattern
+from cadsim.sensing.lidar.beam_pattern import RANGE_STEP_M, BeamPattern
 from cadsim.sensing.lidar.ray_engine import first_hits
 from cadsim.sensing.lidar.scene_triangles import scene_triangles
 from cadsim.world import Snapshot
 
-RANGE_STEP_M = 0.004
 MAX_RANGE_STEPS = np.iinfo(np.uint16).max
 
 

@@ -1,0 +1,152 @@
+"""LiDAR scenarios end to end: the ``sensor`` key and ``[lidar]`` table, records that carry the
+points (bounded) and the boxes, box-only matching problems, ``cadsim show`` from above."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cadsim.cli import main
+from cadsim.dataset import Dataset, layout
+from cadsim.dataset.lidar_points import MAX_POINTS_PER_VIEW, bounded, check_lidar_arrays
+from cadsim.dataset.manifest import DatasetError
+from cadsim.scenario import ScenarioError, load_scenario
+from cadsim.sensing.box_features import BOX_CUES, BOX_FEATURE_DIM
+from cadsim.sensing.lidar.beam_pattern import PRESETS
+from cadsim.sensing.lidar.raycast import LidarScan
+
+SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
+LIDAR = SCENARIOS / "cad-v2x-lidar.toml"
+RECORD_BYTES_CAP = 1_500_000  # a two-view LiDAR record: two 64-channel sweeps + boxes
+
+
+def _scenario(tmp_path: Path, text: str, name: str = "s.toml") -> Path:
+    shutil.copy(SCENARIOS / "cad-vtypes.add.xml", tmp_path / "cad-vtypes.add.xml")
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_the_lidar_scenario_loads_with_its_sensor_and_table():
+    s = load_scenario(LIDAR)
+    assert s.sensor == "lidar" and s.lidar["preset"] == "hdl-64e"
+    assert load_scenario(SCENARIOS / "cad-v2x.toml").sensor == "camera"
+
+
+@pytest.mark.parametrize(("edit", "message"), [
+    (('sensor = "lidar"', 'sensor = "radar"'), r"sensor.*radar.*camera.*lidar.*both"),
+    (('sensor = "lidar"', 'sensor = "camera"'), r'lidar: is given but sensor is "camera"'),
+    (('preset = "hdl-64e"', 'preset = "hdl-16"'), r"lidar.preset.*must be one of hdl-32e, hdl-64e, pandar128"),
+    (('dropout = 0.05 ', 'dropuot = 0.05 '), r"lidar.dropuot"),
+    (('dropout = 0.05 ', 'dropout = 1.5 '), r"lidar.dropout.*<= 1"),
+])  # fmt: skip
+def test_bad_sensor_settings_are_one_line_errors_naming_file_and_key(tmp_path, edit, message):
+    text = LIDAR.read_text()
+    assert edit[0] in text
+    path = _scenario(tmp_path, text.replace(edit[0], edit[1], 1))
+    with pytest.raises(ScenarioError, match=message) as err:
+        load_scenario(path)
+    assert str(path) in str(err.value) and "\n" not in str(err.value)
+
+
+def test_a_sweep_beyond_the_cap_keeps_every_kth_return():
+    n = MAX_POINTS_PER_VIEW * 2 + 5
+    pattern = PRESETS["pandar128"]
+    scan = LidarScan(
+        pattern, np.arange(n), np.full(n, 100, np.uint16), np.full(n, -1, np.int32), ()
+    )
+    kept = bounded(scan)
+    assert len(kept) <= MAX_POINTS_PER_VIEW and np.array_equal(kept.ray_index, np.arange(0, n, 3))
+
+
+@pytest.fixture(scope="module")
+def lidar_dataset(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("lidar") / "ds"
+    args = ["generate", str(LIDAR), "--out", str(out), "--pairs", "2", "--workers", "1"]
+    assert main([*args, "--no-progress"]) == 0
+    return out
+
+
+def test_lidar_records_carry_boxes_and_bounded_points(lidar_dataset):
+    ds = Dataset(lidar_dataset, verify=True)
+    assert ds.manifest["record_files"] == [
+        layout.DETECTIONS_NPZ,
+        layout.RECORD_JSON,
+        layout.LIDAR_NPZ,
+    ]
+    for pair in ds:
+        size = sum(f.stat().st_size for f in pair.path.iterdir())
+        assert size < RECORD_BYTES_CAP
+        assert pair.cues == BOX_CUES and not pair.has_images
+        problem = pair.problem()
+        assert problem.pixels1 is None and problem.features1.shape[1] == BOX_FEATURE_DIM
+        assert pair.view1.headings is not None and pair.view1.reported_classes
+        assert len(pair.gt_pairs) >= 3
+        objects = pair.objects
+        for view, sweep, observer in zip((pair.view1, pair.view2), pair.lidar, pair.observer_ids, strict=True):  # fmt: skip
+            assert 10_000 < len(sweep.points) <= MAX_POINTS_PER_VIEW
+            hit = {objects[i].id for i in np.unique(sweep.object_index) if i >= 0}
+            assert observer not in hit  # the carrier is not drawn
+            # every box that is an object was hit by that object's points
+            assert {i for i in view.object_ids if not i.startswith("clutter:")} <= hit
+            # the sensor pose is on the carrier's roof
+            carrier = next(o for o in objects if o.id == observer)
+            assert np.allclose(sweep.pose[:2, 3], carrier.center[:2])
+            assert sweep.pose[2, 3] == pytest.approx(carrier.center[2] + carrier.size[2] / 2 + 0.25)
+
+
+def test_a_damaged_points_file_is_a_one_line_error(lidar_dataset):
+    from cadsim.dataset.encoding import load_npz
+
+    pair = Dataset(lidar_dataset)[0]
+    objects = len(pair.objects)
+    arrays = load_npz(str(pair.path / layout.LIDAR_NPZ), "x")
+    check_lidar_arrays(arrays, 2, objects, "x")
+    arrays["view1_range"] = arrays["view1_range"].astype(np.int32)
+    with pytest.raises(ValueError, match=r"^x: view1_range: expected \(\d+,\) uint16$"):
+        check_lidar_arrays(arrays, 2, objects, "x")
+    arrays = load_npz(str(pair.path / layout.LIDAR_NPZ), "x")
+    arrays["view2_object"][:1] = objects
+    with pytest.raises(ValueError, match=rf"^x: view2_object: index outside -1\.\.{objects - 1}$"):
+        check_lidar_arrays(arrays, 2, objects, "x")
+    arrays = load_npz(str(pair.path / layout.LIDAR_NPZ), "x")
+    arrays["view1_stray"] = np.zeros(3)
+    with pytest.raises(ValueError, match=r"^x: view1_stray: not an array of a 2-view lidar.npz$"):
+        check_lidar_arrays(arrays, 2, objects, "x")
+    # through the dataset: the record's verification names the file
+    damaged = pair.path / layout.LIDAR_NPZ
+    from cadsim.dataset.encoding import npz_bytes
+
+    original = damaged.read_bytes()
+    try:
+        arrays = load_npz(original, "x")
+        arrays["view1_hits"] = arrays["view1_hits"][:-1]
+        damaged.write_bytes(npz_bytes(arrays))
+        with pytest.raises(DatasetError):
+            Dataset(lidar_dataset).verify_record(0)
+    finally:
+        damaged.write_bytes(original)
+
+
+def test_show_draws_the_points_from_above(lidar_dataset, tmp_path, capsys):
+    out = tmp_path / "fig.png"
+    assert main(["show", str(lidar_dataset), "--pair", "0", "--out", str(out)]) == 0
+    assert out.stat().st_size > 20_000
+
+
+@pytest.mark.render
+def test_both_sensors_keep_camera_detections_and_add_the_points(tmp_path):
+    text = LIDAR.read_text().replace('sensor = "lidar"', 'sensor = "both"', 1)
+    path = _scenario(tmp_path, text)
+    out = tmp_path / "both"
+    assert main(["generate", str(path), "--out", str(out), "--pairs", "1", "--workers", "1", "--no-progress"]) == 0  # fmt: skip
+    ds = Dataset(out, verify=True)
+    pair = ds[0]
+    assert pair.has_images and pair.cues != BOX_CUES
+    assert layout.LIDAR_NPZ in ds.manifest["record_files"]
+    boxes = pair.lidar[0].boxes
+    assert boxes is not None and len(boxes["ids"]) == len(boxes["classes"]) > 0
+    assert main(["show", str(out), "--pair", "0", "--lidar", "--out", str(tmp_path / "f.png")]) == 0
