@@ -10,6 +10,7 @@ from collections import Counter
 
 import numpy as np
 
+from cadsim.dataset.lidar_regime import card_lines
 from cadsim.dataset.regime import dataset_regime
 
 
@@ -79,7 +80,7 @@ def summarise(ds) -> dict:
         },
         "regime": dataset_regime(frame_pairs),
         "pairs": pairs,
-    } | ({"multi_view": multi_view_summary(ds)} if getattr(ds, "n_views", 2) > 2 else {})
+    } | _lidar_card(frame_pairs) | ({"multi_view": multi_view_summary(ds)} if getattr(ds, "n_views", 2) > 2 else {})
 
 
 def multi_view_summary(ds) -> dict:
@@ -138,6 +139,14 @@ def _regime_text(regime: dict) -> str:
     )
 
 
+def _lidar_card(frame_pairs) -> dict:
+    """``{"lidar_detector": card}`` for a dataset with LiDAR points, else nothing."""
+    from cadsim.dataset.lidar_regime import lidar_detector_card
+
+    card = lidar_detector_card(frame_pairs)
+    return {} if card is None else {"lidar_detector": card}
+
+
 def _text(s: dict) -> str:
     total = sum(s["class_mix"].values()) or 1
     mix = ", ".join(f"{c} {n} ({100 * n / total:.0f}%)" for c, n in s["class_mix"].items())
@@ -164,6 +173,7 @@ def _text(s: dict) -> str:
         f"  class mix               {mix}",
         f"  regime                  {_regime_text(s['regime'])}",
         f"  cues for matchers       {s['regime'].get('cues') or '-'}",
+        *(card_lines(s["lidar_detector"]) if "lidar_detector" in s else []),
         "",
         f"  {'pair':>4}  {'name':<12} {'n1':>3} {'n2':>3} {'cov':>3}  {'depth1 (m)':>12}  {'depth2 (m)':>12}",
     ]
