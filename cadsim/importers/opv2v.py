@@ -191,6 +191,8 @@ def _protocol(folder: Path) -> dict:
     for key in ("start_time", "interval_s", "prior_sigma_m"):
         if block.get(key) is not None:
             out[key] = number(block[key], path, f"cadsim.{key}", 1e12)
+            if key != "start_time" and out[key] <= 0:
+                raise ImportFormatError(path, f"cadsim.{key}: expected a number > 0")
     return out
 
 
