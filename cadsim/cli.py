@@ -35,6 +35,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "cadsim.commands.import_",
         "write external data (DMGM, V2X-Seq, OPV2V) as a dataset",
     ),
+    "export": ("cadsim.commands.export", "write a dataset in the OPV2V layout or as KITTI labels"),
     "train": ("cadsim.commands.train", "train the learned matchers on training datasets"),
     "evaluate": ("eval.commands.evaluate", "run matchers on datasets (cached, parallel)"),
     "sweep-noise": (
@@ -70,6 +71,10 @@ COMMAND_EXAMPLES: dict[str, tuple[str, ...]] = {
         "cadsim import dmgm path/to/DMGM/data/cad/test --out data/dmgm --sequences 069,071",
         "cadsim import v2x-seq path/to/V2X-Seq-SPD --out data/v2x-seq",
         "cadsim import opv2v path/to/OPV2V/test --out data/opv2v-test",
+    ),
+    "export": (
+        "cadsim export opv2v data/cad-v2x --out export/cad-v2x-opv2v",
+        "cadsim export kitti data/cad-v2x --out export/cad-v2x-kitti",
     ),
     "train": (
         "cadsim train data/cad-train data/cad-v2x-train --out my-model.json",

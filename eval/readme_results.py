@@ -42,6 +42,7 @@ from eval.studies.multiagent import readme_part as multiagent_readme
 from eval.studies.prior_defaults import readme_part as prior_sensitivity_readme
 from eval.studies.temporal import readme_part as temporal_readme
 from eval.studies.transfer import readme_part as transfer_readme
+from eval.studies.v2x_boxes import readme_part as v2x_boxes_readme
 from eval.studies.v2x_table import readme_part as v2x_readme
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
@@ -649,6 +650,12 @@ def _sections(results: Path, readme_dir: Path, groups: bool = False) -> list[str
             [
                 part("localisation", lambda: _localisation_part(results, rel, record)),
                 part("v2x", lambda: v2x_readme(results, rel), "The V2X task", "table_v2x.md"),
+                part(
+                    "v2x boxes",
+                    lambda: v2x_boxes_readme(results, rel),
+                    "The V2X task with boxes only",
+                    "table_v2x_boxes.md",
+                ),
             ],
         ),
         (
@@ -814,7 +821,8 @@ SUMMARIES = (
         summary.v2x,
         "The V2X task",
         "F1 in percent of the paper's method, two matchers without and two with the "
-        "localisation prior; every matcher, the pose metrics and the verdicts in the report.",
+        "localisation prior (last column: the same data as 3-D boxes only, its matcher chosen on "
+        "validation); every matcher, the pose metrics and the verdicts in the report.",
     ),
     (
         "Multi-agent — fusing the pairwise matchings of N views",

@@ -8,7 +8,8 @@ Stages (each cached, so a second run only re-renders): generate every scenario's
 all matchers × runs (parameters tuned and τ calibrated on validation only; the untuned table
 beside); the paper's protocol; the CAD noise sweep (re-detection on stored clean depth); the regime
 sweep on every dataset; the dataset spread; the localisation sweep on CAD (prior re-drawn per
-position error); the V2X task on cad-v2x; the multi-agent table on cad-multi
+position error); the V2X task on cad-v2x and its box-only table (:mod:`eval.studies.v2x_boxes`,
+``--no-boxes`` skips it); the multi-agent table on cad-multi
 (:mod:`eval.studies.multiagent`); the temporal table on cad-v2x-seq (:mod:`eval.studies.temporal`,
 ``--no-temporal`` skips it); the external benchmark on the shipped DMGM CAD pairs (``eval/data/dmgm-cad``,
 :mod:`eval.studies.external`) and the ranking agreement with it (:mod:`eval.studies.agreement`); tables and
@@ -98,6 +99,7 @@ from eval.studies.temporal import TEST_SEQUENCES as TEMPORAL_TEST
 from eval.studies.temporal import VAL_SEQUENCES as TEMPORAL_VAL
 from eval.studies.temporal import evaluate_temporal
 from eval.studies.transfer import evaluate_transfer, test_sets, train_models, train_sets
+from eval.studies.v2x_boxes import evaluate_boxes
 from eval.studies.v2x_table import PRESETS as V2X_PRESETS
 from eval.studies.v2x_table import evaluate_v2x
 from matchers.fusion import usable_fusions
@@ -278,6 +280,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--no-transfer",
         action="store_true",
         help="skip the learned matchers' transfer matrix (also skipped without cad-v2x)",
+    )
+    p.add_argument(
+        "--no-boxes",
+        action="store_true",
+        help="skip the box-only V2X table (cad-v2x exported and re-imported as 3-D boxes)",
     )
     p.add_argument(
         "--no-temporal",
@@ -564,6 +571,20 @@ def main(argv: list[str] | None = None) -> int:
                 )
                 v2x_record |= {"table_presets": list(V2X_PRESETS)}
         count("v2x_table", before)
+        with timer.stage("v2x_boxes"):
+            before = asdict(runner.totals)
+            if v2x_entry is not None and not args.no_boxes:
+                _, v2x_record["boxes"] = evaluate_boxes(
+                    v2x_entry.test_dir,
+                    v2x_entry.val_dir,
+                    data,
+                    external_matchers(args.matchers),
+                    v2x_seeds,
+                    runner,
+                    out,
+                    tune=args.tune,
+                )
+        count("v2x_boxes", before)
         external_seeds = list(range(args.external_runs))
         with timer.stage("external"):
             before = asdict(runner.totals)

@@ -376,6 +376,13 @@ class FramePair:
             worlds.append(perturbed_world(world, np.asarray(pose.position) + shift, error))
         return worlds[0], worlds[1], self.localisation[0].stated_sigma_m
 
+    def pose_errors(self) -> tuple[PoseError, PoseError] | None:
+        """Each view's drawn localisation error (``PoseError``: dx, dy metres, dyaw radians,
+        about its observer's body origin) — what its broadcast pose is off by — or None without
+        a simulated prior (none, stored, ``denied``). The exporters write it as the reported
+        pose."""
+        return self._pose_errors()
+
     def _pose_errors(self) -> tuple[PoseError, PoseError] | None:
         """Each view's drawn pose error (about its observer's body origin), or None when the
         record has no simulated prior (none, stored, or ``denied``)."""

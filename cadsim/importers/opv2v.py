@@ -19,7 +19,7 @@ Per agent and frame:
 
 Mapping: a scenario is an episode, its frames the slots (``data_protocol.yaml``'s ``cadsim``
 block — written by ``cadsim export opv2v`` — restores the original episode, slot, simulation
-seed and time); agents are ordered vehicles first (ascending id), then infrastructure (−1, −2,
+seed, time and a stored prior's stated uncertainty); agents are ordered vehicles first (ascending id), then infrastructure (−1, −2,
 …); every record has ``agents`` views (default: the fewest agents of any frame, at least 2; a
 frame's first ones in that order), so frames with fewer are skipped. Two views: frame pairs,
 kept as sequences while a scenario's frames have the same two agents; more: N-view snapshots.
@@ -188,9 +188,11 @@ def _protocol(folder: Path) -> dict:
                 path, f"cadsim.{key}: expected an integer >= 0, got {str(value)[:30]}"
             )
         out[key] = value
-    for key in ("start_time", "interval_s"):
+    for key in ("start_time", "interval_s", "prior_sigma_m"):
         if block.get(key) is not None:
             out[key] = number(block[key], path, f"cadsim.{key}", 1e12)
+            if key != "start_time" and out[key] <= 0:
+                raise ImportFormatError(path, f"cadsim.{key}: expected a number > 0")
     return out
 
 
@@ -297,9 +299,10 @@ def import_opv2v(
             time = None if start is None else start + k * protocol.get("interval_s", 0.1)
             meta = {"source": SOURCE["kind"], "scenario": scenario_name, "frame": name}
             meta["agents"] = [a.agent for a in read]
+            sigma = protocol.get("prior_sigma_m", prior_sigma_m) if use_prior else None
             imported.append(
                 ImportedFrame(time, tuple(views), list(objects.values()), meta,
-                              prior_sigma_m if use_prior else None, _PRIOR_FRAME if use_prior else "")
+                              sigma, _PRIOR_FRAME if use_prior else "")
             )  # fmt: skip
         sim_seed = protocol.get("sim_seed", episode)
         records += sequence_records(

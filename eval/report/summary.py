@@ -181,13 +181,36 @@ def v2x(results: Path) -> list[str]:
     if not shown:
         return []
     f1 = table.drop_duplicates(["preset", "matcher"]).set_index(["preset", "matcher"])["f1_mean"]
+    boxes = _boxes_best(results)
+    extra = ["boxes only: chosen on validation"] if boxes else []
     lines = [
-        "| Preset | " + " | ".join(method_name(m) for m in shown) + " |",
-        "|:---|" + "---:|" * len(shown),
+        "| Preset | " + " | ".join([*(method_name(m) for m in shown), *extra]) + " |",
+        "|:---|" + "---:|" * (len(shown) + len(extra)),
     ]
     for preset in dict.fromkeys(table["preset"]):
-        lines.append(_row([str(preset), *(pct(f1.get((preset, m))) for m in shown)]))
+        cells = [pct(f1.get((preset, m))) for m in shown]
+        if boxes:
+            cells.append(boxes.get(preset, "–"))
+        lines.append(_row([str(preset), *cells]))
     return lines
+
+
+def _boxes_best(results: Path) -> dict[str, str]:
+    """Per preset of the box-only V2X table (``table_v2x_boxes.csv``): "F1 (matcher)" of the
+    matcher with the highest validation F1 (``v2x_boxes/validation_f1.csv``); {} without them."""
+    table = read_csv(Path(results) / "table_v2x_boxes.csv")
+    validation = read_csv(Path(results) / "v2x_boxes" / "validation_f1.csv")
+    if not (_has(table, "matcher", "preset", "f1_mean") and _has(validation, "preset", "val_f1")):
+        return {}
+    out = {}
+    for preset, rows in table.groupby("preset", sort=False):
+        rows = rows[~rows["matcher"].isin(("oracle", "prior"))]
+        val = validation[validation["preset"] == preset].set_index("matcher")["val_f1"]
+        if rows.empty or val.empty:
+            continue
+        best = max(rows.itertuples(index=False), key=lambda r: val.get(r.matcher, float("-inf")))
+        out[preset] = f"{pct(best.f1_mean)} ({method_name(best.matcher)})"
+    return out
 
 
 TEMPORAL_METHODS = ("windowed:consistency", "temporal_pose")

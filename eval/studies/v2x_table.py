@@ -105,12 +105,14 @@ def evaluate_v2x(
     out_dir: str | Path,
     presets: Sequence[str] = PRESETS,
     tune: bool = True,
+    name: str = SUBDIR,
 ) -> pd.DataFrame:
     """Evaluate `matchers` under every preset (module docstring); writes the per-preset files
-    under ``out_dir/v2x/``, ``table_v2x.csv/.md`` and ``table_v2x_intervals.csv`` in
-    `out_dir`; returns the table."""
+    under ``out_dir/<name>/``, ``table_<name>.csv/.md`` and ``table_<name>_intervals.csv`` in
+    `out_dir` (``name`` "v2x"; the box-only table :mod:`eval.studies.v2x_boxes` uses its own);
+    returns the table."""
     out_dir = Path(out_dir)
-    base = out_dir / SUBDIR
+    base = out_dir / name
     tuned_dir = base / TUNE_PRESET
     tuned = open_entry(test_dir, val_dir, label, localisation=TUNE_PRESET)
     evaluate([tuned], matchers, seeds, runner, tuned_dir, tune=tune, untuned=False)
@@ -130,7 +132,7 @@ def evaluate_v2x(
     per_pair = pd.concat(frames, ignore_index=True)
     write_csv(per_pair, base / "metrics_per_pair.csv")
     table = v2x_table(per_pair)
-    write_csv(table.round(6), out_dir / "table_v2x.csv")
+    write_csv(table.round(6), out_dir / f"table_{name}.csv")
     val_table = pd.DataFrame(
         [
             {"preset": p, "matcher": m, "val_f1": f}
@@ -140,8 +142,8 @@ def evaluate_v2x(
     )
     write_csv(val_table.round(6), base / "validation_f1.csv")
     intervals = best_against_runner_up(per_pair, validation)
-    write_csv(intervals.round(6), out_dir / "table_v2x_intervals.csv")
-    write_text(out_dir / "table_v2x.md", to_markdown(table, intervals, label) + "\n")
+    write_csv(intervals.round(6), out_dir / f"table_{name}_intervals.csv")
+    write_text(out_dir / f"table_{name}.md", to_markdown(table, intervals, label) + "\n")
     return table
 
 
@@ -376,9 +378,9 @@ def to_markdown(table: pd.DataFrame, intervals: pd.DataFrame, label: str) -> str
 TOP = 4
 
 
-def _validation(results: Path) -> dict[str, dict[str, float]]:
-    """{preset: {matcher: validation F1}} as ``v2x/validation_f1.csv`` records it."""
-    path = Path(results) / SUBDIR / "validation_f1.csv"
+def _validation(results: Path, name: str = SUBDIR) -> dict[str, dict[str, float]]:
+    """{preset: {matcher: validation F1}} as ``<name>/validation_f1.csv`` records it."""
+    path = Path(results) / name / "validation_f1.csv"
     if not path.is_file():
         return {}
     table = pd.read_csv(path)
