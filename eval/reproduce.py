@@ -9,7 +9,8 @@ all matchers × runs (parameters tuned and τ calibrated on validation only; the
 beside); the paper's protocol; the CAD noise sweep (re-detection on stored clean depth); the regime
 sweep on every dataset; the dataset spread; the localisation sweep on CAD (prior re-drawn per
 position error); the V2X task on cad-v2x and its box-only table (:mod:`eval.studies.v2x_boxes`,
-``--no-boxes`` skips it); the multi-agent table on cad-multi
+``--no-boxes`` skips it) and the LiDAR table on cad-v2x-lidar (:mod:`eval.studies.v2x_lidar`,
+``--no-lidar``); the multi-agent table on cad-multi
 (:mod:`eval.studies.multiagent`); the temporal table on cad-v2x-seq (:mod:`eval.studies.temporal`,
 ``--no-temporal`` skips it); the external benchmark on the shipped DMGM CAD pairs (``eval/data/dmgm-cad``,
 :mod:`eval.studies.external`) and the ranking agreement with it (:mod:`eval.studies.agreement`); tables and
@@ -100,6 +101,8 @@ from eval.studies.temporal import VAL_SEQUENCES as TEMPORAL_VAL
 from eval.studies.temporal import evaluate_temporal
 from eval.studies.transfer import evaluate_transfer, test_sets, train_models, train_sets
 from eval.studies.v2x_boxes import evaluate_boxes
+from eval.studies.v2x_lidar import SCENARIO as LIDAR_SCENARIO
+from eval.studies.v2x_lidar import evaluate_lidar, generate_lidar_splits
 from eval.studies.v2x_table import PRESETS as V2X_PRESETS
 from eval.studies.v2x_table import evaluate_v2x
 from matchers.fusion import usable_fusions
@@ -285,6 +288,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--no-boxes",
         action="store_true",
         help="skip the box-only V2X table (cad-v2x exported and re-imported as 3-D boxes)",
+    )
+    p.add_argument(
+        "--no-lidar",
+        action="store_true",
+        help=f"skip the LiDAR V2X table ({LIDAR_SCENARIO}: boxes from cadsim's LiDAR detector)",
     )
     p.add_argument(
         "--no-temporal",
@@ -585,6 +593,20 @@ def main(argv: list[str] | None = None) -> int:
                     tune=args.tune,
                 )
         count("v2x_boxes", before)
+        with timer.stage("v2x_lidar"):
+            before = asdict(runner.totals)
+            if v2x_seeds and not args.no_lidar and (ROOT / LIDAR_SCENARIO).is_file():
+                lidar_pairs = V2X_PAIRS if args.pairs is None else min(args.pairs, V2X_PAIRS)
+                test, val, v2x_record["lidar"] = generate_lidar_splits(
+                    ROOT, data, lidar_pairs, VAL_SEED_OFFSET,
+                    lambda path, folder, n, seed: _generate(path, folder, n, seed, args),
+                )  # fmt: skip
+                _, used = evaluate_lidar(
+                    test, val, external_matchers(args.matchers), v2x_seeds, runner, out,
+                    tune=args.tune,
+                )  # fmt: skip
+                v2x_record["lidar"] |= used
+        count("v2x_lidar", before)
         external_seeds = list(range(args.external_runs))
         with timer.stage("external"):
             before = asdict(runner.totals)

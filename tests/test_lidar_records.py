@@ -150,3 +150,38 @@ def test_both_sensors_keep_camera_detections_and_add_the_points(tmp_path):
     boxes = pair.lidar[0].boxes
     assert boxes is not None and len(boxes["ids"]) == len(boxes["classes"]) > 0
     assert main(["show", str(out), "--pair", "0", "--lidar", "--out", str(tmp_path / "f.png")]) == 0
+
+
+def test_the_opv2v_export_writes_each_sweep_as_a_pcd_in_carla_axes(lidar_dataset, tmp_path):
+    from cadsim.exporters.pcd import read_pcd
+
+    out = tmp_path / "opv2v"
+    assert main(["export", "opv2v", str(lidar_dataset), "--out", str(out)]) == 0
+    pair = Dataset(lidar_dataset)[0]
+    clouds = sorted((out / pair.name).glob("*/000000.pcd"))
+    assert len(clouds) == 2
+    counts = sorted(len(read_pcd(c.read_bytes())[0]) for c in clouds)
+    assert counts == sorted(len(s.points) for s in pair.lidar)
+    for cloud in clouds:
+        pts, _ = read_pcd(cloud.read_bytes())
+        sweep = next(s for s in pair.lidar if len(s.points) == len(pts))
+        assert np.allclose(pts, sweep.points * [1.0, -1.0, 1.0], atol=1e-4)
+    # the export still imports (the point clouds are extra files of the layout)
+    assert main(["import", "opv2v", str(out), "--out", str(tmp_path / "back")]) == 0
+
+
+def test_the_regime_card_reports_recall_by_range_and_centre_error(lidar_dataset):
+    from cadsim.dataset.lidar_regime import RANGE_BANDS_M, card_lines, lidar_detector_card
+
+    card = lidar_detector_card(Dataset(lidar_dataset))
+    assert [e["band_m"] for e in card["recall"]] == [list(b) for b in RANGE_BANDS_M]
+    near = card["recall"][0]
+    assert near["objects"] > 0 and 0.0 <= near["recall"] <= 1.0
+    for everything, hit in zip(card["recall"], card["recall_hit"], strict=True):
+        assert hit["objects"] <= everything["objects"]
+    err = card["centre_error_m"]
+    assert err["boxes"] > 0 and err["median"] < 0.5  # completed boxes: centres within half a metre
+    assert 0.0 <= card["false_positive_share"] < 1.0
+    assert len(card_lines(card)) == 4
+    # camera datasets have no card
+    assert lidar_detector_card([]) is None

@@ -59,28 +59,32 @@ def summarise(ds) -> dict:
         )
     all_z = np.concatenate(depths) if depths else np.zeros(0)
     manifest = ds.manifest
-    return {
-        "dataset": str(ds.path),
-        "scenario": manifest["scenario"]["name"],
-        "seed": manifest["seeds"]["root"],
-        "source": manifest.get("source"),
-        "checksum": ds.checksum,
-        "noise": ds.noise_config,
-        "n_pairs": len(pairs),
-        "objects_per_view": _stats([p["n1"] for p in pairs] + [p["n2"] for p in pairs]),
-        "covisible": _stats([p["covisible"] for p in pairs]),
-        "non_covisible_per_view": _stats(
-            [p["non_covisible1"] for p in pairs] + [p["non_covisible2"] for p in pairs]
-        ),
-        "class_mix": dict(class_mix.most_common()),
-        "depth": {
-            "min": float(all_z.min()) if all_z.size else None,
-            "median": float(np.median(all_z)) if all_z.size else None,
-            "max": float(all_z.max()) if all_z.size else None,
-        },
-        "regime": dataset_regime(frame_pairs),
-        "pairs": pairs,
-    } | _lidar_card(frame_pairs) | ({"multi_view": multi_view_summary(ds)} if getattr(ds, "n_views", 2) > 2 else {})
+    return (
+        {
+            "dataset": str(ds.path),
+            "scenario": manifest["scenario"]["name"],
+            "seed": manifest["seeds"]["root"],
+            "source": manifest.get("source"),
+            "checksum": ds.checksum,
+            "noise": ds.noise_config,
+            "n_pairs": len(pairs),
+            "objects_per_view": _stats([p["n1"] for p in pairs] + [p["n2"] for p in pairs]),
+            "covisible": _stats([p["covisible"] for p in pairs]),
+            "non_covisible_per_view": _stats(
+                [p["non_covisible1"] for p in pairs] + [p["non_covisible2"] for p in pairs]
+            ),
+            "class_mix": dict(class_mix.most_common()),
+            "depth": {
+                "min": float(all_z.min()) if all_z.size else None,
+                "median": float(np.median(all_z)) if all_z.size else None,
+                "max": float(all_z.max()) if all_z.size else None,
+            },
+            "regime": dataset_regime(frame_pairs),
+            "pairs": pairs,
+        }
+        | _lidar_card(frame_pairs)
+        | ({"multi_view": multi_view_summary(ds)} if getattr(ds, "n_views", 2) > 2 else {})
+    )
 
 
 def multi_view_summary(ds) -> dict:

@@ -31,7 +31,9 @@ def _interval(by_episode: dict[int, list[float]]) -> list[float] | None:
         return None
     from scipy.stats import t
 
-    half = float(t.ppf(0.975, len(means) - 1)) * float(np.std(means, ddof=1)) / math.sqrt(len(means))
+    half = (
+        float(t.ppf(0.975, len(means) - 1)) * float(np.std(means, ddof=1)) / math.sqrt(len(means))
+    )
     centre = float(np.mean(means))
     return [centre - half, centre + half]
 

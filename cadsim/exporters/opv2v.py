@@ -24,8 +24,8 @@ ids. Per agent and frame (:func:`agent_document`):
   ``interval_s``, ``prior_sigma_m``}, so a re-import keeps the record identity (and with it
   the presets' draws) and a stored prior's stated uncertainty.
 
-Each agent's frame is written by :func:`write_agent_frame` (one place, so a point-cloud writer
-can be added beside the yaml). The output folder must be new or empty.
+Each agent's frame is written by :func:`write_agent_frame`; records with LiDAR points add the
+sweep as ``<frame>.pcd`` in the agent's sensor frame (``cadsim.exporters.pcd``). The output folder must be new or empty.
 """
 
 from __future__ import annotations
@@ -39,6 +39,7 @@ import numpy as np
 from cadsim import portable_math as pm
 from cadsim.dataset import layout
 from cadsim.dataset.output_folder import check_output_folder
+from cadsim.exporters.pcd import agent_point_cloud
 from cadsim.exporters.view_boxes import ViewBoxes, snapshot_views
 from cadsim.importers.carla_frame import mirrored_points, pose_angles
 from cadsim.importers.sensor_frame import sensor_pose
@@ -165,6 +166,10 @@ def export_opv2v(dataset: str | Path, out: str | Path) -> ExportResult:
                 files += write_agent_frame(
                     scenario / str(agent), f"{f:06d}", document, _images(pair, view)
                 )
+                cloud = agent_point_cloud(pair, view.view)  # records with LiDAR points
+                if cloud is not None:
+                    (scenario / str(agent) / f"{f:06d}.pcd").write_bytes(cloud)
+                    files += 1
         sequence = first.record.get("sequence") or {}
         protocol = {"episode": first.episode, "slot": first.slot, "sim_seed": first.sim_seed}
         start = sequence.get("start_time", first.record.get("time"))
