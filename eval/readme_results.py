@@ -43,6 +43,7 @@ from eval.studies.prior_defaults import readme_part as prior_sensitivity_readme
 from eval.studies.temporal import readme_part as temporal_readme
 from eval.studies.transfer import readme_part as transfer_readme
 from eval.studies.v2x_boxes import readme_part as v2x_boxes_readme
+from eval.studies.v2x_lidar import readme_part as v2x_lidar_readme
 from eval.studies.v2x_table import readme_part as v2x_readme
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
@@ -655,6 +656,12 @@ def _sections(results: Path, readme_dir: Path, groups: bool = False) -> list[str
                     lambda: v2x_boxes_readme(results, rel),
                     "The V2X task with boxes only",
                     "table_v2x_boxes.md",
+                ),
+                part(
+                    "v2x lidar",
+                    lambda: v2x_lidar_readme(results, rel),
+                    "The V2X task on LiDAR boxes",
+                    "table_v2x_lidar.md",
                 ),
             ],
         ),
