@@ -1,4 +1,4 @@
-"""A LiDAR sweep and its boxes are the same bits on every dispatch level (numpy with and without
+"""A LiDAR sweep, its boxes and the detections a record stores are the same bits on every dispatch level (numpy with and without
 AVX-512, one-ulp faults in its transcendental functions, another BLAS kernel): what reaches a
 record does not depend on the CPU (docs/lidar.md, "Ray engine")."""
 
@@ -30,6 +30,9 @@ for seed in range(3):
     for a in (s.ray_index, s.range_steps, s.object_index, s.points, b.centres, b.sizes, b.yaws, b.point_box):
         h.update(np.ascontiguousarray(a).tobytes())
     h.update(",".join(b.classes).encode())
+    v = b.to_view_detections([f"o{k}" for k in range(len(b))], b.classes)  # what records store
+    for a in (v.positions, v.features, v.headings):
+        h.update(np.ascontiguousarray(a).tobytes())
 open(sys.argv[1], "w").write(h.hexdigest())
 """
 

@@ -12,7 +12,9 @@ length, width and height, a Gaussian radial-basis encoding of log₂(size) on 16
 an octave apart from 0.25 m to 45 m (σ = half an octave). The cosine similarity of two rows is the
 mean over the three dimensions of ≈ exp(−Δ²), Δ the dimension's ratio in octaves: 1 for equal
 boxes, ≈ 0.9 for one dimension 1.5× larger, ≈ 0.35 for a pedestrian against a car. Sizes are
-clipped to [0.05, 100] m before encoding.
+clipped to [0.05, 100] m before encoding. Logarithms, exponentials and the heading's arctangent
+go through :mod:`cadsim.portable_math`, so the stored features and headings are the same bytes on
+every CPU.
 
 Frames. Box centres use the camera-frame convention of every cadsim detection (OpenCV: x right,
 y down, z forward, metres) with the *sensor* as origin; a LiDAR's own frame (x forward, y left,
@@ -25,6 +27,8 @@ from x forward) is heading −ψ (:func:`heading_from_lidar_yaw`).
 from __future__ import annotations
 
 import numpy as np
+
+from cadsim import portable_math as pm
 
 SIZE_NAMES = ("length_m", "width_m", "height_m")
 OCTAVE_CENTRES = np.arange(-2.0, 6.0, 0.5)  # log2 metres: 0.25 m … 45 m
@@ -46,8 +50,8 @@ def box_feature_vector(size_lwh: np.ndarray) -> np.ndarray:
         raise ValueError(f"size_lwh: expected (k, 3) metres, got shape {size.shape}")
     if not np.isfinite(size).all():
         raise ValueError("size_lwh: non-finite box size")
-    octaves = np.log2(np.clip(size, *_SIZE_CLIP_M))
-    rbf = np.exp(-0.5 * ((octaves[:, :, None] - OCTAVE_CENTRES) / OCTAVE_SIGMA) ** 2)
+    octaves = pm.log2(np.clip(size, *_SIZE_CLIP_M)).reshape(size.shape)
+    rbf = pm.exp(-0.5 * ((octaves[:, :, None] - OCTAVE_CENTRES) / OCTAVE_SIGMA) ** 2)
     return rbf.reshape(len(size), BOX_FEATURE_DIM).astype(np.float32)
 
 
@@ -62,4 +66,4 @@ def heading_from_lidar_yaw(yaw: np.ndarray) -> np.ndarray:
     """Heading in the camera-frame convention (radians, (−π, π]) of a LiDAR-frame yaw (radians,
     counter-clockwise about z up from x forward)."""
     h = -np.asarray(yaw, dtype=np.float64)
-    return np.arctan2(np.sin(h), np.cos(h))
+    return np.asarray(pm.arctan2(np.sin(h), np.cos(h)), dtype=np.float64).reshape(h.shape)
