@@ -34,6 +34,7 @@ SCENARIOS = (
     "cad-intersection",
     "cad-dense",
     "cad-v2x",  # detector errors, per-episode light, per-camera exposure
+    "cad-v2x-lidar",  # LiDAR sweeps, box detector, lidar.npz
     "mrc-arena",
     "highway-intersection",
     "sumo-game-cross",

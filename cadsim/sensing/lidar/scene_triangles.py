@@ -10,6 +10,7 @@ registry and the world model only — not pyrender.
 
 from __future__ import annotations
 
+import dataclasses
 from collections import OrderedDict
 from collections.abc import Collection
 
@@ -27,7 +28,10 @@ _local_cache: OrderedDict[MeshSpec, np.ndarray] = OrderedDict()
 
 
 def _local_triangles(spec: MeshSpec) -> np.ndarray:
-    """(F, 3, 3) float64 triangles of a mesh in its object frame (before the node scale)."""
+    """(F, 3, 3) float64 triangles of a mesh in its object frame (before the node scale); cached
+    per geometry: the colour of a spec does not change its shape, so look-alikes of every colour
+    share one entry."""
+    spec = dataclasses.replace(spec, color=(0.5, 0.5, 0.5))
     tri = _local_cache.get(spec)
     if tri is None:
         tri = np.concatenate(
