@@ -71,8 +71,9 @@ class BeamPattern:
     elevations_deg: per-channel elevation, degrees, ascending. azimuth_steps: azimuths per
     revolution. min_range_m / max_range_m: returns closer / farther are dropped (metres).
     range_sigma_m: standard deviation of the Gaussian range noise (metres). dropout: probability
-    that a ray which hits returns nothing, in [0, 1]. mount: "roof" or "roadside" (where the
-    generator puts the sensor, ``cadsim.sensing.lidar.mount``).
+    that a ray which hits returns nothing, in [0, 1]. mount: "roof" or "roadside", the kind of
+    unit the preset is (``cadsim.sensing.lidar.observe`` mounts the table's pattern on vehicles
+    and ``roadside_preset`` on observers on no vehicle).
     """
 
     name: str
@@ -152,8 +153,8 @@ class LidarConfig:
     ([lowest, highest] degrees): evenly spaced channels instead of the preset's; elevations_deg:
     explicit per-channel angles instead (ascending). horizontal_resolution_deg: azimuth step
     (degrees; 360 / it azimuths, rounded). min_range_m, max_range_m, range_noise_m (σ, metres),
-    dropout (probability), mount ("roof" | "roadside"). roadside_preset: the pattern of roadside
-    units when the scenario has both kinds of observer (default "pandar128").
+    dropout (probability). roadside_preset: the pattern of roadside units (observers on no
+    vehicle; default "pandar128"), which takes only range_noise_m and dropout from the table.
     """
 
     preset: str = "hdl-64e"
@@ -165,7 +166,6 @@ class LidarConfig:
     max_range_m: float | None = None
     range_noise_m: float | None = None
     dropout: float | None = None
-    mount: str | None = None
     roadside_preset: str = "pandar128"
 
     def __post_init__(self) -> None:
@@ -222,11 +222,11 @@ class LidarConfig:
         if self.horizontal_resolution_deg is not None:
             changes["azimuth_steps"] = max(1, round(360.0 / float(self.horizontal_resolution_deg)))
         for key, attr in (("min_range_m", "min_range_m"), ("max_range_m", "max_range_m"),
-                          ("range_noise_m", "range_sigma_m"), ("dropout", "dropout"),
-                          ("mount", "mount")):  # fmt: skip
+                          ("range_noise_m", "range_sigma_m"), ("dropout", "dropout")):  # fmt: skip
             value = getattr(self, key)
             if value is not None:
                 changes[attr] = value
-        if changes:
-            changes["name"] = f"{base.name}+custom"
-        return replace(base, **changes, _directions=None) if changes else base
+        changes = {k: v for k, v in changes.items() if v != getattr(base, k)}
+        if not changes:  # the table repeats the preset's values
+            return base
+        return replace(base, **changes, name=f"{base.name}+custom", _directions=None)
