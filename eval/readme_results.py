@@ -609,6 +609,7 @@ def _sections(results: Path, readme_dir: Path, groups: bool = False) -> list[str
     transfer_runs = cold.get("runs", {}).get("transfer", {}).get("computed")
     transfer_s = sum(stages.get(k, 0.0) for k in ("transfer_generate", "transfer")) or None
     temporal_s = sum(stages.get(k, 0.0) for k in ("temporal_generate", "temporal")) or None
+    boxes_s = stages.get("v2x_boxes")
 
     def part(name, build, heading=None, table=None):
         return _guarded(name, build, results, heading, table)
@@ -653,7 +654,7 @@ def _sections(results: Path, readme_dir: Path, groups: bool = False) -> list[str
                 part("v2x", lambda: v2x_readme(results, rel), "The V2X task", "table_v2x.md"),
                 part(
                     "v2x boxes",
-                    lambda: v2x_boxes_readme(results, rel),
+                    lambda: v2x_boxes_readme(results, rel, boxes_s),
                     "The V2X task with boxes only",
                     "table_v2x_boxes.md",
                 ),

@@ -85,6 +85,7 @@ def test_camera_records_export_as_the_same_problems_in_boxes(camera_dataset, tmp
         np.testing.assert_allclose(x.points1, y.points1, atol=1e-9)
         np.testing.assert_allclose(x.points2, y.points2, atol=1e-9)
         assert np.array_equal(pa.gt_pairs, pb.gt_pairs) and y.pixels1 is None
+        assert pa.view2.object_ids == pb.view2.object_ids and pa.observer_ids == pb.observer_ids
         assert (x.classes1 or tuple(pa.view1.true_classes)) == y.classes1
         np.testing.assert_allclose(pa.true_relative_pose(), pb.true_relative_pose(), atol=1e-9)
         # the record identity and the observers' bodies survive: a preset draws the same prior
@@ -114,3 +115,13 @@ def test_kitti_labels_are_camera_frame_boxes(tmp_path):
     np.testing.assert_allclose(np.cos(ry), np.sin(heading), atol=1e-5)
     assert {r[0] for r in rows} <= {"Car", "Tram"}
     assert (tmp_path / "kitti" / "records.txt").read_text().startswith("000000 e00010_s00")
+
+
+def test_a_latency_preset_draws_the_same_prior_after_the_round_trip(camera_dataset, tmp_path):
+    export_opv2v(camera_dataset, tmp_path / "o")
+    boxes = Dataset(import_opv2v(tmp_path / "o", tmp_path / "b", prior=False).out)
+    for pa, pb in zip(Dataset(camera_dataset), boxes, strict=True):
+        wa = pa.localise_preset("gnss-urban", seed=5).prior()  # 100 ms latency: velocities move
+        wb = pb.localise_preset("gnss-urban", seed=5).prior()
+        np.testing.assert_allclose(wa[0], wb[0], atol=1e-6)
+        np.testing.assert_allclose(wa[1], wb[1], atol=1e-6)

@@ -86,3 +86,27 @@ def test_cli_imports_and_reports(tmp_path, capsys):
     assert "3 frame pairs in 1 episodes, box-only" in capsys.readouterr().out
     assert main(["info", str(tmp_path / "out")]) == 0
     assert "position, class, size, heading" in capsys.readouterr().out
+
+
+def test_same_input_same_bytes(tmp_path):
+    src = write_opv2v(tmp_path / "split")
+    a = import_opv2v(src, tmp_path / "a")
+    b = import_opv2v(src, tmp_path / "b")
+    assert a.checksum == b.checksum
+    for rec in sorted((tmp_path / "a" / "pairs").iterdir()):
+        for f in rec.iterdir():
+            assert f.read_bytes() == (tmp_path / "b" / "pairs" / rec.name / f.name).read_bytes()
+
+
+def test_an_interrupted_import_leaves_no_dataset(tmp_path, monkeypatch):
+    import cadsim.importers.box_dataset as writer
+
+    def interrupted(path, data):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(writer, "write_file_atomic", interrupted)  # the manifest, written last
+    with pytest.raises(KeyboardInterrupt):
+        import_v2x_seq(write_v2x_seq(tmp_path / "spd"), tmp_path / "out")
+    assert not (tmp_path / "out" / "manifest.json").exists()
+    with pytest.raises(ValueError):
+        Dataset(tmp_path / "out")

@@ -13,7 +13,8 @@ ids. Per agent and frame (:func:`agent_document`):
 - ``lidar_pose``: the view's sensor — a camera record's camera, a box record's LiDAR — as
   ``[x, y, z, roll, yaw, pitch]`` (metres, degrees, CARLA's left-handed world,
   :mod:`cadsim.importers.carla_frame`), x along the optical axis;
-- ``true_ego_pos``: the observer's body pose; ``predicted_ego_pos``: the pose its localisation
+- ``true_ego_pos``: the observer's body pose, ``ego_speed`` its speed (km/h);
+  ``predicted_ego_pos``: the pose its localisation
   reported (the record's own prior; absent when the record has none);
 - ``vehicles``: the view's detections (every class, not only vehicles): ``location`` (box
   centre), ``center`` [0, 0, 0], ``angle`` [0, yaw, pitch], ``extent`` (half sizes), ``speed``
@@ -21,8 +22,9 @@ ids. Per agent and frame (:func:`agent_document`):
 - ``camera0`` (records with images): ``cords`` (camera pose), ``intrinsic`` (3×3 K, pixels) and
   ``extrinsic`` (4×4 LiDAR → camera, OpenCV axes);
 - ``data_protocol.yaml``: ``cadsim`` {``episode``, ``slot``, ``sim_seed``, ``start_time``,
-  ``interval_s``, ``prior_sigma_m``}, so a re-import keeps the record identity (and with it
-  the presets' draws) and a stored prior's stated uncertainty.
+  ``interval_s``, ``prior_sigma_m``, ``ids`` {actor id: cadsim object id}}, so a re-import
+  keeps the record identity, the object and observer ids (and with them the presets' draws)
+  and a stored prior's stated uncertainty.
 
 Each agent's frame is written by :func:`write_agent_frame`; records with LiDAR points add the
 sweep as ``<frame>.pcd`` in the agent's sensor frame (``cadsim.exporters.pcd``). The output folder must be new or empty.
@@ -105,6 +107,7 @@ def agent_document(view: ViewBoxes, actors: dict[str, int]) -> dict:
         }
     sensor = sensor_pose(view.camera)
     document = {"lidar_pose": pose_angles(sensor), "true_ego_pos": pose_angles(view.body)}
+    document["ego_speed"] = float(view.ego_speed) * _KMH
     if view.reported_body is not None:
         document["predicted_ego_pos"] = pose_angles(view.reported_body)
     document["vehicles"] = vehicles
@@ -177,6 +180,9 @@ def export_opv2v(dataset: str | Path, out: str | Path) -> ExportResult:
             protocol["start_time"] = float(start)
         if sequence.get("interval_s") is not None:
             protocol["interval_s"] = float(sequence["interval_s"])
+        protocol["ids"] = {
+            actor: oid for oid, actor in sorted(actors.items(), key=lambda kv: kv[1])
+        }
         prior = first.record.get("prior") or {}
         if prior.get("kind") == "stored":
             protocol["prior_sigma_m"] = float(prior["world_sigma_m"])

@@ -49,6 +49,15 @@ class ViewBoxes:
     classes: list[str]
     speeds: np.ndarray
     pixel_boxes: np.ndarray | None
+    ego_speed: float = 0.0  # the observer's own speed, m/s (its carrier object's)
+
+
+def _speed(obj: dict | None) -> float:
+    """Horizontal speed (m/s) of a ``record.json`` object entry (0 for none)."""
+    if not obj:
+        return 0.0
+    vx, vy = (float(v) for v in obj.get("velocity", (0.0, 0.0, 0.0))[:2])
+    return float(np.hypot(vx, vy))
 
 
 def _reported(body: np.ndarray, error) -> np.ndarray:
@@ -119,6 +128,7 @@ def record_views(pair, views: list[ViewDetections], errors: list) -> list[ViewBo
                 list(det.reported_classes or det.true_classes),
                 speeds,
                 None if boxes_only else det.boxes,
+                _speed(objects.get(observer["id"])),
             )  # fmt: skip
         )
     return out

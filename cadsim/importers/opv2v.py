@@ -9,7 +9,9 @@ Per agent and frame:
 - ``lidar_pose``: the LiDAR's pose — ``[x, y, z, roll, yaw, pitch]`` (metres, degrees, CARLA's
   left-handed world) or, as V2V4Real gives it, a rotation and translation (``{rotation,
   translation}`` or a 4×4 matrix) in the same axes (:mod:`.carla_frame` converts all of them);
-- ``true_ego_pos``: the body's pose (default: the LiDAR's); ``predicted_ego_pos``: the pose the
+- ``true_ego_pos``: the body's pose (default: the LiDAR's), ``ego_speed`` its speed (km/h; the
+  agent becomes an object of the record, so a message latency moves the sender);
+  ``predicted_ego_pos``: the pose the
   agent's own localisation reported → the stored localisation prior (each box's world position
   as that pose puts it; stated uncertainty ``prior_sigma_m``);
 - ``vehicles``: {actor id: {``location``, ``angle`` [roll, yaw, pitch], ``center`` (box centre
@@ -19,7 +21,7 @@ Per agent and frame:
 
 Mapping: a scenario is an episode, its frames the slots (``data_protocol.yaml``'s ``cadsim``
 block — written by ``cadsim export opv2v`` — restores the original episode, slot, simulation
-seed, time and a stored prior's stated uncertainty); agents are ordered vehicles first (ascending id), then infrastructure (−1, −2,
+seed, time, object and observer ids and a stored prior's stated uncertainty); agents are ordered vehicles first (ascending id), then infrastructure (−1, −2,
 …); every record has ``agents`` views (default: the fewest agents of any frame, at least 2; a
 frame's first ones in that order), so frames with fewer are skipped. Two views: frame pairs,
 kept as sequences while a scenario's frames have the same two agents; more: N-view snapshots.
@@ -79,6 +81,7 @@ class _Agent:
     body: np.ndarray  # 4×4 body → world
     predicted: np.ndarray | None  # 4×4 reported body → world
     boxes: list[dict]
+    speed: float = 0.0  # ego_speed, m/s
 
 
 def _pose(value, path: Path, key: str) -> np.ndarray:
@@ -136,7 +139,8 @@ def _read_agent(path: Path, agent: int) -> _Agent:
     body = _pose(data["true_ego_pos"], path, "true_ego_pos") if "true_ego_pos" in data else sensor
     predicted = data.get("predicted_ego_pos")
     predicted = None if predicted is None else _pose(predicted, path, "predicted_ego_pos")
-    return _Agent(agent, sensor, body, predicted, _boxes(data.get("vehicles"), path))
+    speed = number(data.get("ego_speed", 0.0), path, "ego_speed", 1e4) * _KMH
+    return _Agent(agent, sensor, body, predicted, _boxes(data.get("vehicles"), path), speed)
 
 
 def _ordered(agents: list[int]) -> list[int]:
@@ -144,13 +148,17 @@ def _ordered(agents: list[int]) -> list[int]:
     return sorted(agents, key=lambda a: (a < 0, a if a >= 0 else -a))
 
 
-def _view(agent: _Agent, prior: bool) -> tuple[BoxView, list[WorldObject]]:
+def _view(agent: _Agent, prior: bool, names: dict[str, str]) -> tuple[BoxView, list[WorldObject]]:
+    """An agent's box view and its boxes as world objects; ``names``: {actor id: object id}
+    (``data_protocol.yaml``'s ``cadsim.ids``; an actor not in it keeps its number)."""
     camera = sensor_camera(agent.sensor)
     k = len(agent.boxes)
     world = mirrored_points([b["centre"] for b in agent.boxes]).reshape(k, 3)
     directions = mirrored_points([b["direction"] for b in agent.boxes]).reshape(k, 3)
     positions, headings = boxes_in_view(camera, world, directions)
-    ids, classes = [b["id"] for b in agent.boxes], [b["cls"] for b in agent.boxes]
+    ids = [names.get(b["id"], b["id"]) for b in agent.boxes]
+    classes = [b["cls"] for b in agent.boxes]
+    me = names.get(str(agent.agent), str(agent.agent))
     sizes = np.array([b["size"] for b in agent.boxes], dtype=float).reshape(k, 3)
     stored = None
     if prior:
@@ -161,13 +169,19 @@ def _view(agent: _Agent, prior: bool) -> tuple[BoxView, list[WorldObject]]:
     )
     kind = "roadside" if agent.agent < 0 else "vehicle"
     det = box_detections(positions, sizes, headings, ids, classes, world=stored)
-    view = BoxView(str(agent.agent), kind, camera, pose, det, sizes)
+    view = BoxView(me, kind, camera, pose, det, sizes)
     yaw = heading_of(directions)
     objects = [
         WorldObject(i, c, "box", tuple(w), float(y), tuple(s), (0.5, 0.5, 0.5),
                     velocity=(b["speed"] * np.cos(y), b["speed"] * np.sin(y), 0.0))
         for i, c, w, y, s, b in zip(ids, classes, world.tolist(), yaw, sizes.tolist(), agent.boxes, strict=True)
     ]  # fmt: skip
+    heading = float(pm.arctan2(forward[1], forward[0]))
+    objects.append(  # the agent itself (the sender of its messages), moving along its heading
+        WorldObject(me, "agent", "box", tuple(float(v) for v in agent.body[:3, 3]),
+                    heading, (0.1, 0.1, 0.1), (0.5, 0.5, 0.5), target=False,
+                    velocity=(agent.speed * np.cos(heading), agent.speed * np.sin(heading), 0.0))
+    )  # fmt: skip
     return view, objects
 
 
@@ -193,7 +207,15 @@ def _protocol(folder: Path) -> dict:
             out[key] = number(block[key], path, f"cadsim.{key}", 1e12)
             if key != "start_time" and out[key] <= 0:
                 raise ImportFormatError(path, f"cadsim.{key}: expected a number > 0")
-    return out
+    ids = block.get("ids", {})
+    if not isinstance(ids, dict) or not all(
+        _AGENT.match(str(k)) and isinstance(v, str) and 0 < len(v) <= 200 for k, v in ids.items()
+    ):
+        raise ImportFormatError(path, "cadsim.ids: expected {actor id: object id string}")
+    names = {str(int(k)): v for k, v in ids.items()}
+    if len(set(names.values())) != len(names):
+        raise ImportFormatError(path, "cadsim.ids: two actors with one object id")
+    return out | ({"ids": names} if names else {})
 
 
 def _scenarios(root: Path) -> list[Path]:
@@ -291,7 +313,7 @@ def import_opv2v(
         for k, (name, scenario_name, read) in enumerate(run):
             views, objects = [], {}
             for agent in read:
-                view, found = _view(agent, use_prior)
+                view, found = _view(agent, use_prior, protocol.get("ids", {}))
                 views.append(view)
                 for obj in found:
                     objects.setdefault(obj.id, obj)

@@ -139,8 +139,9 @@ def _delta_line(results: Path) -> list[str]:
     return out
 
 
-def readme_part(results: Path, rel: str) -> list[str]:
-    """Report lines for the box-only table (none without ``table_v2x_boxes.md``)."""
+def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[str]:
+    """Report lines for the box-only table (none without ``table_v2x_boxes.md``); ``seconds``:
+    the stage's time in the last cold run (export, import and evaluation)."""
     from eval.studies.v2x_table import INTERVAL_COLUMNS, _validation, compact, to_markdown
 
     results = Path(results)
@@ -168,6 +169,13 @@ def readme_part(results: Path, rel: str) -> list[str]:
         to_markdown(compact(table, _validation(results, NAME)), intervals, LABEL),
         "",
         *[f"- {line}." for line in _delta_line(results)],
+        *(
+            [
+                f"- stage time (export, import, evaluation; last cold run): {seconds:.0f} s (goal ≤ 120 s)."
+            ]
+            if seconds is not None
+            else []
+        ),
         "",
         f"(`{rel}/table_{NAME}.csv`, `{rel}/table_{NAME}_intervals.csv`, `{rel}/{NAME}/`.)",
         "",
