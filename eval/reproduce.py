@@ -96,7 +96,7 @@ from eval.studies.temporal import RUNS as TEMPORAL_RUNS
 from eval.studies.temporal import SCENARIO as TEMPORAL_SCENARIO
 from eval.studies.temporal import TEST_SEQUENCES as TEMPORAL_TEST
 from eval.studies.temporal import VAL_SEQUENCES as TEMPORAL_VAL
-from eval.studies.temporal import evaluate_temporal
+from eval.studies.temporal import evaluate_temporal, temporal_tuning_record
 from eval.studies.transfer import evaluate_transfer, test_sets, train_models, train_sets
 from eval.studies.v2x_table import PRESETS as V2X_PRESETS
 from eval.studies.v2x_table import evaluate_v2x
@@ -657,9 +657,10 @@ def main(argv: list[str] | None = None) -> int:
                     len(TEMPORAL_PRESETS),
                     len(TEMPORAL_RUNS),
                 )
-                evaluate_temporal(*temporal_dirs, out)
+                table = evaluate_temporal(*temporal_dirs, out, tune=args.tune)
                 temporal_record |= {"presets": list(TEMPORAL_PRESETS), "seeds": list(TEMPORAL_RUNS)}
                 temporal_record |= {"methods": {m: list(w) for m, w in TEMPORAL_METHODS}}
+                temporal_record |= {"tuning": temporal_tuning_record(table)}
 
     with timer.stage("tables_figures"):
         markdown = write_tables(out, PAPER_CSV)
