@@ -217,3 +217,23 @@ def test_every_temporal_method_of_the_table_has_the_equal_budget_and_no_window_i
     register_temporal("fake_windowed_grid", fake)
     with pytest.raises(ValueError, match="window"):
         temporal_search_space("fake_windowed_grid")
+
+
+def test_the_study_reads_each_runs_own_odometry_not_the_stored_one(dirs):
+    from cadsim.dataset.sequence_odometry import redraw_odometry
+
+    ds = Dataset(str(dirs / "val"))
+    for seed in (0, 1):
+        items = temporal.load_split(dirs / "val", "gnss-urban", (seed,))
+        for k, (_, item) in enumerate(items):
+            run = redraw_odometry(ds.sequence(k), seed)
+            for view, odometry in ((0, item.seq.odometry1), (1, item.seq.odometry2)):
+                expected = [
+                    [f.odometry[view].x, f.odometry[view].y, f.odometry[view].yaw] for f in run
+                ]
+                stored = [
+                    [f.odometry[view].x, f.odometry[view].y, f.odometry[view].yaw]
+                    for f in ds.sequence(k)
+                ]
+                np.testing.assert_array_equal(odometry, expected)
+                assert not np.array_equal(odometry, stored)

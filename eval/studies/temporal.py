@@ -3,7 +3,8 @@ evidence over a window of frames, on the sequences of ``cad-v2x-seq``, under thr
 presets.
 
 Protocol. Each sequence (10 frames, 0.2 s apart, of the same two vehicles) becomes a
-:class:`~matchers.core.sequence_problem.SequenceProblem`: every frame's pair redrawn under the
+:class:`~matchers.core.sequence_problem.SequenceProblem`: its odometry drift redrawn for the run
+(:func:`cadsim.dataset.sequence_odometry.redraw_odometry`), every frame's pair redrawn under the
 preset (``pair.localise_preset(preset, seed=run)``) and its ``.problem()``; each agent's own
 tracks from its own detections and odometry (:func:`matchers.tracking.hungarian.with_own_tracks`,
 never a true id); odometry and camera mounts from the pairs. Methods (:data:`METHODS`):
@@ -76,7 +77,7 @@ log = logging.getLogger(__name__)
 LABEL = "CAD-V2X-Seq"
 SCENARIO = "scenarios/cad-v2x-seq.toml"
 TEST_SEQUENCES = 20
-VAL_SEQUENCES = 4
+VAL_SEQUENCES = 10
 PRESETS = ("gnss-open-sky", "gnss-urban", "denied")
 METHODS: tuple[tuple[str, tuple[int, ...]], ...] = (
     ("windowed:consistency", (1, 3, 10)),
@@ -189,12 +190,15 @@ def sequence_problem(frames, preset: str, seed: int, index: int = 0) -> Sequence
 
 
 def load_split(folder: Path, preset: str, seeds: Sequence[int]) -> list[tuple[int, Sequenced]]:
-    """(run seed, :class:`Sequenced`) for every sequence of the dataset at ``folder``."""
+    """(run seed, :class:`Sequenced`) for every sequence of the dataset at ``folder``: per run
+    seed its odometry redrawn (:func:`cadsim.dataset.sequence_odometry.redraw_odometry`) and its
+    prior redrawn under ``preset``, so the splits share no noise."""
     from cadsim.dataset import Dataset
+    from cadsim.dataset.sequence_odometry import redraw_odometry
 
     ds = Dataset(str(folder))
     return [
-        (seed, sequence_problem(ds.sequence(k), preset, seed, k))
+        (seed, sequence_problem(redraw_odometry(ds.sequence(k), seed), preset, seed, k))
         for seed in seeds
         for k in range(ds.sequences)
     ]
