@@ -31,6 +31,21 @@ def test_window_one_is_the_base_matcher(base):
         assert np.array_equal(got.pairs, want.pairs) and np.array_equal(got.scores, want.scores)
 
 
+@pytest.mark.parametrize("base", ["pose", "consistency"])
+def test_over_windows_equals_one_call_per_window(base):
+    seq = planted_sequence(seed=5, frames=6).seq
+    lifted = get_temporal(f"windowed:{base}")
+    many = lifted.over_windows(seq, [1, 3, 10], threshold=0.2, reduce="sum")
+    assert sorted(many) == [1, 3, 10]
+    for window, matchings in many.items():
+        one = lifted(seq, threshold=0.2, window=window, reduce="sum")
+        for got, want in zip(matchings, one, strict=True):
+            assert np.array_equal(got.pairs, want.pairs)
+            assert np.array_equal(got.scores, want.scores)
+    with pytest.raises(ValueError, match="window"):
+        lifted.over_windows(seq, [0])
+
+
 def test_window_accumulates_along_tracks():
     """Two frames, two tracks per view: frame 1 alone is ambiguous, frame 0 decides it."""
     xy = np.array([[0.0, 0.0], [10.0, 0.0]])
