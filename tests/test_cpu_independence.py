@@ -38,7 +38,7 @@ SCENARIOS = (
     "highway-intersection",
     "sumo-game-cross",
 )
-TIMING = ("time", "seconds", "wall", "ms_per_pair", "_s")
+TIMING = ("time", "seconds", "wall", "ms_per_pair", "ms_per_frame", "_s")
 
 
 def _variants() -> dict[str, tuple[list[str], dict[str, str] | None]]:
@@ -139,13 +139,15 @@ def test_a_small_reproduce_gives_the_same_tables_on_every_dispatch_level(tmp_pat
     args += ["--spread-runs", "1", "--sweep-runs", "1", "--localisation-sigmas", "0,2"]
     args += ["--localisation-runs", "1", "--external-runs", "1", "--external-tune-pairs", "3"]
     args += ["--workers", "1", "--no-progress", "--out", "{out}/out", "--data", "{out}/data"]
-    # the temporal study is not yet CPU-independent (docs/reproducibility.md, "Scope"): left out
-    args += ["--cache", "{out}/cache", "--no-temporal"]
+    # --pairs 2 caps the temporal table's sequences too: 2 test + 2 validation sequences
+    args += ["--cache", "{out}/cache"]
     done = _run_all(args, tmp_path)
     plain = _tables(tmp_path / "plain" / "out")
     assert {"table1.csv", "regime_sweep.csv", "crossovers.csv", "noise_runs.csv"} <= set(plain)
     assert "localisation_presets.csv" in plain  # cad-v2x: GNSS draws, latency, detector errors
     assert "table_transfer.csv" in plain  # the learned matchers: trained models, their rows
+    # the temporal table: own tracks, windowed accumulation, tuning, τ, per-frame scores
+    assert {"table_temporal.csv", "temporal/per_frame.csv", "temporal/tuning.csv"} <= set(plain)
     models = {
         name: sorted(p.read_bytes() for p in (tmp_path / name / "data" / "models").glob("*.json"))
         for name in done

@@ -24,7 +24,9 @@ frames s = t - W + 1 .. t:
                  gate * tighten * sigma), accumulated along the own tracks over the window
                  (mean, :func:`matchers.temporal.windowed.accumulate`), Hungarian, threshold.
 
-cutoff = gate * tighten * sigma (as ``pose_refine``). Vectorised: candidates, hypotheses and
+cutoff = gate * tighten * sigma (as ``pose_refine``). The hypotheses' ranking and the choice of
+the best read canonical values (:func:`~matchers.core.discretise.canonical_scores`): ties go to
+the first on every CPU. Vectorised: candidates, hypotheses and
 support are arrays; the loops run over frames and refinement rounds only.
 """
 
@@ -37,6 +39,7 @@ from scipy.optimize import linear_sum_assignment
 
 from matchers.blocks.prior import PRIOR_FIELDS, check_prior_options, ground_plane, prior_likelihood
 from matchers.blocks.rigid2d import biweight, procrustes_2d, rotation
+from matchers.core.discretise import canonical_scores
 from matchers.core.matching import Matching
 from matchers.core.options import check_count, check_range, rng_from_seed
 from matchers.core.result import finish
@@ -109,14 +112,14 @@ def estimate(
     shift0 = np.mean([t for _, (_, t) in used], axis=0)
     yaw, shift = _grouped_fit(src, dst, group, len(groups), yaw0)
     weight = np.bincount(group, lik, len(groups))
-    best = np.argsort(-weight, kind="stable")[:hypotheses]
+    best = np.argsort(-canonical_scores(weight), kind="stable")[:hypotheses]
     yaw, shift = np.r_[yaw0, yaw[best]], np.r_[[shift0], shift[best]]
     residual = np.linalg.norm(_apply(yaw, shift, src) - dst, axis=-1)  # (H, K)
     row_key = np.unique(offset1[frame_of] + rows, return_inverse=True)[1]
     vote = np.zeros((len(yaw), row_key.max() + 1))
     np.maximum.at(vote, (slice(None), row_key), biweight(residual, cutoff))
     support = vote.sum(1)
-    h = int(np.argmax(support))
+    h = int(np.argmax(canonical_scores(support)))  # tied support: the first hypothesis
     turn, move = rotation(float(yaw[h])), shift[h]
     anchor_src = np.concatenate([q2[s] for s, p in enumerate(priors) if p is not None])
     anchor_dst = np.concatenate([p[0] for p in used])
