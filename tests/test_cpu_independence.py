@@ -24,6 +24,7 @@ from cpu_dispatch import (
 )
 
 from cadsim import portable_math
+from cadsim.dataset import Dataset
 
 pytestmark = pytest.mark.slow
 
@@ -34,6 +35,7 @@ SCENARIOS = (
     "cad-intersection",
     "cad-dense",
     "cad-v2x",  # detector errors, per-episode light, per-camera exposure
+    "cad-v2x-seq",  # sequences: consecutive frames of the same observers, odometry
     "mrc-arena",
     "highway-intersection",
     "sumo-game-cross",
@@ -113,6 +115,30 @@ def test_datasets_are_byte_identical_on_every_dispatch_level(tmp_path):
     plain = checksums.pop("plain")
     for name, found in checksums.items():
         assert found == plain, name
+    # what a sequence dataset gives at read time, which no checksum covers: each run's redrawn
+    # odometry and prior, and each agent's own tracks built from them
+    draws = tmp_path / "sequence_draws.py"
+    draws.write_text(
+        "import hashlib, sys\nimport numpy as np\n"
+        "from cadsim.dataset import Dataset\n"
+        "from cadsim.dataset.sequence_odometry import redraw_odometry\n"
+        "from eval.studies.temporal import sequence_problem\n"
+        "ds = Dataset(sys.argv[1])\nh = hashlib.sha256()\n"
+        "for k in range(ds.sequences):\n"
+        "    for seed in (None, 0, 1):\n"
+        "        frames = redraw_odometry(ds.sequence(k), seed)\n"
+        "        h.update(repr([p.as_dict() for f in frames for p in f.odometry]).encode())\n"
+        "        item = sequence_problem(frames, 'gnss-urban', 0 if seed is None else seed, k)\n"
+        "        for f, a, b in zip(item.seq.frames, item.seq.tracks1, item.seq.tracks2):\n"
+        "            for x in (f.points1, f.points2, f.world1, f.world2, a, b):\n"
+        "                h.update(np.ascontiguousarray(x).tobytes())\n"
+        "open(sys.argv[2], 'w').write(h.hexdigest())\n"
+    )
+    sequences = tmp_path / "plain" / "cad-v2x-seq"
+    assert Dataset(sequences).sequences == 2
+    done = _run_all(["--path", str(draws), str(sequences), "{out}.draws"], tmp_path)
+    digests = {name: (tmp_path / f"{name}.draws").read_text() for name in done}
+    assert len(set(digests.values())) == 1, digests
 
 
 def _checksum(dataset: Path) -> str:
