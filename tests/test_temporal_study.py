@@ -237,3 +237,15 @@ def test_the_study_reads_each_runs_own_odometry_not_the_stored_one(dirs):
                 ]
                 np.testing.assert_array_equal(odometry, expected)
                 assert not np.array_equal(odometry, stored)
+
+
+def test_the_run_record_states_every_rows_chosen_parameters(study):
+    _, table = study
+    record = temporal.temporal_tuning_record(table)
+    rows = table[table["method"] != temporal.ORACLE_ROW]
+    assert sum(len(w) for m in record.values() for w in m.values()) == len(rows)
+    for row in rows.itertuples(index=False):
+        entry = record[row.preset][row.method][str(row.window)]
+        assert entry["params"] == json.loads(row.params)
+        assert (entry["tau"] is None) == (not np.isfinite(row.tau))
+    json.dumps(record)  # goes into run_record.json as it is
