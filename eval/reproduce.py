@@ -657,7 +657,9 @@ def main(argv: list[str] | None = None) -> int:
                     len(TEMPORAL_PRESETS),
                     len(TEMPORAL_RUNS),
                 )
-                table = evaluate_temporal(*temporal_dirs, out, tune=args.tune)
+                table = evaluate_temporal(
+                    *temporal_dirs, out, tune=args.tune, executor=executor
+                )  # one task per preset
                 temporal_record |= {"presets": list(TEMPORAL_PRESETS), "seeds": list(TEMPORAL_RUNS)}
                 temporal_record |= {"methods": {m: list(w) for m, w in TEMPORAL_METHODS}}
                 temporal_record |= {"tuning": temporal_tuning_record(table)}

@@ -249,3 +249,21 @@ def test_the_run_record_states_every_rows_chosen_parameters(study):
         assert entry["params"] == json.loads(row.params)
         assert (entry["tau"] is None) == (not np.isfinite(row.tau))
     json.dumps(record)  # goes into run_record.json as it is
+
+
+def test_one_task_per_preset_on_the_executor_gives_the_same_files(dirs, study):
+    from eval.core.executor import LocalProcessExecutor
+
+    out, _ = study
+    with LocalProcessExecutor(2) as executor:
+        temporal.evaluate_temporal(
+            dirs / "test", dirs / "val", dirs / "out-pool", METHODS, PRESETS, executor=executor
+        )
+    for name in ("table_temporal.csv", "table_temporal_gain.csv", "temporal/per_frame.csv"):
+        serial = pd.read_csv(out / name)
+        pooled = pd.read_csv(dirs / "out-pool" / name)
+        keep = [c for c in serial.columns if c != "ms_per_frame"]
+        pd.testing.assert_frame_equal(pooled[keep], serial[keep], obj=name)
+    assert (out / "temporal" / "tuning.csv").read_bytes() == (
+        dirs / "out-pool" / "temporal" / "tuning.csv"
+    ).read_bytes()

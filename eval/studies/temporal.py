@@ -429,6 +429,63 @@ def _oracle(items: list[tuple[int, Sequenced]], preset: str) -> tuple[dict, pd.D
     return row | summarise(per_frame, temporal) | {"ms_per_frame": np.nan}, per_frame
 
 
+@dataclass
+class PresetOutcome:
+    """One preset's part of the study: its table rows (the oracle's last), its gain row (None:
+    no W = 10 / W = 1 pair), its per-frame tables and its tuning candidates."""
+
+    rows: list[dict]
+    gain: dict | None
+    per_frame: list[pd.DataFrame]
+    tuned: list[dict]
+
+
+def evaluate_preset(task: tuple) -> PresetOutcome:
+    """The study under one preset: ``task`` = (test folder, validation folder, preset, methods,
+    run seeds, tune). Module-level and picklable: one task of the executor per preset."""
+    test_dir, val_dir, preset, methods, seeds, tune = task
+    test = load_split(Path(test_dir), preset, seeds)
+    val = load_split(Path(val_dir), preset, seeds)
+    oracle_row, oracle_frames = _oracle(test, preset)
+    rows, tuned = [], []
+    per_frame_all = [oracle_frames.assign(method=ORACLE_ROW, window=0, preset=preset)]
+    frames_by: dict[tuple[str, int], pd.DataFrame] = {}
+    for method, windows in methods:
+        choices = tune_windows(method, windows, val, preset, tune)
+        for window in windows:
+            choice = choices[window]
+            chosen = choice.candidates[choice.chosen]
+            tau, val_f1, options = chosen.tau, chosen.val_f1, choice.params
+            tuned += [r | {"preset": preset, "window": window} for r in tuning_rows([choice])]
+            per_frame, temporal, seconds = [], [], 0.0
+            for seed, item in test:
+                frames, took = run_method(method, window, item, seed, preset, options)
+                seconds += took
+                r, s = score_test(item, frames, tau, seed)
+                per_frame += r
+                temporal.append(s)
+            table = pd.DataFrame(per_frame)
+            frames_by[(method, window)] = table
+            per_frame_all.append(table.assign(method=method, window=window, preset=preset))
+            row = {"method": method, "window": window, "preset": preset}
+            row |= {"tau": tau, "val_f1": val_f1, "params": params_json(options)}
+            row |= summarise(table, temporal)
+            row["ms_per_frame"] = 1000 * seconds / max(len(table), 1)
+            rows.append(row)
+            log.info(
+                "[temporal] %s %s W=%d %s: τ %.3f, val F1 %.3f, test F1 %.3f",
+                preset,
+                method,
+                window,
+                row["params"],
+                tau,
+                val_f1,
+                row["f1_mean"],
+            )
+    rows.append(oracle_row)
+    return PresetOutcome(rows, _gain(preset, rows, frames_by), per_frame_all, tuned)
+
+
 def evaluate_temporal(
     test_dir: Path,
     val_dir: Path,
@@ -437,53 +494,30 @@ def evaluate_temporal(
     presets: Sequence[str] = PRESETS,
     seeds: Sequence[int] = RUNS,
     tune: bool = True,
+    executor=None,
 ) -> pd.DataFrame:
     """Run the study (module docstring) and write ``out/table_temporal.{md,csv}``,
     ``out/table_temporal_gain.csv``, the per-frame scores ``out/temporal/per_frame.csv`` and
     every tuning candidate ``out/temporal/tuning.csv`` (``tune=False``: defaults only, no
-    candidates). Returns the table."""
+    candidates). One :func:`evaluate_preset` task per preset on ``executor``
+    (:class:`eval.core.executor.Executor`; None or one worker: in this process, in order);
+    the outputs are assembled in preset order, whatever the completion order. Returns the
+    table."""
     out = Path(out)
-    rows, gains, per_frame_all, tuned = [], [], [], []
-    for preset in presets:
-        test = load_split(Path(test_dir), preset, seeds)
-        val = load_split(Path(val_dir), preset, seeds)
-        oracle_row, oracle_frames = _oracle(test, preset)
-        per_frame_all.append(oracle_frames.assign(method=ORACLE_ROW, window=0, preset=preset))
-        frames_by: dict[tuple[str, int], pd.DataFrame] = {}
-        for method, windows in methods:
-            choices = tune_windows(method, windows, val, preset, tune)
-            for window in windows:
-                choice = choices[window]
-                chosen = choice.candidates[choice.chosen]
-                tau, val_f1, options = chosen.tau, chosen.val_f1, choice.params
-                tuned += [r | {"preset": preset, "window": window} for r in tuning_rows([choice])]
-                per_frame, temporal, seconds = [], [], 0.0
-                for seed, item in test:
-                    frames, took = run_method(method, window, item, seed, preset, options)
-                    seconds += took
-                    r, s = score_test(item, frames, tau, seed)
-                    per_frame += r
-                    temporal.append(s)
-                table = pd.DataFrame(per_frame)
-                frames_by[(method, window)] = table
-                per_frame_all.append(table.assign(method=method, window=window, preset=preset))
-                row = {"method": method, "window": window, "preset": preset}
-                row |= {"tau": tau, "val_f1": val_f1, "params": params_json(options)}
-                row |= summarise(table, temporal)
-                row["ms_per_frame"] = 1000 * seconds / max(len(table), 1)
-                rows.append(row)
-                log.info(
-                    "[temporal] %s %s W=%d %s: τ %.3f, val F1 %.3f, test F1 %.3f",
-                    preset,
-                    method,
-                    window,
-                    row["params"],
-                    tau,
-                    val_f1,
-                    row["f1_mean"],
-                )
-        rows.append(oracle_row)
-        gains.append(_gain(preset, rows, frames_by))
+    methods = tuple((m, tuple(int(w) for w in ws)) for m, ws in methods)
+    tasks = [(str(test_dir), str(val_dir), p, methods, tuple(seeds), bool(tune)) for p in presets]
+    if executor is None or getattr(executor, "workers", 1) <= 1 or len(tasks) <= 1:
+        outcomes = [evaluate_preset(task) for task in tasks]
+    else:
+        outcomes = [None] * len(tasks)
+        for done in executor.map_unordered(evaluate_preset, tasks):
+            if done.error is not None:
+                raise done.error
+            outcomes[done.index] = done.value
+    rows = [r for o in outcomes for r in o.rows]
+    gains = [o.gain for o in outcomes]
+    per_frame_all = [f for o in outcomes for f in o.per_frame]
+    tuned = [t for o in outcomes for t in o.tuned]
     table = pd.DataFrame(rows, columns=list(COLUMNS))
     oracle = table[table["method"] == ORACLE_ROW].set_index("preset")["success_1m_2deg"]
     ceiling = table["preset"].map(oracle).to_numpy(dtype=float)
