@@ -64,6 +64,7 @@ COMMAND_EXAMPLES: dict[str, tuple[str, ...]] = {
     "info": ("cadsim info data/cad", "cadsim info data/cad --json > cad-info.json"),
     "show": (
         "cadsim show data/cad --pair 0 --out pair0.png",
+        "cadsim show data/cad-v2x-seq --sequence 2 --frame 9 --out seq2-frame9.png",
         "cadsim show eval/data/dmgm-cad/val-070 --pair 5 --no-labels --out dmgm5.png",
     ),
     "schema": ("cadsim schema", "cadsim schema --out scenario.schema.json"),

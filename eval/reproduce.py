@@ -98,7 +98,7 @@ from eval.studies.temporal import RUNS as TEMPORAL_RUNS
 from eval.studies.temporal import SCENARIO as TEMPORAL_SCENARIO
 from eval.studies.temporal import TEST_SEQUENCES as TEMPORAL_TEST
 from eval.studies.temporal import VAL_SEQUENCES as TEMPORAL_VAL
-from eval.studies.temporal import evaluate_temporal
+from eval.studies.temporal import evaluate_temporal, temporal_tuning_record
 from eval.studies.transfer import evaluate_transfer, test_sets, train_models, train_sets
 from eval.studies.v2x_boxes import evaluate_boxes
 from eval.studies.v2x_lidar import SCENARIO as LIDAR_SCENARIO
@@ -700,9 +700,12 @@ def main(argv: list[str] | None = None) -> int:
                     len(TEMPORAL_PRESETS),
                     len(TEMPORAL_RUNS),
                 )
-                evaluate_temporal(*temporal_dirs, out)
+                table = evaluate_temporal(
+                    *temporal_dirs, out, tune=args.tune, executor=executor
+                )  # one task per preset
                 temporal_record |= {"presets": list(TEMPORAL_PRESETS), "seeds": list(TEMPORAL_RUNS)}
                 temporal_record |= {"methods": {m: list(w) for m, w in TEMPORAL_METHODS}}
+                temporal_record |= {"tuning": temporal_tuning_record(table)}
 
     with timer.stage("tables_figures"):
         markdown = write_tables(out, PAPER_CSV)

@@ -17,6 +17,13 @@ a leading-eigenvector relaxation, then a consistent set extracted from it — ve
    as boolean masks);
 3. keep the largest clique S (ties: the largest total weight W inside it).
 
+Every decision compares canonical values (:func:`~matchers.core.discretise.canonical_scores`,
+a 2^-40 grid): the weights W themselves (so that W stays exactly symmetric whatever the CPU's
+``exp``), the eigenvector u that orders the starts and the growth, and the clique weights of the
+last step; ties then go to the lower index. Mirror-symmetric candidates (two objects of one
+view equally far from a third) give exactly tied cliques, which raw last bits would otherwise
+decide differently on another CPU (``../shared/DESIGN.md`` §10).
+
 Scores: s_a = sum_{b in S, b != a} W[a, b] / (|S| - 1) in [0, 1] — the share of the consistent
 set that agrees with candidate a (members close to 1; 0 everywhere when no two candidates are
 consistent); then the shared Hungarian + threshold.
@@ -30,6 +37,7 @@ import numpy as np
 from scipy.spatial.distance import cdist
 
 from matchers.blocks.memory_models import consistency_memory
+from matchers.core.discretise import canonical_scores
 from matchers.core.matching import Matching
 from matchers.core.memory_budget import budgeted
 from matchers.core.options import check_count, check_problem, check_range, rng_from_seed
@@ -49,6 +57,7 @@ def consistency_weights(problem: Problem, tolerance: float) -> np.ndarray:
     d2 = cdist(problem.points2, problem.points2)
     diff = np.abs(d1[:, None, :, None] - d2[None, :, None, :])  # [i, j, k, l]
     weights = np.where(diff <= tolerance, np.exp(-2.0 * (diff / tolerance) ** 2), 0.0)
+    weights = canonical_scores(weights)  # the same bits on every CPU: W exactly symmetric
     same_i = np.eye(n, dtype=bool)[:, None, :, None]
     same_j = np.eye(m, dtype=bool)[None, :, None, :]
     weights[np.broadcast_to(same_i | same_j, weights.shape)] = 0.0
@@ -80,12 +89,14 @@ def consistent_set(weights: np.ndarray, starts: int = 64) -> np.ndarray:
     if not adjacent.any():
         return np.zeros(size, dtype=bool)
     u, _, _ = spectral_vector(weights)
+    u = canonical_scores(u)  # orders starts and growth: equal u tie by index on every CPU
     has_edge = adjacent.any(axis=1)
     order = np.argsort(-np.where(has_edge, u, -1.0), kind="stable")
     first = order[: min(starts, int(has_edge.sum()))]
     cliques = greedy_cliques(adjacent, u, first)
     sizes = cliques.sum(axis=1)
     inside = np.einsum("ka,ab,kb->k", cliques.astype(float), weights, cliques.astype(float))
+    inside = canonical_scores(inside)  # exactly tied (mirror) cliques: the first start wins
     best = np.lexsort((-inside, -sizes))[0]
     return cliques[best]
 

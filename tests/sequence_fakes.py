@@ -49,11 +49,19 @@ def planted_sequence(
     gnss_sigma: float = 1.2,
     gnss_yaw_deg: float = 2.0,
     camera: bool = False,
+    latency: float = 0.0,
+    moving: float = 0.3,
+    speed_sigma: float = 3.0,
 ) -> Planted:
+    """Frames 0.1 s apart (``seq.meta["interval_s"]``); a share ``moving`` of the objects moves
+    (N(0, speed_sigma²) m/s per axis); agent 2's detections are ``latency`` seconds old (the
+    objects where they were then; its own pose current)."""
     rng = np.random.default_rng(seed)
     count = covisible + 2 * only
     objects = rng.uniform([-10, -25], [60, 25], size=(count, 2))
-    speed = np.where(rng.random(count)[:, None] < 0.3, rng.normal(0, 3, (count, 2)), 0.0)
+    speed = np.where(
+        rng.random(count)[:, None] < moving, rng.normal(0, speed_sigma, (count, 2)), 0.0
+    )
     # agent 1 drives along +x from the origin; agent 2 comes the other way, 40 m ahead, 8 m left
     start1, start2 = pose_matrix(0, 0, 0.0), pose_matrix(45, 8, np.pi - 0.3)
     view1 = np.r_[np.arange(covisible), covisible + np.arange(only)]
@@ -63,6 +71,7 @@ def planted_sequence(
     next_clutter = 5000
     for t in range(frames):
         at = objects + speed * t * 0.1
+        sent = objects + speed * (t * 0.1 - latency)  # what agent 2's message shows
         poses = [
             start1 @ pose_matrix(1.5 * t, 0, 0.01 * t),
             start2 @ pose_matrix(1.2 * t, 0, -0.02 * t),
@@ -71,7 +80,9 @@ def planted_sequence(
         odo2.append(as_xyyaw(np.linalg.inv(start2) @ poses[1]))
         per_view = []
         for k, (seen, perm) in enumerate(((view1, perm1), (view2, perm2))):
-            body = apply(np.linalg.inv(poses[k]), at[seen]) + rng.normal(0, noise, (len(seen), 2))
+            where = at if k == 0 else sent
+            body = apply(np.linalg.inv(poses[k]), where[seen])
+            body = body + rng.normal(0, noise, (len(seen), 2))
             junk = rng.uniform([0, -20], [40, 20], size=(clutter, 2))
             xy = np.r_[body, junk]
             truth = np.r_[seen, np.full(clutter, -1)]
@@ -95,7 +106,10 @@ def planted_sequence(
         true1.append(tr1)
         true2.append(tr2)
     mount = MOUNT if camera else None
-    seq = SequenceProblem(problems, tracks1, tracks2, np.array(odo1), np.array(odo2), mount, mount)
+    seq = SequenceProblem(
+        problems, tracks1, tracks2, np.array(odo1), np.array(odo2), mount, mount,
+        {"interval_s": 0.1},
+    )  # fmt: skip
     return Planted(seq, true1, true2, np.linalg.inv(start1) @ start2)
 
 

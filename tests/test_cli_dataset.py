@@ -125,3 +125,64 @@ def test_birdseye_draws_observers_objects_and_match_lines_at_true_positions(data
     assert len(ax.patches) == 2  # both observers' view frusta
     labels = {t.get_text() for t in ax.get_legend().get_texts()}
     assert {"observer 1", "observer 2", "seen by 1", "seen by 2"} <= labels
+
+
+@pytest.fixture(scope="module")
+def sequences(tmp_path_factory) -> Path:
+    from test_sequences import _generate, _scenario
+
+    out = tmp_path_factory.mktemp("cli-seq") / "ds"
+    _generate(out, _scenario(frames=4, interval_s=0.25), pairs=3)
+    return out
+
+
+def test_info_states_sequences_frames_and_interval(sequences, dataset, capsys):
+    assert main(["info", str(sequences), "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    ds = Dataset(sequences)
+    q = info["sequence"]
+    assert q["sequences"] == ds.sequences == 3 and q["frames_planned"] == 4
+    assert q["frames"] == {"mean": 4.0, "min": 4.0, "max": 4.0}
+    assert q["interval_s"] == pytest.approx(0.25)
+    assert q["odometry_model"]["scale_sigma"] == pytest.approx(0.01)
+    for k in range(ds.sequences):
+        for pair in ds.sequence(k):
+            entry = info["pairs"][pair.index]
+            assert (entry["sequence"], entry["frame"]) == (k, pair.frame)
+    assert main(["info", str(sequences)]) == 0
+    text = capsys.readouterr().out
+    assert "sequences               3 of 4 frames (planned 4), 0.25 s apart" in text
+    assert "seq frame" in text
+    # a dataset without sequences says nothing about them
+    assert main(["info", str(dataset), "--json"]) == 0
+    plain = json.loads(capsys.readouterr().out)
+    assert "sequence" not in plain and "sequence" not in plain["pairs"][0]
+
+
+def test_show_draws_frame_t_of_sequence_k(sequences, dataset, tmp_path, capsys):
+    import cv2
+
+    ds = Dataset(sequences)
+    target = ds.sequence(1)[2]
+    out = tmp_path / "seq1-frame2.png"
+    assert main(["show", str(sequences), "--sequence", "1", "--frame", "2", "--out", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert f"pair {target.index} ({target.name}), sequence 1 frame 2" in said
+    # the same drawing as the record named by its pair index
+    again = tmp_path / "by-pair.png"
+    assert main(["show", str(sequences), "--pair", str(target.index), "--out", str(again)]) == 0
+    capsys.readouterr()
+    assert np.array_equal(cv2.imread(str(out)), cv2.imread(str(again)))
+    assert main(["show", str(sequences), "--sequence", "2", "--out", str(tmp_path / "f0")]) == 0
+    assert f"({ds.sequence(2)[0].name}), sequence 2 frame 0" in capsys.readouterr().out
+    cases = [
+        (["--sequence", "3"], "--sequence: 3 is out of range; expected 0..2"),
+        (["--sequence", "0", "--frame", "4"], "--frame: 4 is out of range"),
+        (["--frame", "1"], "--frame: needs --sequence"),
+        (["--pair", "0", "--sequence", "0"], "not both"),
+    ]
+    for extra, words in cases:
+        assert main(["show", str(sequences), *extra, "--out", str(tmp_path / "x.png")]) == 2
+        assert words in capsys.readouterr().err, extra
+    assert main(["show", str(dataset), "--sequence", "0", "--out", str(tmp_path / "y.png")]) == 2
+    assert "not a sequence dataset" in capsys.readouterr().err

@@ -24,6 +24,7 @@ from cpu_dispatch import (
 )
 
 from cadsim import portable_math
+from cadsim.dataset import Dataset
 
 pytestmark = pytest.mark.slow
 
@@ -35,11 +36,12 @@ SCENARIOS = (
     "cad-dense",
     "cad-v2x",  # detector errors, per-episode light, per-camera exposure
     "cad-v2x-lidar",  # LiDAR sweeps, box detector, lidar.npz
+    "cad-v2x-seq",  # sequences: consecutive frames of the same observers, odometry
     "mrc-arena",
     "highway-intersection",
     "sumo-game-cross",
 )
-TIMING = ("time", "seconds", "wall", "ms_per_pair", "_s")
+TIMING = ("time", "seconds", "wall", "ms_per_pair", "ms_per_frame", "_s")
 
 
 def _variants() -> dict[str, tuple[list[str], dict[str, str] | None]]:
@@ -114,6 +116,30 @@ def test_datasets_are_byte_identical_on_every_dispatch_level(tmp_path):
     plain = checksums.pop("plain")
     for name, found in checksums.items():
         assert found == plain, name
+    # what a sequence dataset gives at read time, which no checksum covers: each run's redrawn
+    # odometry and prior, and each agent's own tracks built from them
+    draws = tmp_path / "sequence_draws.py"
+    draws.write_text(
+        "import hashlib, sys\nimport numpy as np\n"
+        "from cadsim.dataset import Dataset\n"
+        "from cadsim.dataset.sequence_odometry import redraw_odometry\n"
+        "from eval.studies.temporal import sequence_problem\n"
+        "ds = Dataset(sys.argv[1])\nh = hashlib.sha256()\n"
+        "for k in range(ds.sequences):\n"
+        "    for seed in (None, 0, 1):\n"
+        "        frames = redraw_odometry(ds.sequence(k), seed)\n"
+        "        h.update(repr([p.as_dict() for f in frames for p in f.odometry]).encode())\n"
+        "        item = sequence_problem(frames, 'gnss-urban', 0 if seed is None else seed, k)\n"
+        "        for f, a, b in zip(item.seq.frames, item.seq.tracks1, item.seq.tracks2):\n"
+        "            for x in (f.points1, f.points2, f.world1, f.world2, a, b):\n"
+        "                h.update(np.ascontiguousarray(x).tobytes())\n"
+        "open(sys.argv[2], 'w').write(h.hexdigest())\n"
+    )
+    sequences = tmp_path / "plain" / "cad-v2x-seq"
+    assert Dataset(sequences).sequences == 2
+    done = _run_all(["--path", str(draws), str(sequences), "{out}.draws"], tmp_path)
+    digests = {name: (tmp_path / f"{name}.draws").read_text() for name in done}
+    assert len(set(digests.values())) == 1, digests
 
 
 def _checksum(dataset: Path) -> str:
@@ -140,13 +166,15 @@ def test_a_small_reproduce_gives_the_same_tables_on_every_dispatch_level(tmp_pat
     args += ["--spread-runs", "1", "--sweep-runs", "1", "--localisation-sigmas", "0,2"]
     args += ["--localisation-runs", "1", "--external-runs", "1", "--external-tune-pairs", "3"]
     args += ["--workers", "1", "--no-progress", "--out", "{out}/out", "--data", "{out}/data"]
-    # the temporal study is not yet CPU-independent (docs/reproducibility.md, "Scope"): left out
-    args += ["--cache", "{out}/cache", "--no-temporal"]
+    # --pairs 2 caps the temporal table's sequences too: 2 test + 2 validation sequences
+    args += ["--cache", "{out}/cache"]
     done = _run_all(args, tmp_path)
     plain = _tables(tmp_path / "plain" / "out")
     assert {"table1.csv", "regime_sweep.csv", "crossovers.csv", "noise_runs.csv"} <= set(plain)
     assert "localisation_presets.csv" in plain  # cad-v2x: GNSS draws, latency, detector errors
     assert "table_transfer.csv" in plain  # the learned matchers: trained models, their rows
+    # the temporal table: own tracks, windowed accumulation, tuning, τ, per-frame scores
+    assert {"table_temporal.csv", "temporal/per_frame.csv", "temporal/tuning.csv"} <= set(plain)
     models = {
         name: sorted(p.read_bytes() for p in (tmp_path / name / "data" / "models").glob("*.json"))
         for name in done

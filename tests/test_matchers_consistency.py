@@ -89,3 +89,38 @@ def test_bad_consistency_options_are_named(option, value):
     problem, _ = planted(0)
     with pytest.raises(ValueError, match=option):
         get("consistency")(problem, **{option: value})
+
+
+def _faulty_exp(monkeypatch, seed: int) -> None:
+    """np.exp whose float64 results move up by one ulp at seeded places (another CPU's SIMD
+    exp, as tests/cpu_dispatch.py injects it)."""
+    real = np.exp
+    rng = np.random.default_rng(seed)
+
+    def exp(x, *args, **kwargs):
+        out = np.asarray(real(x, *args, **kwargs))
+        if out.dtype == np.float64 and out.size:
+            moved = rng.random(out.shape) < 0.5
+            out = np.where(moved, np.nextafter(out, np.inf), out)
+        return out
+
+    monkeypatch.setattr(np, "exp", exp)
+
+
+def test_mirror_tied_cliques_are_decided_the_same_way_whatever_the_last_bits(monkeypatch):
+    """View 2 holds two objects 6 m apart; view 1 two objects 5.9 m apart and distractors: the
+    cliques {(0, 0), (1, 1)} and {(0, 1), (1, 0)} are exactly tied (mirror images). With
+    last-bit noise in exp the tie must still go the same way (canonical W, u and clique
+    weights, ties by index)."""
+    from matchers import Problem, get
+
+    view1 = np.array([[0, 0, 10], [5.9, 0, 10], [40, 0, 60], [-30, 0, 55]], dtype=float)
+    view2 = np.array([[1, 0, 12], [7, 0, 12]], dtype=float)
+    problem = Problem(view1, view2)
+    want = get("consistency")(problem, tolerance=0.5)
+    for seed in range(12):
+        with monkeypatch.context() as m:
+            _faulty_exp(m, seed)
+            got = get("consistency")(problem, tolerance=0.5)
+        assert got.pairs.tolist() == want.pairs.tolist(), seed
+        assert np.array_equal(got.scores, want.scores), seed

@@ -272,3 +272,52 @@ def test_cad_v2x_seq_makes_sequences_of_the_same_sumo_vehicles(tmp_path):
         true = relative_pose(frames[0].observer_poses[v], frames[-1].observer_poses[v])
         pose = frames[-1].odometry[v]
         assert abs(pose.x - true[0]) < 0.3 and abs(pose.y - true[1]) < 0.3
+
+
+# --------------------------------------------------------------------------- a run's odometry
+
+
+def _odometry(frames) -> list[tuple]:
+    return [tuple(p.as_dict()["position"] + [p.yaw]) for f in frames for p in f.odometry]
+
+
+def test_a_run_redraws_the_odometry_drift_and_none_keeps_the_records_own(reference, tmp_path):
+    from cadsim.dataset.sequence_odometry import (
+        odometry_redraw_seeds,
+        redraw_odometry,
+        replay_odometry,
+    )
+
+    ds = Dataset(reference)
+    frames = ds.sequence(0)
+    # replaying generation with the stored seeds gives the stored odometry bit for bit: the
+    # redraw is the generation's model along the same true poses, only the seeds differ
+    stored = [int(o["odometry_seed"]) for o in frames[0].record["observers"]]
+    assert _odometry(replay_odometry(frames, stored)) == _odometry(frames)
+    assert _odometry(redraw_odometry(frames, None)) == _odometry(frames)
+    run0, run1 = redraw_odometry(frames, 0), redraw_odometry(frames, 1)
+    assert _odometry(run0) == _odometry(redraw_odometry(ds.sequence(0), 0))  # same seed, same
+    assert _odometry(run0) != _odometry(frames) and _odometry(run0) != _odometry(run1)
+    assert run0[0].odometry[0].as_dict() == frames[0].odometry[0].as_dict()  # the origin
+    for f, g in zip(frames, run0, strict=True):  # only the odometry changes
+        assert g.name == f.name and np.array_equal(g.view1.positions, f.view1.positions)
+        assert [p.distance_m for p in g.odometry] == [p.distance_m for p in f.odometry]
+        # and it survives the other redraws of a run
+        assert g.localise_preset("gnss-urban", seed=0).odometry == g.odometry
+    # another split (another root seed, the same episode and slot numbers): other noise in run 0
+    _generate(tmp_path / "other", seed=99)
+    other = Dataset(tmp_path / "other").sequence(0)
+    assert (other[0].episode, other[0].slot) == (frames[0].episode, frames[0].slot)
+    assert odometry_redraw_seeds(other, 0) != odometry_redraw_seeds(frames, 0)
+    assert odometry_redraw_seeds(frames, 0) != odometry_redraw_seeds(frames, 1)
+    assert odometry_redraw_seeds(frames, 0) != tuple(stored)
+
+
+def test_a_redraw_refuses_frames_that_are_not_one_whole_sequence(reference):
+    from cadsim.dataset.sequence_odometry import redraw_odometry
+
+    ds = Dataset(reference)
+    with pytest.raises(ValueError, match="one sequence"):
+        redraw_odometry(ds.sequence(0)[1:], 0)
+    with pytest.raises(ValueError, match="one sequence"):
+        redraw_odometry(ds.sequence(0)[:2] + ds.sequence(1)[2:], 0)

@@ -65,3 +65,14 @@ def test_correspondence_hota_keeps_own_track_identity():
     out = correspondence_hota(pairs, true1, true2, tracks, [A([20, 21])] * 3)
     # true pairs: 2 + 2 + 1 = 5; declared 6, right 3 (t=0 both, t=2 object 1): DetA 3/8
     assert out["DetA"] == pytest.approx(3 / 8)
+
+
+def test_time_offset_error_against_hand_computed_values():
+    from eval.protocol.temporal_metrics import time_offset_error
+
+    out = time_offset_error([0.1, None, 0.15, 0.0], 0.1)
+    assert out["frames"] == 3
+    assert out["mean_abs_s"] == pytest.approx((0 + 0.05 + 0.1) / 3)
+    assert out["median_abs_s"] == pytest.approx(0.05) and out["max_abs_s"] == pytest.approx(0.1)
+    empty = time_offset_error([None, None], 0.1)
+    assert empty["frames"] == 0 and np.isnan(empty["mean_abs_s"])

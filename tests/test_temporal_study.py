@@ -5,6 +5,8 @@ goal lines through goal_verdict, the README part."""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -72,6 +74,7 @@ def test_w1_rows_equal_the_two_view_matchers_per_frame_outcome(dirs, study):
             & (table["window"] == 1)
             & (table["preset"] == preset)
         ].iloc[0]
+        options = json.loads(row.params)  # the configuration chosen on validation
         got = per_frame[
             (per_frame["method"] == "windowed:consistency")
             & (per_frame["window"] == 1)
@@ -82,7 +85,7 @@ def test_w1_rows_equal_the_two_view_matchers_per_frame_outcome(dirs, study):
             for pair in ds.sequence(k):
                 local = pair.localise_preset(preset, seed=0)
                 problem = local.problem()
-                m = base(problem, seed=0, threshold=None)
+                m = base(problem, seed=0, threshold=None, **options)
                 pairs = np.asarray(m.pairs, dtype=np.int64).reshape(-1, 2)
                 kept = pairs[m.scores[pairs[:, 0], pairs[:, 1]] >= row.tau]
                 expected.append(pair_metrics(kept, local.gt_pairs, problem.n1, problem.n2).f1)
@@ -99,11 +102,15 @@ def test_tau_comes_from_validation_only(dirs, study):
     left = table[table["method"] != temporal.ORACLE_ROW].set_index(key)["tau"]
     right = other[other["method"] != temporal.ORACLE_ROW].set_index(key)["tau"]
     pd.testing.assert_series_equal(left.sort_index(), right.sort_index())
+    params = other[other["method"] != temporal.ORACLE_ROW].set_index(key)["params"]
+    chosen = table[table["method"] != temporal.ORACLE_ROW].set_index(key)["params"]
+    pd.testing.assert_series_equal(chosen.sort_index(), params.sort_index())
     # and each τ is the calibration of the validation outcomes alone
     for preset in PRESETS:
         val = temporal.load_split(dirs / "val", preset, temporal.RUNS)
+        options = json.loads(table.set_index(key).loc[("windowed:consistency", 3, preset)].params)
         outcomes = [
-            (item, temporal.run_method("windowed:consistency", 3, item, s, preset)[0])
+            (item, temporal.run_method("windowed:consistency", 3, item, s, preset, options)[0])
             for s, item in val
         ]
         tau, val_f1 = temporal.calibrate_tau(outcomes)
@@ -115,7 +122,7 @@ def test_tau_comes_from_validation_only(dirs, study):
 def test_a_planted_validation_threshold_is_the_one_applied(monkeypatch, dirs):
     """Plant the τ calibration: the test F1 is then the F1 at the planted τ, whatever the test
     split would prefer."""
-    monkeypatch.setattr(temporal, "calibrate_tau", lambda outcomes: (1e9, 0.5))
+    monkeypatch.setattr(temporal, "calibrate_tau", lambda outcomes: (1e9, 0.5))  # every config
     table = temporal.evaluate_temporal(
         dirs / "test", dirs / "val", dirs / "out-planted", METHODS[:1], PRESETS[:1]
     )
@@ -165,3 +172,98 @@ def test_readme_part_is_compact_and_states_the_goals(study):
     text = "\n".join(lines)
     assert "W = 10 beats W = 1" in text and "42 s" in text
     assert temporal.readme_part(out / "missing", "results") == []
+
+
+def test_every_method_gets_the_equal_budget_and_the_best_validation_f1_wins(study):
+    from matchers.core.search_spaces import TUNING_BUDGET
+
+    out, table = study
+    tuning = pd.read_csv(out / "temporal" / "tuning.csv", keep_default_na=False)
+    assert list(tuning.columns) == list(temporal.TUNING_COLUMNS)
+    sizes = tuning.groupby(["preset", "matcher", "window"]).size()
+    assert (sizes == TUNING_BUDGET).all(), sizes
+    # a prior reader under denied declares nothing: not tuned, no candidates
+    assert not ((tuning["preset"] == "denied") & (tuning["matcher"] == "temporal_pose")).any()
+    assert "window" not in "".join(tuning["params"])  # W is the table's axis, never tuned
+    for (preset, method, window), rows in tuning.groupby(["preset", "matcher", "window"]):
+        won = rows[rows["chosen"].astype(str) == "True"]
+        assert len(won) == 1
+        assert won["val_f1"].iloc[0] == rows["val_f1"].max()
+        row = table[
+            (table["method"] == method) & (table["window"] == window) & (table["preset"] == preset)
+        ].iloc[0]
+        assert row.params == won["params"].iloc[0]
+        assert row.val_f1 == pytest.approx(won["val_f1"].iloc[0], abs=1e-6)
+        assert row.tau == pytest.approx(won["tau"].iloc[0], abs=1e-6)
+    md = (out / "table_temporal.md").read_text()
+    assert "| parameters |" in md
+
+
+def test_every_temporal_method_of_the_table_has_the_equal_budget_and_no_window_in_it(monkeypatch):
+    from matchers.core import temporal_registry
+    from matchers.core.search_spaces import TUNING_BUDGET
+    from matchers.core.temporal_registry import register_temporal, temporal_search_space
+
+    for method, _ in temporal.METHODS:
+        grid = temporal_search_space(method)
+        assert len(grid) == TUNING_BUDGET and {} in grid, method
+        assert not any("window" in config for config in grid), method
+
+    def fake(seq, seed=0, threshold=None, window=1):
+        return []
+
+    fake.search_space = [{}, {"window": 3}]
+    monkeypatch.setattr(temporal_registry, "_registered", {})
+    register_temporal("fake_windowed_grid", fake)
+    with pytest.raises(ValueError, match="window"):
+        temporal_search_space("fake_windowed_grid")
+
+
+def test_the_study_reads_each_runs_own_odometry_not_the_stored_one(dirs):
+    from cadsim.dataset.sequence_odometry import redraw_odometry
+
+    ds = Dataset(str(dirs / "val"))
+    for seed in (0, 1):
+        items = temporal.load_split(dirs / "val", "gnss-urban", (seed,))
+        for k, (_, item) in enumerate(items):
+            run = redraw_odometry(ds.sequence(k), seed)
+            for view, odometry in ((0, item.seq.odometry1), (1, item.seq.odometry2)):
+                expected = [
+                    [f.odometry[view].x, f.odometry[view].y, f.odometry[view].yaw] for f in run
+                ]
+                stored = [
+                    [f.odometry[view].x, f.odometry[view].y, f.odometry[view].yaw]
+                    for f in ds.sequence(k)
+                ]
+                np.testing.assert_array_equal(odometry, expected)
+                assert not np.array_equal(odometry, stored)
+
+
+def test_the_run_record_states_every_rows_chosen_parameters(study):
+    _, table = study
+    record = temporal.temporal_tuning_record(table)
+    rows = table[table["method"] != temporal.ORACLE_ROW]
+    assert sum(len(w) for m in record.values() for w in m.values()) == len(rows)
+    for row in rows.itertuples(index=False):
+        entry = record[row.preset][row.method][str(row.window)]
+        assert entry["params"] == json.loads(row.params)
+        assert (entry["tau"] is None) == (not np.isfinite(row.tau))
+    json.dumps(record)  # goes into run_record.json as it is
+
+
+def test_one_task_per_preset_on_the_executor_gives_the_same_files(dirs, study):
+    from eval.core.executor import LocalProcessExecutor
+
+    out, _ = study
+    with LocalProcessExecutor(2) as executor:
+        temporal.evaluate_temporal(
+            dirs / "test", dirs / "val", dirs / "out-pool", METHODS, PRESETS, executor=executor
+        )
+    for name in ("table_temporal.csv", "table_temporal_gain.csv", "temporal/per_frame.csv"):
+        serial = pd.read_csv(out / name)
+        pooled = pd.read_csv(dirs / "out-pool" / name)
+        keep = [c for c in serial.columns if c != "ms_per_frame"]
+        pd.testing.assert_frame_equal(pooled[keep], serial[keep], obj=name)
+    assert (out / "temporal" / "tuning.csv").read_bytes() == (
+        dirs / "out-pool" / "temporal" / "tuning.csv"
+    ).read_bytes()

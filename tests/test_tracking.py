@@ -50,3 +50,15 @@ def test_gap_and_new_tracks_and_degenerate():
     empty = Problem(np.zeros((0, 2)), np.zeros((0, 2)))
     seq = SequenceProblem([empty], [[]], [[]], np.zeros((1, 3)), np.zeros((1, 3)))
     assert with_own_tracks(seq).tracks1[0].shape == (0,)
+
+
+def test_an_exact_tie_goes_the_same_way_whatever_the_last_bits():
+    """A track at the origin, then two detections equally far from it: which one continues the
+    track must not depend on a one-ulp difference in a position (another CPU's arithmetic)."""
+    first = np.array([[0.0, 0.0]])
+    tied = np.array([[1.0, 0.0], [-1.0, 0.0]])
+    want = [ids.tolist() for ids in link([first, tied])]
+    for row in (0, 1):  # either detection one ulp closer
+        other = tied.copy()
+        other[row, 0] = np.nextafter(other[row, 0], 0.0)
+        assert [ids.tolist() for ids in link([first, other])] == want, row

@@ -1,6 +1,7 @@
 """`cadsim info DIR [--json]`: objects per view, covisible and non-covisible counts, class mix,
 object depth ranges and the regime card (``cadsim.dataset.regime``) of a frame-pair dataset; for
-an N-view dataset also per view and per pair of views (``multi_view``)."""
+an N-view dataset also per view and per pair of views (``multi_view``); for a sequence dataset
+the sequences, their frames and the interval between frames (``sequence``)."""
 
 from __future__ import annotations
 
@@ -84,7 +85,33 @@ def summarise(ds) -> dict:
         }
         | _lidar_card(frame_pairs)
         | ({"multi_view": multi_view_summary(ds)} if getattr(ds, "n_views", 2) > 2 else {})
+        | (sequence_summary(ds, pairs) if getattr(ds, "is_sequential", False) else {})
     )
+
+
+def sequence_summary(ds, pairs: list[dict]) -> dict:
+    """``{"sequence": …}`` of a sequence dataset: the number of sequences, frames per sequence
+    (``frames_planned``: the scenario's ``[sequence] frames``; ``frames``: stats over the
+    sequences, some of which may have ended short), the interval between frames (s) and the
+    odometry model. Marks each entry of ``pairs`` (by index) with its ``sequence`` (0-based)
+    and ``frame``."""
+    config = ds.manifest.get("generation", {}).get("sequence", {})
+    lengths, interval, model = [], config.get("interval_s"), None
+    for k, frames in enumerate(ds.iter_sequences()):
+        lengths.append(len(frames))
+        for pair in frames:
+            pairs[pair.index] |= {"sequence": k, "frame": pair.frame}
+        block = frames[0].record.get("sequence") or {}
+        interval, model = block.get("interval_s", interval), block.get("model", model)
+    return {
+        "sequence": {
+            "sequences": ds.sequences,
+            "frames_planned": config.get("frames"),
+            "frames": _stats(lengths),
+            "interval_s": interval,
+            "odometry_model": model,
+        }
+    }
 
 
 def multi_view_summary(ds) -> dict:
@@ -183,14 +210,31 @@ def _text(s: dict) -> str:
     ]
     if "multi_view" in s:  # before the per-pair table (of views 1 and 2)
         lines[-2:-2] = ["", *_multi_view_text(s["multi_view"])[:-1]]
+    if "sequence" in s:  # after the counts: what a "pair" of the table below is
+        lines[-2:-2] = [_sequence_text(s["sequence"])]
+        lines[-1] += f"  {'seq':>4} {'frame':>5}"
     for p in s["pairs"]:
         r1 = "-" if p["depth1"] is None else f"{p['depth1'][0]:.1f}-{p['depth1'][1]:.1f}"
         r2 = "-" if p["depth2"] is None else f"{p['depth2'][0]:.1f}-{p['depth2'][1]:.1f}"
         lines.append(
             f"  {p['index']:>4}  {p['name']:<12} {p['n1']:>3} {p['n2']:>3} {p['covisible']:>3}  "
             f"{r1:>12}  {r2:>12}"
+            + (f"  {p['sequence']:>4} {p['frame']:>5}" if "sequence" in p else "")
         )
     return "\n".join(lines)
+
+
+def _sequence_text(q: dict) -> str:
+    frames = q["frames"]
+    found = "-" if frames["mean"] is None else f"{frames['min']:.0f}"
+    if frames["mean"] is not None and frames["max"] != frames["min"]:
+        found += f"-{frames['max']:.0f}"
+    interval = "-" if q["interval_s"] is None else f"{q['interval_s']:g} s"
+    planned = "" if q["frames_planned"] is None else f" (planned {q['frames_planned']})"
+    return (
+        f"  sequences               {q['sequences']} of {found} frames{planned}, "
+        f"{interval} apart (pairs below are frames)"
+    )
 
 
 def _multi_view_text(m: dict) -> list[str]:

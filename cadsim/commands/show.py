@@ -1,6 +1,8 @@
 """`cadsim show DIR --pair K --out FILE.png`: both views side by side with their detection boxes
 and the ground-truth correspondences as lines; for an N-view dataset, record K's N views in a
-grid with object numbers shared across views (``cadsim.snapshot_drawing``)."""
+grid with object numbers shared across views (``cadsim.snapshot_drawing``). In a sequence
+dataset, `--sequence K --frame T` draws frame T of sequence K (``Dataset.sequence``) instead of
+naming the record by its pair index."""
 
 from __future__ import annotations
 
@@ -12,7 +14,21 @@ import numpy as np
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("dataset", help="dataset folder written by `cadsim generate`")
-    parser.add_argument("--pair", type=int, default=0, help="pair index K (default 0)")
+    parser.add_argument(
+        "--pair", type=int, default=None, help="pair index K (default 0; not with --sequence)"
+    )
+    parser.add_argument(
+        "--sequence",
+        type=int,
+        default=None,
+        help="sequence K of a sequence dataset (0-based, as `cadsim info` numbers them)",
+    )
+    parser.add_argument(
+        "--frame",
+        type=int,
+        default=None,
+        help="frame T of --sequence (0-based, default 0)",
+    )
     parser.add_argument(
         "--out",
         required=True,
@@ -55,24 +71,23 @@ def run(args: argparse.Namespace) -> int:
     from cadsim.pair_drawing import draw_pair_from_record, save_figure
 
     ds = Dataset(args.dataset)
-    if not 0 <= args.pair < len(ds):
-        raise ValueError(f"--pair: {args.pair} is out of range; expected 0..{len(ds) - 1}")
-    ds.verify_record(args.pair)  # the record drawn is the one the manifest vouches for
+    index, where = record_index(ds, args.pair, args.sequence, args.frame)
+    ds.verify_record(index)  # the record drawn is the one the manifest vouches for
     if ds.n_views > 2:
         from cadsim.snapshot_drawing import shared_objects, snapshot_figure
 
-        snapshot = ds.snapshot(args.pair)
+        snapshot = ds.snapshot(index)
         path = output_path(args.out, snapshot.name)
         path = save_figure(snapshot_figure(snapshot, labels=not args.no_labels), path)
         shared = shared_objects(snapshot)
         linked = int((np.triu(shared, 1) >= 3).sum())
         print(
-            f"{path}: snapshot {snapshot.index} ({snapshot.name}), {ds.n_views} views, "
+            f"{path}: snapshot {snapshot.index} ({snapshot.name}){where}, {ds.n_views} views, "
             f"{linked} of {ds.n_views * (ds.n_views - 1) // 2} view pairs share >= 3 objects "
             "(record checksum verified)"
         )
         return 0
-    pair = ds[args.pair]
+    pair = ds[index]
     path = output_path(args.out, pair.name)
     if pair.lidar is not None and (args.lidar or not pair.has_images):
         from cadsim.lidar_drawing import lidar_figure
@@ -84,7 +99,37 @@ def run(args: argparse.Namespace) -> int:
         figure = draw_pair_from_record(pair, labels=not args.no_labels)
     path = save_figure(figure, path)
     print(
-        f"{path}: pair {pair.index} ({pair.name}), {len(pair.gt_pairs)} ground-truth pairs "
-        "(record checksum verified)"
+        f"{path}: pair {pair.index} ({pair.name}){where}, {len(pair.gt_pairs)} ground-truth "
+        "pairs (record checksum verified)"
     )
     return 0
+
+
+def record_index(ds, pair: int | None, sequence: int | None, frame: int | None) -> tuple[int, str]:
+    """(dataset index, ", sequence K frame T (t = … s)" or "") of the record that ``--pair`` or
+    ``--sequence``/``--frame`` name; ValueError naming the option for a conflict or an index out
+    of range."""
+    if sequence is None:
+        if frame is not None:
+            raise ValueError("--frame: needs --sequence (the frame of which sequence)")
+        pair = 0 if pair is None else pair
+        if not 0 <= pair < len(ds):
+            raise ValueError(f"--pair: {pair} is out of range; expected 0..{len(ds) - 1}")
+        return pair, ""
+    if pair is not None:
+        raise ValueError("--pair: give either --pair or --sequence/--frame, not both")
+    if not ds.is_sequential:
+        raise ValueError(
+            f"--sequence: {ds.path} is not a sequence dataset (no [sequence] in its scenario); "
+            "use --pair"
+        )
+    if not 0 <= sequence < ds.sequences:
+        raise ValueError(f"--sequence: {sequence} is out of range; expected 0..{ds.sequences - 1}")
+    frames = ds.sequence(sequence)
+    frame = 0 if frame is None else frame
+    if not 0 <= frame < len(frames):
+        raise ValueError(
+            f"--frame: {frame} is out of range; sequence {sequence} has frames 0..{len(frames) - 1}"
+        )
+    chosen = frames[frame]
+    return chosen.index, f", sequence {sequence} frame {frame} (t = {chosen.time:g} s)"

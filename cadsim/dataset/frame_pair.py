@@ -94,6 +94,7 @@ class FramePair:
         self._detection = dict(detection)
         self._record_files = tuple(record_files)
         self._localisation = localisation  # "record": the record's own pose-error draw
+        self._odometry: tuple | None = None  # a redrawn odometry (with_odometry); None: stored
         if views is None:
             what = self.path / layout.DETECTIONS_NPZ
             arrays = load_npz(str(self._file(layout.DETECTIONS_NPZ)), str(what))
@@ -153,12 +154,29 @@ class FramePair:
         metres; yaw, radians; ``cadsim.sensing.odometry``), or None (no sequence)."""
         if self.record.get("sequence") is None:
             return None
+        if self._odometry is not None:
+            return self._odometry
         from cadsim.sensing.odometry import OdometryPose
 
         observers = self.record["observers"]
         return tuple(
             OdometryPose.from_dict(observers[v - 1]["odometry"]) for v in self.view_numbers
         )
+
+    def with_odometry(self, poses: Sequence) -> FramePair:
+        """This pair with ``poses`` (one ``OdometryPose`` per view, in this pair's view order)
+        as its ``odometry`` instead of the stored one (a run's redraw:
+        :func:`cadsim.dataset.sequence_odometry.redraw_odometry`); ValueError for a record of
+        no sequence or another number of poses."""
+        if self.record.get("sequence") is None:
+            raise ValueError(f"{self.path}: not a sequence frame: it has no odometry to replace")
+        if len(poses) != len(self.view_numbers):
+            raise ValueError(
+                f"poses: expected {len(self.view_numbers)} odometry poses, got {len(poses)}"
+            )
+        pair = self._derived((self.view1, self.view2), self.noise_rate, self._localisation)
+        pair._odometry = tuple(poses)
+        return pair
 
     @property
     def cues(self) -> tuple[str, ...]:
@@ -556,6 +574,7 @@ class FramePair:
             localisation=localisation,
             view_numbers=self.view_numbers,
         )
+        pair._odometry = self._odometry
         shared = ("record", "color1", "color2", "_depth", "_instance", "objects", "cameras")
         shared += ("observer_poses", "camera_extrinsics", "camera_to_world")
         for name in shared:

@@ -15,7 +15,9 @@ its simulation seed*, which is derived from the dataset's own root seed. Two dat
 different seeds (a validation and a test split) therefore never share a run's noise, although
 their records have the same (episode, slot) numbers — under seed scheme 1 the run seed alone was
 the root, so every split saw the same per-view GNSS bias, heading error and outliers in run r.
-``seed=None`` gives back the record's own draws (the stored detections, the stored prior: the
+A sequence's odometry drift is redrawn the same way, per view, from the sequence's first
+record (:func:`cadsim.dataset.sequence_odometry.redraw_odometry`, stream :data:`ODOMETRY_STREAM`
+with the slot of frame 0). ``seed=None`` gives back the record's own draws (the stored detections, the stored prior: the
 seeds written at generation). Across rates the noise field is the same one, scaled (common
 random numbers for noise sweeps). The attribute seed is stored in the record and reused by
 ``redetect`` whatever its seed: which objects a view's detector misclassifies is part of the
@@ -31,7 +33,7 @@ _RUN_EPISODE = 5  # a run's per-episode draws (the GNSS bias and drift of a redr
 _ODOMETRY = 6  # a sequence's odometry drift, per view (cadsim.sensing.odometry)
 SEED_SCHEME = 2
 """Version of the evaluation-time seed derivation (module docstring); the run record states it."""
-NOISE_STREAM, LOCALISATION_STREAM = _NOISE, _LOCALISATION
+NOISE_STREAM, LOCALISATION_STREAM, ODOMETRY_STREAM = _NOISE, _LOCALISATION, _ODOMETRY
 
 
 def _check(root: int) -> int:
@@ -75,8 +77,8 @@ def odometry_seed(root: int, episode: int, first_slot: int, view: int) -> int:
 def redraw_seed(
     stream: int, run_seed: int, sim_seed: int, episode: int, slot: int, view: int
 ) -> int:
-    """Seed of a run's redraw of ``stream`` (:data:`NOISE_STREAM` or :data:`LOCALISATION_STREAM`)
-    for view ``view`` of record (episode, slot) whose simulation seed is ``sim_seed`` (which
+    """Seed of a run's redraw of ``stream`` (:data:`NOISE_STREAM`, :data:`LOCALISATION_STREAM`
+    or :data:`ODOMETRY_STREAM`) for view ``view`` of record (episode, slot) whose simulation seed is ``sim_seed`` (which
     carries the dataset's root seed): ``SeedSequence([run_seed, sim_seed], spawn_key=(stream,
     episode, slot, view))``."""
     entropy = [_check(run_seed), _check(sim_seed)]

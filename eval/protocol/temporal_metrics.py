@@ -17,6 +17,9 @@ are the (i, j) with ``true1[i] == true2[j] >= 0``.
   correspondence sequence (:func:`correspondence_hota`) a "ground-truth detection" is a true
   pair, identified by its object, and a "tracker detection" a declared pair, identified by its
   pair of own track ids; similarity 1 when the declared pair is a true pair, else 0.
+* **Time-offset error** (:func:`time_offset_error`): where a method estimates the age of the
+  other agent's message (``temporal_pose``'s ``time_offset_s``), the absolute error against
+  the true latency, seconds, over the frames that have an estimate.
 """
 
 from __future__ import annotations
@@ -153,3 +156,24 @@ def correspondence_hota(pairs, true1, true2, tracks1, tracks2) -> dict:
         tr_ids.append([(int(ta[i]), int(tb[j])) for i, j in p])
         sims.append((ti[:, None] == p[None, :, 0]) & (tj[:, None] == p[None, :, 1]))
     return hota(gt_ids, tr_ids, sims)
+
+
+def time_offset_error(estimates: Sequence[float | None], true_s: float) -> dict:
+    """{"mean_abs_s", "median_abs_s", "max_abs_s", "frames"}: the absolute error (s) of the
+    per-frame time-offset ``estimates`` (None: no estimate that frame, left out) against the
+    true latency ``true_s``; NaN errors and 0 frames when no frame has one.
+
+    >>> time_offset_error([0.1, None, 0.15], 0.1)["mean_abs_s"]
+    0.025
+    """
+    found = np.array([e for e in estimates if e is not None], dtype=float)
+    if not found.size:
+        nan = float("nan")
+        return {"mean_abs_s": nan, "median_abs_s": nan, "max_abs_s": nan, "frames": 0}
+    error = np.abs(found - float(true_s))
+    return {
+        "mean_abs_s": float(np.round(error.mean(), 12)),
+        "median_abs_s": float(np.round(np.median(error), 12)),
+        "max_abs_s": float(np.round(error.max(), 12)),
+        "frames": int(found.size),
+    }

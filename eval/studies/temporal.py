@@ -3,17 +3,25 @@ evidence over a window of frames, on the sequences of ``cad-v2x-seq``, under thr
 presets.
 
 Protocol. Each sequence (10 frames, 0.2 s apart, of the same two vehicles) becomes a
-:class:`~matchers.core.sequence_problem.SequenceProblem`: every frame's pair redrawn under the
+:class:`~matchers.core.sequence_problem.SequenceProblem`: its odometry drift redrawn for the run
+(:func:`cadsim.dataset.sequence_odometry.redraw_odometry`), every frame's pair redrawn under the
 preset (``pair.localise_preset(preset, seed=run)``) and its ``.problem()``; each agent's own
 tracks from its own detections and odometry (:func:`matchers.tracking.hungarian.with_own_tracks`,
 never a true id); odometry and camera mounts from the pairs. Methods (:data:`METHODS`):
 ``windowed:<m>`` for the two-view matchers ``consistency`` and ``pose_refine`` at W in
-{1, 3, 10} and ``temporal_pose`` at W in {1, 10}, every option at its default (nothing tuned).
-A method that reads the localisation prior declares nothing under ``denied`` (rows kept, F1 0).
-Every method runs with ``threshold=None`` (its whole Hungarian assignment) and τ is calibrated
-per (method, W, preset) on the validation split (scenario seed + 1000) with the two-view rule
-(:func:`eval.protocol.calibration.calibrate_ranked`: the τ maximising the mean per-frame F1,
-in the middle of the best interval). The test split never enters τ.
+{1, 3, 10} and ``temporal_pose`` at W in {1, 10}. A method that reads the localisation prior
+declares nothing under ``denied`` (rows kept, F1 0, not tuned).
+
+Tuning (the equal budget of the two-view tables, :mod:`eval.protocol.tuning`). Per (method, W,
+preset) every configuration of the method's grid
+(:func:`matchers.core.temporal_registry.temporal_search_space`: 8 each, the defaults among
+them; W is the table's axis, never tuned) runs on the validation split (scenario seed + 1000,
+run seed 0) with ``threshold=None`` (its whole Hungarian assignment); each gets its τ by the
+two-view rule (:func:`eval.protocol.calibration.calibrate_ranked`: the τ maximising the mean
+per-frame F1, in the middle of the best interval) and is scored by that validation F1; the best
+wins (:func:`eval.protocol.tuning.best_candidate`, exact ties to the smallest parameters JSON).
+The chosen parameters (``params``) and τ go to the table and ``temporal/tuning.csv`` (every
+candidate). The test split never enters the choice or τ.
 
 Metrics. Per frame: F1 of the declared pairs at τ against ``pair.gt_pairs``;
 success@(1 m, 2°) of the planar fit of those pairs (:func:`eval.core.pose_metrics.
@@ -32,6 +40,7 @@ episode-level interval. Goals (issue 41) go through :func:`eval.protocol.goal_ve
 
 from __future__ import annotations
 
+import json
 import logging
 import time
 from collections.abc import Sequence
@@ -43,6 +52,7 @@ import pandas as pd
 
 from eval.core.pose_metrics import matched_planar_error
 from eval.core.result_files import write_csv, write_text
+from eval.core.tasks import MatcherSpec
 from eval.protocol.calibration import calibrate_ranked
 from eval.protocol.cluster_interval import t_interval
 from eval.protocol.goal_verdict import goal_line
@@ -52,13 +62,22 @@ from eval.protocol.temporal_metrics import (
     correspondence_hota,
     frames_to_first_correct,
 )
+from eval.protocol.tuning import (
+    Candidate,
+    TuningChoice,
+    best_candidate,
+    check_budget,
+    params_json,
+    tuning_rows,
+)
+from matchers.core.search_spaces import TUNING_BUDGET
 
 log = logging.getLogger(__name__)
 
 LABEL = "CAD-V2X-Seq"
 SCENARIO = "scenarios/cad-v2x-seq.toml"
 TEST_SEQUENCES = 20
-VAL_SEQUENCES = 4
+VAL_SEQUENCES = 10
 PRESETS = ("gnss-open-sky", "gnss-urban", "denied")
 METHODS: tuple[tuple[str, tuple[int, ...]], ...] = (
     ("windowed:consistency", (1, 3, 10)),
@@ -76,6 +95,7 @@ COLUMNS = (
     "preset",
     "tau",
     "val_f1",
+    "params",
     "f1_mean",
     "f1_low",
     "f1_high",
@@ -97,6 +117,8 @@ COLUMNS = (
 )
 GAIN_COLUMNS = ("preset", "method", "f1_w10", "f1_w1", "diff", "ci_low", "ci_high", "episodes")
 TABLE, GAIN = "table_temporal", "table_temporal_gain"
+TUNING_FILE = "temporal/tuning.csv"
+TUNING_COLUMNS = ("preset", "window", "matcher", "config", "params", "val_f1", "tau", "chosen")
 
 
 @dataclass
@@ -168,36 +190,77 @@ def sequence_problem(frames, preset: str, seed: int, index: int = 0) -> Sequence
 
 
 def load_split(folder: Path, preset: str, seeds: Sequence[int]) -> list[tuple[int, Sequenced]]:
-    """(run seed, :class:`Sequenced`) for every sequence of the dataset at ``folder``."""
+    """(run seed, :class:`Sequenced`) for every sequence of the dataset at ``folder``: per run
+    seed its odometry redrawn (:func:`cadsim.dataset.sequence_odometry.redraw_odometry`) and its
+    prior redrawn under ``preset``, so the splits share no noise."""
     from cadsim.dataset import Dataset
+    from cadsim.dataset.sequence_odometry import redraw_odometry
 
     ds = Dataset(str(folder))
     return [
-        (seed, sequence_problem(ds.sequence(k), preset, seed, k))
+        (seed, sequence_problem(redraw_odometry(ds.sequence(k), seed), preset, seed, k))
         for seed in seeds
         for k in range(ds.sequences)
     ]
 
 
-def run_method(method: str, window: int, item: Sequenced, seed: int, preset: str):
-    """Per frame (assigned (k, 2), assigned scores (k,)) of ``method`` at ``window`` with no
-    threshold; nothing under ``denied`` for a prior reader. Plus the seconds it took."""
-    from matchers.core.discretise import canonical_scores
+def run_method(
+    method: str,
+    window: int,
+    item: Sequenced,
+    seed: int,
+    preset: str,
+    options: dict | None = None,
+):
+    """Per frame (assigned (k, 2), assigned scores (k,)) of ``method`` at ``window`` with its
+    ``options`` (None: defaults) and no threshold; nothing under ``denied`` for a prior reader.
+    Plus the seconds it took."""
+    return run_windows(method, (window,), item, seed, preset, options)[window]
+
+
+def run_windows(
+    method: str,
+    windows: Sequence[int],
+    item: Sequenced,
+    seed: int,
+    preset: str,
+    options: dict | None = None,
+) -> dict[int, tuple[list, float]]:
+    """{W: :func:`run_method`'s (frames, seconds)} for every W of ``windows``: one call of the
+    method's ``over_windows`` where it has one (``windowed:<m>``: the base matcher run once for
+    every W; seconds then shared out evenly), else one call per W."""
     from matchers.core.temporal_registry import get_temporal
 
     empty = [(np.zeros((0, 2), np.int64), np.zeros(0)) for _ in item.seq.frames]
     if preset == "denied" and reads_prior(method):
-        return empty, 0.0
-    started = time.perf_counter()
-    out = get_temporal(method)(item.seq, seed=seed, threshold=None, window=window)
-    seconds = time.perf_counter() - started
+        return {w: (empty, 0.0) for w in windows}
+    fn = get_temporal(method)
+    options = dict(options or {})
+    many = getattr(fn, "over_windows", None)
+    if many is not None and len(windows) > 1:
+        started = time.perf_counter()
+        outs = many(item.seq, list(windows), seed=seed, threshold=None, **options)
+        seconds = (time.perf_counter() - started) / len(windows)
+        return {w: (_assigned(outs[w]), seconds) for w in windows}
+    found = {}
+    for w in windows:
+        started = time.perf_counter()
+        out = fn(item.seq, seed=seed, threshold=None, window=w, **options)
+        found[w] = (_assigned(out), time.perf_counter() - started)
+    return found
+
+
+def _assigned(matchings) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Per frame (assigned pairs (k, 2), their canonical scores (k,))."""
+    from matchers.core.discretise import canonical_scores
+
     frames = []
-    for m in out:
+    for m in matchings:
         pairs = np.asarray(m.pairs, dtype=np.int64).reshape(-1, 2)
         # canonical (grid) scores, as the two-view runner uses: τ sees the same values on every CPU
         scores = canonical_scores(np.asarray(m.scores, dtype=float))
         frames.append((pairs, scores[pairs[:, 0], pairs[:, 1]] if len(pairs) else np.zeros(0)))
-    return frames, seconds
+    return frames
 
 
 def calibrate_tau(outcomes: list[tuple[Sequenced, list]]) -> tuple[float, float]:
@@ -209,6 +272,52 @@ def calibrate_tau(outcomes: list[tuple[Sequenced, list]]) -> tuple[float, float]
     ]
     tau, f1, _, _ = calibrate_ranked(RankedAssignments.from_frames(rows))
     return tau, f1
+
+
+def tune_method(
+    method: str,
+    window: int,
+    val: list[tuple[int, Sequenced]],
+    preset: str,
+    tune: bool = True,
+) -> TuningChoice:
+    """Every configuration of ``method``'s grid (only its defaults when ``tune`` is False or a
+    prior reader under ``denied``) at ``window`` on the validation items ``val``: each with its
+    own τ and validation F1 (:func:`calibrate_tau`), the best chosen
+    (:func:`eval.protocol.tuning.best_candidate`)."""
+    return tune_windows(method, (window,), val, preset, tune)[window]
+
+
+def tune_windows(
+    method: str,
+    windows: Sequence[int],
+    val: list[tuple[int, Sequenced]],
+    preset: str,
+    tune: bool = True,
+) -> dict[int, TuningChoice]:
+    """{W: :func:`tune_method`'s choice at W} for every W of ``windows``, each configuration
+    run once for all of them (:func:`run_windows`); every W chooses on its own."""
+    from matchers.core.temporal_registry import temporal_search_space
+
+    declares_nothing = preset == "denied" and reads_prior(method)
+    configs = temporal_search_space(method) if tune and not declares_nothing else [{}]
+    if len(configs) > 1:
+        check_budget(method, len(configs))
+    candidates: dict[int, list[Candidate]] = {w: [] for w in windows}
+    for config in configs:
+        runs = [
+            (item, run_windows(method, windows, item, seed, preset, config)) for seed, item in val
+        ]
+        for w in windows:
+            tau, val_f1 = calibrate_tau([(item, found[w][0]) for item, found in runs])
+            if declares_nothing:
+                tau = float("nan")  # declares nothing: no τ to calibrate
+            spec = MatcherSpec.of(method, **config)
+            candidates[w].append(Candidate(spec, dict(config), val_f1, tau))
+    return {
+        w: TuningChoice(f"{LABEL} {preset} W={w}", method, tuple(c), best_candidate(c))
+        for w, c in candidates.items()
+    }
 
 
 def _pose_success(item: Sequenced, t: int, pairs: np.ndarray) -> float:
@@ -316,7 +425,65 @@ def _oracle(items: list[tuple[int, Sequenced]], preset: str) -> tuple[dict, pd.D
         temporal.append(s)
     per_frame = pd.DataFrame(rows)
     row = {"method": ORACLE_ROW, "window": 0, "preset": preset, "tau": np.nan, "val_f1": np.nan}
+    row["params"] = ""
     return row | summarise(per_frame, temporal) | {"ms_per_frame": np.nan}, per_frame
+
+
+@dataclass
+class PresetOutcome:
+    """One preset's part of the study: its table rows (the oracle's last), its gain row (None:
+    no W = 10 / W = 1 pair), its per-frame tables and its tuning candidates."""
+
+    rows: list[dict]
+    gain: dict | None
+    per_frame: list[pd.DataFrame]
+    tuned: list[dict]
+
+
+def evaluate_preset(task: tuple) -> PresetOutcome:
+    """The study under one preset: ``task`` = (test folder, validation folder, preset, methods,
+    run seeds, tune). Module-level and picklable: one task of the executor per preset."""
+    test_dir, val_dir, preset, methods, seeds, tune = task
+    test = load_split(Path(test_dir), preset, seeds)
+    val = load_split(Path(val_dir), preset, seeds)
+    oracle_row, oracle_frames = _oracle(test, preset)
+    rows, tuned = [], []
+    per_frame_all = [oracle_frames.assign(method=ORACLE_ROW, window=0, preset=preset)]
+    frames_by: dict[tuple[str, int], pd.DataFrame] = {}
+    for method, windows in methods:
+        choices = tune_windows(method, windows, val, preset, tune)
+        for window in windows:
+            choice = choices[window]
+            chosen = choice.candidates[choice.chosen]
+            tau, val_f1, options = chosen.tau, chosen.val_f1, choice.params
+            tuned += [r | {"preset": preset, "window": window} for r in tuning_rows([choice])]
+            per_frame, temporal, seconds = [], [], 0.0
+            for seed, item in test:
+                frames, took = run_method(method, window, item, seed, preset, options)
+                seconds += took
+                r, s = score_test(item, frames, tau, seed)
+                per_frame += r
+                temporal.append(s)
+            table = pd.DataFrame(per_frame)
+            frames_by[(method, window)] = table
+            per_frame_all.append(table.assign(method=method, window=window, preset=preset))
+            row = {"method": method, "window": window, "preset": preset}
+            row |= {"tau": tau, "val_f1": val_f1, "params": params_json(options)}
+            row |= summarise(table, temporal)
+            row["ms_per_frame"] = 1000 * seconds / max(len(table), 1)
+            rows.append(row)
+            log.info(
+                "[temporal] %s %s W=%d %s: τ %.3f, val F1 %.3f, test F1 %.3f",
+                preset,
+                method,
+                window,
+                row["params"],
+                tau,
+                val_f1,
+                row["f1_mean"],
+            )
+    rows.append(oracle_row)
+    return PresetOutcome(rows, _gain(preset, rows, frames_by), per_frame_all, tuned)
 
 
 def evaluate_temporal(
@@ -326,51 +493,31 @@ def evaluate_temporal(
     methods: Sequence[tuple[str, Sequence[int]]] = METHODS,
     presets: Sequence[str] = PRESETS,
     seeds: Sequence[int] = RUNS,
+    tune: bool = True,
+    executor=None,
 ) -> pd.DataFrame:
     """Run the study (module docstring) and write ``out/table_temporal.{md,csv}``,
-    ``out/table_temporal_gain.csv`` and the per-frame scores ``out/temporal/per_frame.csv``.
-    Returns the table."""
+    ``out/table_temporal_gain.csv``, the per-frame scores ``out/temporal/per_frame.csv`` and
+    every tuning candidate ``out/temporal/tuning.csv`` (``tune=False``: defaults only, no
+    candidates). One :func:`evaluate_preset` task per preset on ``executor``
+    (:class:`eval.core.executor.Executor`; None or one worker: in this process, in order);
+    the outputs are assembled in preset order, whatever the completion order. Returns the
+    table."""
     out = Path(out)
-    rows, gains, per_frame_all = [], [], []
-    for preset in presets:
-        test = load_split(Path(test_dir), preset, seeds)
-        val = load_split(Path(val_dir), preset, seeds)
-        oracle_row, oracle_frames = _oracle(test, preset)
-        per_frame_all.append(oracle_frames.assign(method=ORACLE_ROW, window=0, preset=preset))
-        frames_by: dict[tuple[str, int], pd.DataFrame] = {}
-        for method, windows in methods:
-            for window in windows:
-                val_out = [
-                    (item, run_method(method, window, item, s, preset)[0]) for s, item in val
-                ]
-                tau, val_f1 = calibrate_tau(val_out)
-                if preset == "denied" and reads_prior(method):
-                    tau = float("nan")  # declares nothing: no τ to calibrate
-                per_frame, temporal, seconds = [], [], 0.0
-                for seed, item in test:
-                    frames, took = run_method(method, window, item, seed, preset)
-                    seconds += took
-                    r, s = score_test(item, frames, tau, seed)
-                    per_frame += r
-                    temporal.append(s)
-                table = pd.DataFrame(per_frame)
-                frames_by[(method, window)] = table
-                per_frame_all.append(table.assign(method=method, window=window, preset=preset))
-                row = {"method": method, "window": window, "preset": preset}
-                row |= {"tau": tau, "val_f1": val_f1} | summarise(table, temporal)
-                row["ms_per_frame"] = 1000 * seconds / max(len(table), 1)
-                rows.append(row)
-                log.info(
-                    "[temporal] %s %s W=%d: τ %.3f, val F1 %.3f, test F1 %.3f",
-                    preset,
-                    method,
-                    window,
-                    tau,
-                    val_f1,
-                    row["f1_mean"],
-                )
-        rows.append(oracle_row)
-        gains.append(_gain(preset, rows, frames_by))
+    methods = tuple((m, tuple(int(w) for w in ws)) for m, ws in methods)
+    tasks = [(str(test_dir), str(val_dir), p, methods, tuple(seeds), bool(tune)) for p in presets]
+    if executor is None or getattr(executor, "workers", 1) <= 1 or len(tasks) <= 1:
+        outcomes = [evaluate_preset(task) for task in tasks]
+    else:
+        outcomes = [None] * len(tasks)
+        for done in executor.map_unordered(evaluate_preset, tasks):
+            if done.error is not None:
+                raise done.error
+            outcomes[done.index] = done.value
+    rows = [r for o in outcomes for r in o.rows]
+    gains = [o.gain for o in outcomes]
+    per_frame_all = [f for o in outcomes for f in o.per_frame]
+    tuned = [t for o in outcomes for t in o.tuned]
     table = pd.DataFrame(rows, columns=list(COLUMNS))
     oracle = table[table["method"] == ORACLE_ROW].set_index("preset")["success_1m_2deg"]
     ceiling = table["preset"].map(oracle).to_numpy(dtype=float)
@@ -381,6 +528,7 @@ def evaluate_temporal(
     (out / "temporal").mkdir(parents=True, exist_ok=True)
     write_csv(table.round(6), out / f"{TABLE}.csv")
     write_csv(gain.round(6), out / f"{GAIN}.csv")
+    write_csv(pd.DataFrame(tuned, columns=list(TUNING_COLUMNS)).round(6), out / TUNING_FILE)
     if per_frame_all:
         write_csv(
             pd.concat(per_frame_all, ignore_index=True).round(6), out / "temporal" / "per_frame.csv"
@@ -432,6 +580,14 @@ def _ranged(value: float, low: float, high: float) -> str:
     return f"{_pct(value)} [{_pct(low)}, {_pct(high)}]"
 
 
+def _params(params: object) -> str:
+    """A ``params`` cell (canonical JSON) as ``key=value, …``; ``defaults`` for ``{}``."""
+    options = json.loads(params) if isinstance(params, str) and params else {}
+    if not options:
+        return "defaults"
+    return ", ".join(f"{k}={v}" for k, v in options.items())
+
+
 def _num(value: float, digits: int = 2) -> str:
     return "–" if not np.isfinite(value) else f"{value:.{digits}f}"
 
@@ -440,20 +596,22 @@ def to_markdown(table: pd.DataFrame, gain: pd.DataFrame | None = None) -> str:
     """The table as markdown: per preset every (method, W) and the oracle row."""
     lines = [
         f"**{LABEL}** — temporal matchers × window W × localisation preset; F1 and success in "
-        "percent with episode-level 95 % intervals; τ per (method, W, preset) from validation; "
+        "percent with episode-level 95 % intervals; parameters "
+        f"({TUNING_BUDGET} configurations each) and τ per "
+        "(method, W, preset) from validation; "
         "switches per 100 covisible object-frames; frames to the first correct association "
         "(mean over objects matched at all; never: objects never matched correctly); HOTA/AssA "
         "of the declared pairs over the own tracks.",
         "",
-        "| Preset | Method | W | τ | F1 [95 % CI] | success@(1 m, 2°) [95 % CI] | of oracle "
-        "| switches/100 | frames to first | never | HOTA | AssA |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| Preset | Method | W | τ | parameters | F1 [95 % CI] | success@(1 m, 2°) [95 % CI] "
+        "| of oracle | switches/100 | frames to first | never | HOTA | AssA |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for row in table.itertuples(index=False):
         oracle = row.method == ORACLE_ROW
         lines.append(
             f"| `{row.preset}` | `{row.method}` | {'' if oracle else row.window} "
-            f"| {'' if oracle else _num(row.tau, 3)} "
+            f"| {'' if oracle else _num(row.tau, 3)} | {'' if oracle else _params(row.params)} "
             f"| {_ranged(row.f1_mean, row.f1_low, row.f1_high)} "
             f"| {_ranged(row.success_1m_2deg, row.success_low, row.success_high)} "
             f"| {_pct(row.share_of_oracle, 0)} | {_num(row.switches_per_100)} "
@@ -596,8 +754,8 @@ def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[s
         f"`{SCENARIO}`: sequences of 10 frames 0.2 s apart of the same two vehicles; each "
         "agent's own tracks from its detections and odometry (never a true id); "
         "`windowed:<m>` (a two-view matcher's scores averaged along the own tracks over W "
-        "frames) and `temporal_pose` (one planar motion per window), defaults only, τ per "
-        "(method, W, preset) on validation. Per preset the method with the best validation F1 "
+        "frames) and `temporal_pose` (one planar motion per window), parameters "
+        f"({TUNING_BUDGET} configurations each) and τ per (method, W, preset) on validation. Per preset the method with the best validation F1 "
         "at W = 10: test F1 at W = 10 and W = 1, their paired difference (episode-level 95 % "
         f"interval), success@(1 m, 2°) at W = 10 and the oracle's. Every row: "
         f"[{rel}/{TABLE}.md]({rel}/{TABLE}.md).",
@@ -648,3 +806,16 @@ def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[s
     )
     lines += ["", *[f"- {line}." for line in findings + goals(table, results) + timing], ""]
     return lines
+
+
+def temporal_tuning_record(table: pd.DataFrame) -> dict:
+    """The run record's ``temporal.tuning``: {preset: {method: {W: {"params": chosen options,
+    "tau": τ, "val_f1": validation F1}}}} of every row but the oracle."""
+    record: dict = {}
+    for row in table[table["method"] != ORACLE_ROW].itertuples(index=False):
+        record.setdefault(row.preset, {}).setdefault(row.method, {})[str(row.window)] = {
+            "params": json.loads(row.params),
+            "tau": None if not np.isfinite(row.tau) else round(float(row.tau), 6),
+            "val_f1": round(float(row.val_f1), 6),
+        }
+    return record

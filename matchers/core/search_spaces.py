@@ -101,6 +101,18 @@ BUILTIN_SEARCH_SPACES: dict[str, list[dict]] = {
 }
 
 
+TEMPORAL_SEARCH_SPACES: dict[str, list[dict]] = {
+    # The temporal reference method (matchers.temporal.temporal_pose): the prior's width and
+    # gate (spread 2, gate 8), the aligned tightening (0.5) and the prior's weight in the
+    # refinement (1), around its defaults as pose_refine's grid is. The window W is never in a
+    # grid: it is an axis of the temporal table. ``windowed:<name>`` searches <name>'s own grid.
+    "temporal_pose": [{}]
+    + [{"spread": s} for s in (1.0, 3.0)]
+    + [{"gate": 4.0}, {"gate": 12.0}, {"tighten": 0.25}, {"tighten": 1.0}]
+    + [{"prior_weight": 4.0}],
+}
+
+
 def check_search_space(space: object, name: str, field: str = "search_space") -> list[dict]:
     """``space`` as a list of option dicts, or ValueError naming ``field`` and the matcher:
     a non-empty sequence of at most 12 mappings whose keys are option names (identifiers) and

@@ -20,6 +20,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from matchers.core.named_lookup import load, lookup
+from matchers.core.search_spaces import TEMPORAL_SEARCH_SPACES, check_search_space
 
 TemporalMatcher = Callable[..., list]
 
@@ -68,3 +69,32 @@ def temporal_available() -> list[str]:
     """Sorted names of the temporal matchers other than the ``windowed:`` family (which has one
     member per two-view matcher, :func:`matchers.core.registry.available`)."""
     return sorted(set(_BUILTIN) | set(_registered))
+
+
+def temporal_search_space(name: str) -> list[dict]:
+    """The tuning grid of temporal matcher ``name`` (1 to 12 option dicts, ``{}`` = defaults):
+    ``windowed:<base>`` searches ``<base>``'s two-view grid
+    (:func:`matchers.core.registry.search_space`), a built-in its entry in
+    :data:`~matchers.core.search_spaces.TEMPORAL_SEARCH_SPACES`, any other its callable's
+    ``search_space`` attribute (none: ``[{}]``). ``window`` is never a grid option (it is the
+    table's axis): a grid that sets it raises ValueError. Returns a fresh copy.
+
+    >>> len(temporal_search_space("temporal_pose"))
+    8
+    """
+    prefix, _, rest = name.partition(":")
+    if prefix in _FAMILIES and rest:
+        from matchers.core.registry import search_space
+
+        space = search_space(rest)
+    elif name in _BUILTIN and name not in _registered:
+        space = TEMPORAL_SEARCH_SPACES.get(name, [{}])
+    else:
+        fn = get_temporal(name)
+        space = check_search_space(getattr(fn, "search_space", None) or [{}], name)
+    if any("window" in config for config in space):
+        raise ValueError(
+            f"search_space of temporal matcher {name!r}: sets 'window', which is the table's "
+            "axis (W), not a tuned option"
+        )
+    return [dict(config) for config in space]

@@ -24,7 +24,14 @@ frames s = t - W + 1 .. t:
                  gate * tighten * sigma), accumulated along the own tracks over the window
                  (mean, :func:`matchers.temporal.windowed.accumulate`), Hungarian, threshold.
 
-cutoff = gate * tighten * sigma (as ``pose_refine``). Vectorised: candidates, hypotheses and
+time offset  (``max_offset_s`` > 0: latency unknown) the window's motion is estimated for each
+             candidate age Δt of agent 2's detections, moved forward along agent 2's own
+             tracks by their velocity · Δt (:mod:`matchers.temporal.time_offset`); the largest
+             support wins.
+
+cutoff = gate * tighten * sigma (as ``pose_refine``). The hypotheses' ranking and the choice of
+the best read canonical values (:func:`~matchers.core.discretise.canonical_scores`): ties go to
+the first on every CPU. Vectorised: candidates, hypotheses and
 support are arrays; the loops run over frames and refinement rounds only.
 """
 
@@ -37,10 +44,12 @@ from scipy.optimize import linear_sum_assignment
 
 from matchers.blocks.prior import PRIOR_FIELDS, check_prior_options, ground_plane, prior_likelihood
 from matchers.blocks.rigid2d import biweight, procrustes_2d, rotation
+from matchers.core.discretise import canonical_scores
 from matchers.core.matching import Matching
 from matchers.core.options import check_count, check_range, rng_from_seed
 from matchers.core.result import finish
 from matchers.core.sequence_problem import SequenceProblem, ground_positions
+from matchers.temporal.time_offset import compensated, offset_grid, track_velocities
 from matchers.temporal.windowed import accumulate, check_sequence
 
 MIN_SPREAD_M = 0.5
@@ -109,14 +118,14 @@ def estimate(
     shift0 = np.mean([t for _, (_, t) in used], axis=0)
     yaw, shift = _grouped_fit(src, dst, group, len(groups), yaw0)
     weight = np.bincount(group, lik, len(groups))
-    best = np.argsort(-weight, kind="stable")[:hypotheses]
+    best = np.argsort(-canonical_scores(weight), kind="stable")[:hypotheses]
     yaw, shift = np.r_[yaw0, yaw[best]], np.r_[[shift0], shift[best]]
     residual = np.linalg.norm(_apply(yaw, shift, src) - dst, axis=-1)  # (H, K)
     row_key = np.unique(offset1[frame_of] + rows, return_inverse=True)[1]
     vote = np.zeros((len(yaw), row_key.max() + 1))
     np.maximum.at(vote, (slice(None), row_key), biweight(residual, cutoff))
     support = vote.sum(1)
-    h = int(np.argmax(support))
+    h = int(np.argmax(canonical_scores(support)))  # tied support: the first hypothesis
     turn, move = rotation(float(yaw[h])), shift[h]
     anchor_src = np.concatenate([q2[s] for s, p in enumerate(priors) if p is not None])
     anchor_dst = np.concatenate([p[0] for p in used])
@@ -165,12 +174,20 @@ def temporal_pose(
     prior_weight: float = 1.0,
     hypotheses: int = 64,
     max_iter: int = 10,
+    max_offset_s: float = 0.0,
+    offset_step_s: float = 0.05,
+    interval_s: float | None = None,
 ) -> list[Matching]:
     """One matching per frame (module docstring). Options: ``window`` (5 frames, causal),
     ``spread`` (2) and ``gate`` (8) of the candidate prior likelihood (multiples of
     world_sigma, as ``pose``), ``tighten`` (0.5) once aligned, ``prior_weight`` (1: one frame's
     GNSS prior weighs as much as one matched observation), ``hypotheses`` (64) scored,
-    ``max_iter`` (10) refinement rounds. Scores: the aligned likelihood accumulated along the own
+    ``max_iter`` (10) refinement rounds. ``max_offset_s`` (0: latency known, none estimated)
+    > 0 estimates the age Δt of agent 2's detections per window (:mod:`~matchers.temporal.
+    time_offset`): every offset 0, ``offset_step_s`` (0.05 s), … ≤ ``max_offset_s`` moves agent
+    2's detections forward along its own tracks (``interval_s`` s between frames, else
+    ``seq.meta["interval_s"]``), the window's motion is estimated for each, and the one with the
+    largest support wins (ties: the smaller offset); info ``time_offset_s``. Scores: the aligned likelihood accumulated along the own
     tracks (absolute, [0, 1]). Info per frame: the window's motion of agent 2's frame-0 plane into
     agent 1's (``yaw_deg``, ``shift_m``) and ``relative_pose`` [x, y, yaw] of agent 2's body
     into agent 1's at that frame. Needs world1/world2/world_sigma on every non-empty frame.
@@ -183,6 +200,18 @@ def temporal_pose(
     prior_weight = check_range("prior_weight", prior_weight, 0.0, 1e6)
     hypotheses = check_count("hypotheses", hypotheses)
     max_iter = check_count("max_iter", max_iter)
+    max_offset_s = check_range("max_offset_s", max_offset_s, 0.0, 10.0)
+    offsets = np.zeros(1)
+    if max_offset_s > 0:
+        offset_step_s = check_range("offset_step_s", offset_step_s, 0.0, 10.0, open_low=True)
+        interval_s = seq.meta.get("interval_s") if interval_s is None else interval_s
+        if interval_s is None:
+            raise ValueError(
+                "interval_s: estimating a time offset needs the time between frames "
+                "(interval_s, or seq.meta['interval_s'])"
+            )
+        interval_s = check_range("interval_s", interval_s, 0.0, 1e6, open_low=True)
+        offsets = offset_grid(max_offset_s, offset_step_s)
     for t, frame in enumerate(seq.frames):
         if frame.n1 and frame.n2 and (frame.world1 is None or frame.world_sigma is None):
             raise ValueError(
@@ -196,14 +225,26 @@ def temporal_pose(
         lo = max(0, t - window + 1)
         sigmas = [f.world_sigma for f in seq.frames[lo : t + 1] if f.world_sigma is not None]
         frame = seq.frames[t]
-        found = None
+        found, offset, here2 = None, 0.0, q2
         if sigmas and frame.n1 and frame.n2:
             sigma = float(np.mean(sigmas))
-            found = estimate(
-                q1[lo : t + 1], q2[lo : t + 1], seq.frames[lo : t + 1],
-                seq.tracks1[lo : t + 1], seq.tracks2[lo : t + 1],
-                sigma, spread, gate, tighten, prior_weight, hypotheses, max_iter,
-            )  # fmt: skip
+            tried = []
+            if len(offsets) > 1:  # velocities from the window's own frames only (causal)
+                v2 = track_velocities(q2[lo : t + 1], seq.tracks2[lo : t + 1], interval_s)
+            for delta in offsets:  # one candidate (0) unless a time offset is estimated
+                moved = q2[lo : t + 1]
+                if delta > 0:
+                    moved = compensated(moved, v2, float(delta))
+                moved = [*q2[:lo], *moved]
+                result = estimate(
+                    q1[lo : t + 1], moved[lo : t + 1], seq.frames[lo : t + 1],
+                    seq.tracks1[lo : t + 1], seq.tracks2[lo : t + 1],
+                    sigma, spread, gate, tighten, prior_weight, hypotheses, max_iter,
+                )  # fmt: skip
+                tried.append((result, float(delta), moved))
+            support = [-np.inf if r is None else r[1]["support"] for r, _, _ in tried]
+            best = int(np.argmax(canonical_scores(np.array(support))))  # ties: smaller offset
+            found, offset, here2 = tried[best]
         if found is None:
             scores = np.zeros((frame.n1, frame.n2))
             out.append(finish("temporal_pose", scores, threshold, started, 0, {"window": window}))
@@ -211,7 +252,7 @@ def temporal_pose(
         (turn, move), info = found
         cut = gate * tighten
         scores_by_frame = {
-            s: prior_likelihood(q1[s], q2[s] @ turn.T + move, sigma, spread * tighten, cut)
+            s: prior_likelihood(q1[s], here2[s] @ turn.T + move, sigma, spread * tighten, cut)
             for s in range(lo, t + 1)
         }
         aligned = [scores_by_frame.get(s, np.zeros((0, 0))) for s in range(t + 1)]
@@ -220,6 +261,8 @@ def temporal_pose(
         yaw = np.arctan2(turn[1, 0], turn[0, 0]) + o2[2] - o1[2]
         at = rotation(float(o1[2])).T @ (turn @ o2[:2] + move - o1[:2])
         info |= {"window": window, "relative_pose": [float(at[0]), float(at[1]), float(yaw)]}
+        if len(offsets) > 1:
+            info["time_offset_s"] = offset
         out.append(finish("temporal_pose", scores, threshold, started, info["rounds"], info))
     return out
 

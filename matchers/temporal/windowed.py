@@ -13,6 +13,8 @@ which both tracks have a detection:
 and frame t's matching is the shared discretisation (Hungarian, then ``threshold``) of
 S~_t[i, j] = A_{track1_t(i), track2_t(j)}. Causal: frame t never looks past t. W = 1 is the
 base matcher itself, bit for bit (tested). Vectorised: one scatter-add per frame of the window.
+``windowed(base).over_windows(seq, windows, …)`` gives the matchings at several W from one run
+of the base matcher per frame (a table over W need not run it once per W).
 """
 
 from __future__ import annotations
@@ -78,23 +80,29 @@ def windowed(base: str):
     matcher = get(base)
     name = f"windowed:{base}"
 
-    def lifted(
+    def over_windows(
         seq: SequenceProblem,
+        windows: Sequence[int],
         seed: int | None = 0,
         threshold: float | None = None,
         *,
-        window: int = 5,
         reduce: str = "mean",
         **options,
-    ) -> list[Matching]:
+    ) -> dict[int, list[Matching]]:
+        """{W: ``lifted(seq, seed, threshold, window=W, reduce=reduce, **options)``} for every
+        W of ``windows``, the base matcher run once per frame for all of them (the same
+        matchings as one call per W: the base does not depend on W)."""
         check_sequence(seq)
         rng_from_seed(seed)
-        window = check_count("window", window)
+        windows = [check_count("window", w) for w in windows]
         if reduce not in REDUCTIONS:
             raise ValueError(f"reduce: expected one of {REDUCTIONS}, got {reduce!r}")
         per_frame = [
             matcher(frame, seed=seed, threshold=threshold, **options) for frame in seq.frames
         ]
+        return {w: _lift(per_frame, seq, w, reduce, threshold) for w in windows}
+
+    def _lift(per_frame, seq, window, reduce, threshold) -> list[Matching]:
         if window == 1:
             return per_frame
         out = []
@@ -107,8 +115,21 @@ def windowed(base: str):
             out.append(done)
         return out
 
+    def lifted(
+        seq: SequenceProblem,
+        seed: int | None = 0,
+        threshold: float | None = None,
+        *,
+        window: int = 5,
+        reduce: str = "mean",
+        **options,
+    ) -> list[Matching]:
+        window = check_count("window", window)
+        return over_windows(seq, [window], seed, threshold, reduce=reduce, **options)[window]
+
     lifted.__name__ = lifted.__qualname__ = name
     lifted.requires = frozenset(getattr(matcher, "requires", ()))
     lifted.deterministic = bool(getattr(matcher, "deterministic", False))
     lifted.temporal = True
+    lifted.over_windows = over_windows
     return lifted

@@ -10,7 +10,10 @@ whatever the agent does. Then, frame by frame:
     Hungarian on cost with cost > gate forbidden;  matched detections continue their track,
     the others start new tracks;  a track unseen for more than ``max_age`` frames ends.
 
-Track ids are 0, 1, 2, ... in order of creation. The loop runs over frames; each frame's cost
+The gate and the assignment read distances on the canonical grid
+(:func:`~matchers.core.discretise.canonical_scores`, 2^-40 m), so that two equally distant
+detections tie exactly, and a tie goes the same way, on every CPU. Track ids are 0, 1, 2, ...
+in order of creation. The loop runs over frames; each frame's cost
 matrix is one vectorised ``cdist``. Why this rather than a tracking library: docs/matchers.md
 ("Each agent's own tracks").
 """
@@ -21,6 +24,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from scipy.spatial.distance import cdist
 
+from matchers.core.discretise import canonical_scores
 from matchers.core.options import check_count, check_range
 from matchers.core.sequence_problem import SequenceProblem, ground_positions
 
@@ -48,7 +52,7 @@ def link(positions: list[np.ndarray], gate: float = 2.0, max_age: int = 2) -> li
         alive = np.flatnonzero(t - seen <= max_age)
         if len(alive) and len(xy):
             predicted = last[alive] + velocity[alive] * (t - seen[alive])[:, None]
-            cost = cdist(predicted, xy)
+            cost = canonical_scores(cdist(predicted, xy))  # gate and ties: same on every CPU
             rows, cols = linear_sum_assignment(np.where(cost <= gate, cost, _FORBIDDEN))
             keep = cost[rows, cols] <= gate
             tracks, dets = alive[rows[keep]], cols[keep]
