@@ -142,18 +142,12 @@ def _delta_line(results: Path) -> list[str]:
 def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[str]:
     """Report lines for the box-only table (none without ``table_v2x_boxes.md``); ``seconds``:
     the stage's time in the last cold run (export, import and evaluation)."""
-    from eval.studies.v2x_table import INTERVAL_COLUMNS, _validation, compact, to_markdown
+    from eval.studies.v2x_table import compact_markdown
 
     results = Path(results)
-    if not (results / f"table_{NAME}.md").is_file():
+    markdown = compact_markdown(results, NAME, LABEL)
+    if markdown is None:
         return []
-    table = pd.read_csv(results / f"table_{NAME}.csv", keep_default_na=False, na_values=[""])
-    intervals_path = results / f"table_{NAME}_intervals.csv"
-    intervals = (
-        pd.read_csv(intervals_path)
-        if intervals_path.is_file()
-        else pd.DataFrame(columns=list(INTERVAL_COLUMNS))
-    )
     return [
         "### The V2X task with boxes only",
         "",
@@ -166,7 +160,7 @@ def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[s
         f"by validation F1, the best without a prior and the reference rows; every matcher: "
         f"[{rel}/table_{NAME}.md]({rel}/table_{NAME}.md).",
         "",
-        to_markdown(compact(table, _validation(results, NAME)), intervals, LABEL),
+        markdown,
         "",
         *[f"- {line}." for line in _delta_line(results)],
         *(

@@ -141,18 +141,12 @@ def goal_line(results: Path) -> list[str]:
 
 def readme_part(results: Path, rel: str) -> list[str]:
     """Report lines for the LiDAR table (none without ``table_v2x_lidar.md``)."""
-    from eval.studies.v2x_table import INTERVAL_COLUMNS, _validation, compact, to_markdown
+    from eval.studies.v2x_table import compact_markdown
 
     results = Path(results)
-    if not (results / f"table_{NAME}.md").is_file():
+    markdown = compact_markdown(results, NAME, LABEL)
+    if markdown is None:
         return []
-    table = pd.read_csv(results / f"table_{NAME}.csv", keep_default_na=False, na_values=[""])
-    intervals_path = results / f"table_{NAME}_intervals.csv"
-    intervals = (
-        pd.read_csv(intervals_path)
-        if intervals_path.is_file()
-        else pd.DataFrame(columns=list(INTERVAL_COLUMNS))
-    )
     return [
         "### The V2X task on LiDAR boxes",
         "",
@@ -162,7 +156,7 @@ def readme_part(results: Path, rel: str) -> list[str]:
         f"the best by validation F1, the best without a prior and the reference rows; every "
         f"matcher: [{rel}/table_{NAME}.md]({rel}/table_{NAME}.md).",
         "",
-        to_markdown(compact(table, _validation(results, NAME)), intervals, LABEL),
+        markdown,
         "",
         *[f"- {line}." for line in goal_line(results)],
         *[f"- {line}." for line in sensor_lines(results)],

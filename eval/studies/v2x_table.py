@@ -415,6 +415,23 @@ def compact(
     return table.loc[keep].reset_index(drop=True)
 
 
+def compact_markdown(results: Path, name: str, label: str) -> str | None:
+    """The compact Markdown of the V2X-protocol table ``table_<name>.csv`` under ``results``
+    (validation-ranked rows, intervals from ``table_<name>_intervals.csv`` when present), or
+    None without ``table_<name>.md``."""
+    results = Path(results)
+    if not (results / f"table_{name}.md").is_file():
+        return None
+    table = pd.read_csv(results / f"table_{name}.csv", keep_default_na=False, na_values=[""])
+    intervals_path = results / f"table_{name}_intervals.csv"
+    intervals = (
+        pd.read_csv(intervals_path)
+        if intervals_path.is_file()
+        else pd.DataFrame(columns=list(INTERVAL_COLUMNS))
+    )
+    return to_markdown(compact(table, _validation(results, name)), intervals, label)
+
+
 def _family(name: str) -> str:
     if name in REFERENCE_ROWS:
         return "a reference row"
