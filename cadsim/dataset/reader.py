@@ -19,6 +19,7 @@ from cadsim.dataset.checksum import dataset_checksum
 from cadsim.dataset.frame_pair import FramePair
 from cadsim.dataset.manifest import DatasetError, read_manifest
 from cadsim.dataset.multi_view import SnapshotViews
+from cadsim.dataset.sensor_view import check_sensor, dataset_sensor, lidar_pair
 from cadsim.dataset.verification import RecordLayout, record_layout, verify_record
 
 __all__ = ["Dataset", "FramePair"]  # FramePair: defined in cadsim.dataset.frame_pair
@@ -36,10 +37,12 @@ class Dataset(Sequence[FramePair]):
     files (:meth:`verify_once`). Raises ``DatasetError`` for a missing, incomplete or (verified)
     modified or malformed dataset (:mod:`cadsim.dataset.verification`: every view of every
     record). ``ds.n_views``: views per record (2: frame pairs); ``ds.snapshot(k)``: record k's
-    views (N-view datasets).
+    views (N-view datasets). ``sensor``: read a two-sensor dataset (``sensor = "both"``) as
+    "camera" (its camera detections, the default) or "lidar" (its LiDAR boxes,
+    :mod:`cadsim.dataset.sensor_view`); None or the records' own sensor: as stored.
     """
 
-    def __init__(self, path: str | Path, verify: bool = False) -> None:
+    def __init__(self, path: str | Path, verify: bool = False, sensor: str | None = None) -> None:
         self.path = Path(path)
         self.manifest = read_manifest(self.path)
         if not self.manifest["complete"]:
@@ -56,6 +59,14 @@ class Dataset(Sequence[FramePair]):
         self.record_layout: RecordLayout = record_layout(self.manifest, self.path)
         self.record_files: tuple[str, ...] = self.record_layout.record_files
         self.n_views: int = self.record_layout.views
+        self.sensor: str | None = check_sensor(
+            sensor, dataset_sensor(self.manifest), str(self.path / layout.MANIFEST)
+        )
+        if self.sensor is not None and self.n_views != 2:
+            raise ValueError(
+                f"{self.path / layout.MANIFEST}: sensor {sensor!r}: only frame-pair datasets "
+                f"can be read by sensor, this one has {self.n_views} views per record"
+            )
         if not self._records:
             raise DatasetError(
                 f"{self.path / layout.MANIFEST}: records: a finished dataset with no record"
@@ -86,7 +97,7 @@ class Dataset(Sequence[FramePair]):
         record_dir = self.path / layout.PAIRS_DIR / entry["name"]
         if not record_dir.is_dir():
             raise DatasetError(f"{record_dir}: record listed in the manifest is missing")
-        return FramePair(
+        pair = FramePair(
             record_dir,
             k,
             entry,
@@ -94,6 +105,7 @@ class Dataset(Sequence[FramePair]):
             self.detection_config,
             record_files=self.record_files,
         )
+        return pair if self.sensor is None else lidar_pair(pair)
 
     def __iter__(self) -> Iterator[FramePair]:
         for k in range(len(self)):

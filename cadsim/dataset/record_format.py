@@ -145,7 +145,7 @@ class SnapshotRecord:
     localisation: dict = field(default_factory=dict)
 
 
-def _lidar_camera(pose: np.ndarray) -> Camera:
+def lidar_camera(pose: np.ndarray) -> Camera:
     """A level LiDAR (4×4 LiDAR → world) as a camera pose: its optical axis the LiDAR's x."""
     return Camera(tuple(float(v) for v in pose[:3, 3]), float(pm.arctan2(pose[1, 0], pose[0, 0])))
 
@@ -154,7 +154,7 @@ def _observer_entry(view: ViewCapture) -> dict:
     lidar_only = view.lidar is not None and view.color is None
     entry = {
         "id": view.observer_id,
-        "camera": (_lidar_camera(view.lidar.pose) if lidar_only else view.camera).as_dict(),
+        "camera": (lidar_camera(view.lidar.pose) if lidar_only else view.camera).as_dict(),
         "pose": view.pose.as_dict(),
         "noise_seed": int(view.noise_seed),
         "attribute_seed": int(view.attribute_seed),

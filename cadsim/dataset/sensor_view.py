@@ -1,0 +1,105 @@
+"""Reading one sensor of a two-sensor dataset (``sensor = "both"``): the same records, frames and
+ground truth, with either the camera's detections or the LiDAR detector's boxes as the views.
+
+A ``"both"`` record keeps the camera detections in ``detections.npz`` (what a plain read gives)
+and the LiDAR boxes beside the points in ``lidar.npz`` (``view{k}_box_*``, LiDAR frame:
+x forward, y left, z up, metres; :mod:`cadsim.dataset.lidar_points`). :func:`lidar_pair` turns a
+record's pair into the pair a ``sensor = "lidar"`` record of the same frame would be: the
+boxes as box-only detections (positions in the camera-frame convention with the LiDAR at the
+origin, the 48-d box feature vector of the fitted sizes, headings, the reported classes), the
+record's ``cues`` the box cues, each observer's ``camera`` entry the LiDAR's pose — so the true
+relative pose, the pose fit, the oracle row and the localisation prior are the LiDAR's, exactly
+as for a LiDAR-only record. Ground truth: the box ids (the object most of a box's points hit;
+``clutter:lidar:…`` for false positives); a true class is that object's class, a false
+positive's its reported one (:mod:`cadsim.sensing.lidar.box_truth`). Point counts are not kept
+in a ``"both"`` record, so ``pixels`` is 0 (unknown). Imports neither SUMO nor pyrender.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from cadsim.dataset import layout
+from cadsim.dataset.detections import ViewDetections
+from cadsim.dataset.manifest import DatasetError
+from cadsim.sensing.box_features import (
+    BOX_CUES,
+    box_feature_vector,
+    heading_from_lidar_yaw,
+    lidar_to_camera_convention,
+)
+
+SENSORS = ("camera", "lidar")
+"""What :class:`cadsim.dataset.reader.Dataset` can read a ``"both"`` dataset as."""
+
+
+def dataset_sensor(manifest: dict) -> str:
+    """What a dataset's records carry: "camera", "lidar" or "both" (its manifest's generation
+    configuration; imported and older datasets: "camera")."""
+    return str((manifest.get("generation") or {}).get("sensor", "camera"))
+
+
+def check_sensor(sensor: str | None, stored: str, where: str) -> str | None:
+    """The sensor to read a dataset of ``stored`` records as: None for the records' own
+    detections (``sensor`` None, or the one sensor the records have), "lidar" for the boxes of a
+    ``"both"`` dataset. ``ValueError`` naming ``where`` for a sensor the records do not have."""
+    if sensor is None:
+        return None
+    if sensor not in SENSORS:
+        raise ValueError(f"{where}: sensor: expected one of {', '.join(SENSORS)}, got {sensor!r}")
+    if stored == "both":
+        return None if sensor == "camera" else sensor
+    if stored != sensor:
+        raise ValueError(
+            f"{where}: sensor {sensor!r}: the records carry {stored} detections only (a "
+            'scenario with sensor = "both" gives both)'
+        )
+    return None
+
+
+def lidar_detections(boxes: dict, objects: list[dict]) -> ViewDetections:
+    """One view's LiDAR boxes (a :class:`~cadsim.dataset.lidar_points.LidarView`'s ``boxes``:
+    ``centres``, ``sizes`` (k, 3) metres LiDAR frame, ``yaws`` (k,) radians, ``classes``,
+    ``ids``) as box-only detections; ``objects``: the record's ``objects`` (for true classes)."""
+    ids = [str(v) for v in np.asarray(boxes["ids"]).reshape(-1)]
+    reported = [str(v) for v in np.asarray(boxes["classes"]).reshape(-1)]
+    sizes = np.asarray(boxes["sizes"], dtype=np.float64).reshape(-1, 3)
+    by_id = {str(o["id"]): str(o["cls"]) for o in objects}
+    k = len(ids)
+    return ViewDetections(
+        positions=lidar_to_camera_convention(boxes["centres"]),
+        boxes=np.zeros((k, 4)),
+        features=box_feature_vector(sizes) if k else np.zeros((0, 48), np.float32),
+        object_ids=ids,
+        true_classes=[by_id.get(i, r) for i, r in zip(ids, reported, strict=True)],
+        pixels=np.zeros(k, dtype=np.int64),
+        reported_classes=reported,
+        headings=heading_from_lidar_yaw(boxes["yaws"]),
+    )
+
+
+def lidar_pair(pair):
+    """``pair`` (a :class:`~cadsim.dataset.frame_pair.FramePair` of a ``"both"`` record) read
+    as its LiDAR: the boxes as the views, the LiDAR poses as the observers' sensors, the box cues
+    (module docstring). ``DatasetError`` for a record without LiDAR boxes."""
+    from cadsim.dataset.record_format import lidar_camera
+
+    sweeps = pair.lidar
+    if sweeps is None or any(s.boxes is None for s in sweeps):
+        raise DatasetError(f"{pair.path / layout.LIDAR_NPZ}: no LiDAR boxes to read the pair with")
+    record = dict(pair.record)
+    observers = [dict(o) for o in record["observers"]]
+    for v, sweep in zip(pair.view_numbers, sweeps, strict=True):
+        observers[v - 1]["camera"] = lidar_camera(sweep.pose).as_dict()
+        observers[v - 1]["sensor"] = "lidar"
+    record |= {"observers": observers, "cues": list(BOX_CUES)}
+    views = tuple(lidar_detections(s.boxes, record["objects"]) for s in sweeps)
+    out = type(pair)(
+        pair.path, pair.index, pair._entry, pair._noise, pair._detection, views,
+        record_files=layout.record_files(2, "lidar"), view_numbers=pair.view_numbers,
+    )  # fmt: skip
+    out.__dict__["record"] = record
+    return out
+
+
+__all__ = ["SENSORS", "check_sensor", "dataset_sensor", "lidar_detections", "lidar_pair"]
