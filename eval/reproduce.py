@@ -9,7 +9,8 @@ all matchers × runs (parameters tuned and τ calibrated on validation only; the
 beside); the paper's protocol; the CAD noise sweep (re-detection on stored clean depth); the regime
 sweep on every dataset; the dataset spread; the localisation sweep on CAD (prior re-drawn per
 position error); the V2X task on cad-v2x and its box-only table (:mod:`eval.studies.v2x_boxes`,
-``--no-boxes`` skips it) and the LiDAR table on cad-v2x-lidar (:mod:`eval.studies.v2x_lidar`,
+``--no-boxes`` skips it), the LiDAR table and the paired camera-vs-LiDAR comparison on the
+two-sensor cad-v2x-both (:mod:`eval.studies.v2x_lidar`, :mod:`eval.studies.v2x_sensors`,
 ``--no-lidar``); the multi-agent table on cad-multi
 (:mod:`eval.studies.multiagent`); the temporal table on cad-v2x-seq (:mod:`eval.studies.temporal`,
 ``--no-temporal`` skips it); the external benchmark on the shipped DMGM CAD pairs (``eval/data/dmgm-cad``,

@@ -96,6 +96,7 @@ def _spec_from_dict(d: dict) -> RunSpec:
         keep=None if d.get("keep") is None else float(d["keep"]),
         localisation=_localisation(d.get("localisation")),
         views=None if d.get("views") is None else (int(d["views"][0]), int(d["views"][1])),
+        sensor=d.get("sensor"),
     )
 
 

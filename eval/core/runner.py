@@ -46,6 +46,7 @@ class RunRequest:
     keep: float | None = None
     localisation: tuple[float, float] | str | None = None
     views: tuple[int, int] | None = None
+    sensor: str | None = None
 
     def spec(self, version: str) -> RunSpec:
         return RunSpec(
@@ -58,6 +59,7 @@ class RunRequest:
             self.keep,
             self.localisation,
             self.views,
+            self.sensor,
         )
 
 
@@ -90,19 +92,20 @@ def requests_for(
     keep: float | None = None,
     localisation: tuple[float, float] | str | None = None,
     views: tuple[int, int] | None = None,
+    sensor: str | None = None,
 ) -> list[RunRequest]:
     """Every combination of (dataset dir, checksum) × matcher × seed × noise rate (first `limit`
     frame pairs of each dataset; None: all; non-covisible detections thinned to level `keep`,
     where 1 and None both mean no thinning and share the untouched runs; the localisation prior
     re-drawn at (position sigma m, yaw sigma deg) or by a GNSS-like preset (its name), None: each
     record's own; ``views``: the pair of views (i, j) of N-view snapshots, None: the records'
-    pairs)."""
+    pairs; ``sensor``: read a two-sensor dataset as "camera" or "lidar", None: as stored)."""
     matchers, seeds, noise_rates = list(matchers), list(seeds), list(noise_rates)
     keep = None if keep is None or float(keep) == 1.0 else float(keep)
     if localisation is not None and not isinstance(localisation, str):
         localisation = (float(localisation[0]), float(localisation[1]))
     return [
-        RunRequest(d, c, m, s, r, limit, keep, localisation, views)
+        RunRequest(d, c, m, s, r, limit, keep, localisation, views, sensor)
         for d, c in datasets
         for r in noise_rates
         for s in seeds
@@ -171,6 +174,7 @@ def _group(
             req.keep,
             req.localisation,
             req.views,
+            req.sensor,
         )
         groups.setdefault(key, {}).setdefault(req.noise_rate, []).append(req.matcher)
     blocks: list[tuple[tuple, tuple[MatcherSpec, ...], tuple[float | None, ...]]] = []
@@ -191,9 +195,7 @@ def _group(
             break
         blocks[widest : widest + 1] = halves
     return [
-        RunTask(
-            k[0], k[1], k[2], rates, matchers, version, k[3], k[4], k[5], k[6], plugin_time_limit_s
-        )
+        RunTask(*k[:3], rates, matchers, version, *k[3:7], plugin_time_limit_s, k[7])
         for k, matchers, rates in blocks
     ]
 

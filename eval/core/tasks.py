@@ -67,13 +67,16 @@ class RunSpec:
     localisation: tuple[float, float] | str | None = None
     # the pair of views (i, j) of each N-view snapshot (view i receives); None: the record's pair
     views: tuple[int, int] | None = None
+    # the sensor a two-sensor dataset is read as (cadsim.dataset.sensor_view); None: as stored
+    sensor: str | None = None
 
     def key(self) -> str:
-        """Hex SHA-256 of the canonical JSON of the fields (``views`` only when set, so that the
-        keys of two-view runs do not depend on it)."""
+        """Hex SHA-256 of the canonical JSON of the fields (``views`` and ``sensor`` only when
+        set, so that the keys of other runs do not depend on them)."""
         fields = asdict(self)
-        if fields["views"] is None:
-            del fields["views"]
+        for optional in ("views", "sensor"):
+            if fields[optional] is None:
+                del fields[optional]
         text = json.dumps(fields, sort_keys=True, separators=(",", ":"))
         return hashlib.sha256(text.encode()).hexdigest()
 
@@ -96,6 +99,7 @@ class RunTask:
     # seconds a plug-in matcher may take on one frame pair (None: the worker's
     # $CADSIM_PLUGIN_TIME_LIMIT_S or 600); not part of any result, so not of the specs' keys
     plugin_time_limit_s: float | None = None
+    sensor: str | None = None  # a two-sensor dataset read as "camera" or "lidar"; None: as stored
 
     def __post_init__(self) -> None:
         if not self.noise_rates or (None in self.noise_rates and len(self.noise_rates) > 1):
@@ -126,6 +130,7 @@ class RunTask:
                 self.keep,
                 self.localisation,
                 self.views,
+                self.sensor,
             )
             for rate in self.noise_rates
             for m in self.matchers
@@ -185,11 +190,12 @@ class RunResult:
         return [(o.assigned, o.assigned_scores, o.gt_pairs, o.n1, o.n2) for o in self.outcomes]
 
 
-def open_dataset(path: str):
-    """The dataset at `path` (``cadsim.dataset.Dataset``)."""
+def open_dataset(path: str, sensor: str | None = None):
+    """The dataset at `path` (``cadsim.dataset.Dataset``), read as ``sensor`` (None: as stored;
+    "camera" or "lidar": one sensor of a two-sensor dataset)."""
     from cadsim.dataset import Dataset
 
-    return Dataset(path)
+    return Dataset(path, sensor=sensor)
 
 
 def matcher_function(name: str):
@@ -292,7 +298,7 @@ def execute(task: RunTask) -> list[RunResult]:
     ``("runs", task.token, runs)`` (``report_progress``): the share of its runs now done."""
     from cadsim.generation.executor import report_progress
 
-    dataset = open_dataset(task.dataset_dir)
+    dataset = open_dataset(task.dataset_dir, task.sensor)
     if dataset.checksum != task.dataset_checksum:
         raise ValueError(
             f"{task.dataset_dir}: dataset checksum {dataset.checksum[:12]} differs from the task's "

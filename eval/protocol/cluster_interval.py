@@ -57,3 +57,23 @@ def t_intervals(
     variance = (per_cluster**2).sum(axis=1) * groups / (groups - 1) / count**2
     half = student_t.ppf(0.5 + level / 2, groups - 1) * np.sqrt(variance)
     return mean, mean - half, mean + half
+
+
+def t_p_value(values: np.ndarray, clusters: np.ndarray) -> float:
+    """Two-sided p-value of "the mean of ``values`` is 0" with the cluster-robust standard error
+    and G − 1 degrees of freedom of :func:`t_interval` (the test its interval inverts: p < 1 −
+    level exactly when the interval excludes 0). NaN with fewer than two clusters; with no
+    spread at all, 1 for a zero mean and 0 otherwise."""
+    values = np.asarray(values, dtype=float).reshape(-1)
+    labels, index = np.unique(np.asarray(clusters).reshape(-1), return_inverse=True)
+    if len(values) != len(index):
+        raise ValueError(f"clusters: {len(index)} labels for {len(values)} values")
+    groups = len(labels)
+    if groups < 2:
+        return float("nan")
+    mean = values.mean()
+    per_cluster = np.bincount(index, weights=values - mean, minlength=groups)
+    se = np.sqrt((per_cluster**2).sum() * groups / (groups - 1)) / len(values)
+    if se == 0:
+        return 1.0 if mean == 0 else 0.0
+    return float(2 * student_t.sf(abs(mean) / se, groups - 1))

@@ -105,6 +105,7 @@ def tune_entry(
             [TUNING_SEED],
             limit=limit,
             localisation=localisation,
+            sensor=getattr(entry, "sensor", None),
         ),
         desc=f"{entry.label} tuning",
     )

@@ -54,7 +54,9 @@ Named = dict[str, MatcherSpec]
 class DatasetEntry:
     """A test dataset and its validation dataset. label: the table's dataset name (``CAD``);
     localisation: the name of a GNSS-like preset (:mod:`cadsim.sensing.gnss_error`) that
-    re-draws every record's localisation prior in every run (None: the records' own)."""
+    re-draws every record's localisation prior in every run (None: the records' own); sensor:
+    the sensor a two-sensor dataset is read as ("camera", "lidar"; None: as stored,
+    :mod:`cadsim.dataset.sensor_view`)."""
 
     label: str
     scenario: str
@@ -65,6 +67,7 @@ class DatasetEntry:
     val_checksum: str | None = None
     val_pairs: int = 0
     localisation: str | None = None  # a GNSS-like preset re-drawing every record's prior
+    sensor: str | None = None
 
 
 PAPER_FAMILIES = ("cad", "mrc")  # scenario-name prefixes titled like the paper's datasets
@@ -85,13 +88,15 @@ def open_entry(
     val_dir: str | Path | None,
     label: str | None = None,
     localisation: str | None = None,
+    sensor: str | None = None,
 ) -> DatasetEntry:
     """Open the test (and validation) dataset and describe them, titled `label` (default:
-    :func:`dataset_label` of its scenario). Each is verified against its
+    :func:`dataset_label` of its scenario), read as ``sensor`` (a two-sensor dataset's
+    "camera" or "lidar"; None: as stored). Each is verified against its
     manifest's checksums (once per process for unchanged files): the result cache is keyed by
     the manifest's checksum, so a record modified after generation would otherwise go unseen."""
-    test = tasks.open_dataset(str(test_dir))
-    val = tasks.open_dataset(str(val_dir)) if val_dir is not None else None
+    test = tasks.open_dataset(str(test_dir), sensor)
+    val = tasks.open_dataset(str(val_dir), sensor) if val_dir is not None else None
     for dataset in (test, val):
         if dataset is not None:
             dataset.verify_once()
@@ -123,6 +128,7 @@ def open_entry(
         val_checksum=None if val is None else val.checksum,
         val_pairs=0 if val is None else len(val),
         localisation=localisation,
+        sensor=test.sensor,
     )
 
 
@@ -189,11 +195,15 @@ def run_named(
     limit: int | None = None,
     keep: float | None = None,
     localisation: str | None = None,
+    sensor: str | None = None,
 ) -> dict[str, list[RunResult]]:
     """Runs of every spec of `named` on `dataset` (dir, checksum) × seeds × noise rates, grouped
-    by row label (seed order, then rate order); `localisation`: a preset re-drawing the prior."""
+    by row label (seed order, then rate order); `localisation`: a preset re-drawing the prior;
+    `sensor`: the sensor a two-sensor dataset is read as (None: as stored)."""
     specs = list(dict.fromkeys(named.values()))
-    requests = requests_for([dataset], specs, seeds, noise_rates, limit, keep, localisation)
+    requests = requests_for(
+        [dataset], specs, seeds, noise_rates, limit, keep, localisation, sensor=sensor
+    )
     runs = runner.run(requests, desc=desc)
     by_spec: dict[MatcherSpec, list[RunResult]] = {}
     for run in runs:
@@ -268,6 +278,7 @@ def calibrate_entry(
         f"{entry.label} validation",
         keep=keep,
         localisation=entry.localisation,
+        sensor=entry.sensor,
     )
     return val_runs, calibrate_named(val_runs)
 
@@ -357,6 +368,7 @@ def evaluate_entry(
         seeds,
         f"{entry.label} test",
         localisation=entry.localisation,
+        sensor=entry.sensor,
     )
     if val_runs:
         calibration.check_disjoint(

@@ -1,18 +1,25 @@
 """The LiDAR V2X table (``results/table_v2x_lidar.{md,csv}``): what the matchers get on boxes
 that cadsim's own LiDAR detector found, beside the camera table and the label-quality box table.
 
-Data. ``scenarios/cad-v2x-lidar.toml`` — cad-v2x's junction, traffic, observers, seeds and
-localisation preset, each observer sensing with an HDL-64E on its roof instead of a camera — is
-generated into ``DATA/cad-v2x-lidar`` (test, seed 11) and ``DATA/cad-v2x-lidar-val`` (validation,
-seed 1011), as many pairs as the camera table's splits. Each view's detections are the LiDAR
-box detector's (``cadsim.sensing.lidar.box_detector``): its misses, splits, merges, wall slivers
-and centre bias (its regime card: ``cadsim info``), reported classes from box size, the box
-feature vector of the *fitted* sizes, headings; no pixels.
+Data. ``scenarios/cad-v2x-both.toml`` — cad-v2x's junction, traffic, observers, seeds and
+localisation preset, each observer sensing with its camera *and* an HDL-64E on its roof — is
+generated into ``DATA/cad-v2x-both`` (test, seed 11) and ``DATA/cad-v2x-both-val`` (validation,
+seed 1011), as many pairs as the camera table's splits. Pairs are accepted by their camera
+detections, so the frames are cad-v2x's. Read as LiDAR (``sensor="lidar"``,
+:mod:`cadsim.dataset.sensor_view`), each view's detections are the LiDAR box detector's
+(``cadsim.sensing.lidar.box_detector``): its misses, splits, merges, wall slivers and centre bias
+(its regime card: ``cadsim info``), reported classes from box size, the box feature vector of
+the *fitted* sizes, headings; no pixels. Read as camera, the same records give cad-v2x's camera
+detections.
 
 Protocol. The camera table's (:func:`eval.studies.v2x_table.evaluate_v2x`): every matcher that
 runs without pixels (:func:`eval.studies.v2x_boxes.box_matchers`), every preset, the same tuning
-budget, τ and parameters on the validation split, oracle and prior rows. Files:
-``table_v2x_lidar.{md,csv}``, ``table_v2x_lidar_intervals.csv``, ``v2x_lidar/<preset>/``.
+budget, τ and parameters on the validation split, oracle and prior rows — once on the LiDAR
+boxes (the LiDAR table) and once on the camera detections of the same records, whose per-pair
+F1 the paired sensor comparison (:mod:`eval.studies.v2x_sensors`) takes. Files:
+``table_v2x_lidar.{md,csv}``, ``table_v2x_lidar_intervals.csv``, ``v2x_lidar/<preset>/``; the
+camera side under ``v2x_lidar/`` (``table_camera.{md,csv}``, ``table_camera_intervals.csv``,
+``camera/<preset>/``); ``table_v2x_sensors.csv``.
 """
 
 from __future__ import annotations
@@ -29,7 +36,9 @@ log = logging.getLogger(__name__)
 
 NAME = "v2x_lidar"
 LABEL = "CAD-V2X LiDAR"
-SCENARIO = "scenarios/cad-v2x-lidar.toml"
+CAMERA_LABEL = "CAD-V2X camera (two-sensor split)"
+CAMERA_NAME = "camera"  # the camera side's table and folder under ``v2x_lidar/``
+SCENARIO = "scenarios/cad-v2x-both.toml"
 
 
 def generate_lidar_splits(
@@ -41,7 +50,7 @@ def generate_lidar_splits(
 
     path = root / SCENARIO
     seed = load_scenario(path).seed
-    test, val = data / "cad-v2x-lidar", data / "cad-v2x-lidar-val"
+    test, val = data / "cad-v2x-both", data / "cad-v2x-both-val"
     record = {}
     for split, folder, split_seed in (("test", test, None), ("val", val, seed + val_seed_offset)):
         log.info("[v2x lidar generate] %s %s: %d pairs", LABEL, split, pairs)
@@ -60,63 +69,26 @@ def evaluate_lidar(
     out_dir: str | Path,
     tune: bool = True,
 ) -> tuple[pd.DataFrame, dict]:
-    """The full table's protocol on the LiDAR splits (module docstring); (table, record)."""
+    """The full table's protocol on the two-sensor splits read as LiDAR, then as camera, and
+    the paired sensor comparison (module docstring); (LiDAR table, record)."""
     from eval.studies.v2x_boxes import box_matchers
+    from eval.studies.v2x_sensors import write_sensor_table
     from eval.studies.v2x_table import evaluate_v2x
 
+    out_dir = Path(out_dir)
     chosen = box_matchers(matchers)
     log.info("[v2x lidar] %s: %d matchers on %s, %s", LABEL, len(chosen), test_dir, val_dir)
-    table = evaluate_v2x(test_dir, val_dir, LABEL, chosen, seeds, runner, out_dir, tune=tune, name=NAME)  # fmt: skip
+    table = evaluate_v2x(
+        test_dir, val_dir, LABEL, chosen, seeds, runner, out_dir, tune=tune, name=NAME,
+        sensor="lidar",
+    )  # fmt: skip
+    log.info("[v2x lidar] %s: the same records' camera detections", CAMERA_LABEL)
+    evaluate_v2x(
+        test_dir, val_dir, CAMERA_LABEL, chosen, seeds, runner, out_dir / NAME, tune=tune,
+        name=CAMERA_NAME, sensor="camera",
+    )  # fmt: skip
+    write_sensor_table(out_dir / NAME, out_dir / NAME / CAMERA_NAME, out_dir)
     return table, {"matchers": [m.name for m in chosen]}
-
-
-def _best_of_family(table: pd.DataFrame, preset: str, validation, prior: bool):
-    """(name, row) of the matcher with the highest validation F1 (test F1 without it) that does
-    (``prior``) or does not read the localisation prior, at ``preset``; None if there is none."""
-    from eval.studies.v2x_table import REFERENCE_ROWS, reads_prior
-
-    rows = table[(table["preset"] == preset) & ~table["matcher"].isin(REFERENCE_ROWS)]
-    rows = rows[[reads_prior(m) == prior for m in rows["matcher"]]]
-    if rows.empty:
-        return None
-    scores = (validation or {}).get(preset, {})
-    key = [(-scores.get(m, -1.0), -f, m) for m, f in zip(rows["matcher"], rows["f1_mean"], strict=True)]  # fmt: skip
-    best = min(key)[2]
-    return best, rows[rows["matcher"] == best].iloc[0]
-
-
-def sensor_lines(results: Path) -> list[str]:
-    """Per preset and matcher family (with / without the prior): the validation-chosen matcher's
-    test F1 on LiDAR boxes against on camera detections; a sensor "favours" the family only
-    where the two intervals do not overlap."""
-    from eval.studies.v2x_table import _ranged, _validation
-
-    results = Path(results)
-    camera_path = results / "table_v2x.csv"
-    if not camera_path.is_file():
-        return []
-    lidar = pd.read_csv(results / f"table_{NAME}.csv", keep_default_na=False, na_values=[""])
-    camera = pd.read_csv(camera_path, keep_default_na=False, na_values=[""])
-    val_lidar, val_camera = _validation(results, NAME), _validation(results)
-    out = []
-    for preset in dict.fromkeys(lidar["preset"]):
-        for prior, family in ((True, "with the prior"), (False, "without a prior")):
-            a = _best_of_family(lidar, preset, val_lidar, prior)
-            b = _best_of_family(camera, preset, val_camera, prior)
-            if a is None or b is None or a[1].f1_mean == 0 and b[1].f1_mean == 0:
-                continue
-            (na, ra), (nb, rb) = a, b
-            if ra.f1_low > rb.f1_high:
-                verdict = "LiDAR boxes favour it"
-            elif rb.f1_low > ra.f1_high:
-                verdict = "cameras favour it"
-            else:
-                verdict = "the intervals overlap: no sensor is shown to favour it"
-            out.append(
-                f"`{preset}`, {family}: LiDAR `{na}` {_ranged(ra.f1_mean, ra.f1_low, ra.f1_high)} F1, "
-                f"camera `{nb}` {_ranged(rb.f1_mean, rb.f1_low, rb.f1_high)} F1 — {verdict}"
-            )  # fmt: skip
-    return out
 
 
 def goal_line(results: Path) -> list[str]:
@@ -141,6 +113,8 @@ def goal_line(results: Path) -> list[str]:
 
 def readme_part(results: Path, rel: str) -> list[str]:
     """Report lines for the LiDAR table (none without ``table_v2x_lidar.md``)."""
+    from eval.studies.v2x_sensors import NAME as SENSORS
+    from eval.studies.v2x_sensors import sensor_lines
     from eval.studies.v2x_table import compact_markdown
 
     results = Path(results)
@@ -150,18 +124,27 @@ def readme_part(results: Path, rel: str) -> list[str]:
     return [
         "### The V2X task on LiDAR boxes",
         "",
-        "`cad-v2x-lidar`: the cad-v2x scenes sensed by a 64-channel roof LiDAR; the boxes are "
-        "cadsim's LiDAR detector's (its misses, false positives and centre error: docs/lidar.md). "
-        "Every matcher that runs without pixels, under the camera table's protocol. Per preset "
+        "`cad-v2x-both`: the cad-v2x frames sensed by each vehicle's camera and a 64-channel roof "
+        "LiDAR; the boxes are cadsim's LiDAR detector's (its misses, false positives and centre "
+        "error: docs/lidar.md). Every matcher that runs without pixels, under the camera table's "
+        "protocol, on the LiDAR boxes and on the camera detections of the same records. Per preset "
         f"the best by validation F1, the best without a prior and the reference rows; every "
         f"matcher: [{rel}/table_{NAME}.md]({rel}/table_{NAME}.md).",
         "",
         markdown,
         "",
         *[f"- {line}." for line in goal_line(results)],
+        "",
+        "LiDAR against camera on the same frames, per preset and matcher family (the matcher "
+        "chosen on validation, the same on both sensors): mean per-frame-pair difference of F1 "
+        "with its 95 % interval over episodes; a sensor favours the family only where the "
+        "difference stays beyond 0 after Holm's adjustment over every comparison of "
+        f"[{rel}/table_{SENSORS}.csv]({rel}/table_{SENSORS}.csv):",
+        "",
         *[f"- {line}." for line in sensor_lines(results)],
         "",
-        f"(`{rel}/table_{NAME}.csv`, `{rel}/table_{NAME}_intervals.csv`, `{rel}/{NAME}/`.)",
+        f"(`{rel}/table_{NAME}.csv`, `{rel}/table_{NAME}_intervals.csv`, `{rel}/{NAME}/`, "
+        f"`{rel}/table_{SENSORS}.csv`.)",
         "",
     ]
 

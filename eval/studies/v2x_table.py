@@ -106,22 +106,24 @@ def evaluate_v2x(
     presets: Sequence[str] = PRESETS,
     tune: bool = True,
     name: str = SUBDIR,
+    sensor: str | None = None,
 ) -> pd.DataFrame:
     """Evaluate `matchers` under every preset (module docstring); writes the per-preset files
     under ``out_dir/<name>/``, ``table_<name>.csv/.md`` and ``table_<name>_intervals.csv`` in
     `out_dir` (``name`` "v2x"; the box-only table :mod:`eval.studies.v2x_boxes` uses its own);
-    returns the table."""
+    ``sensor``: read a two-sensor dataset as "camera" or "lidar" (None: as stored); returns
+    the table."""
     out_dir = Path(out_dir)
     base = out_dir / name
     tuned_dir = base / TUNE_PRESET
-    tuned = open_entry(test_dir, val_dir, label, localisation=TUNE_PRESET)
+    tuned = open_entry(test_dir, val_dir, label, localisation=TUNE_PRESET, sensor=sensor)
     evaluate([tuned], matchers, seeds, runner, tuned_dir, tune=tune, untuned=False)
     named, _ = chosen_specs(tuned_dir, label, matchers)
     frames, validation = [], {}
     for preset in presets:
         folder = base / preset
         if preset != TUNE_PRESET:
-            entry = open_entry(test_dir, val_dir, label, localisation=preset)
+            entry = open_entry(test_dir, val_dir, label, localisation=preset, sensor=sensor)
             here = _retuned(entry, matchers, named, runner, folder) if tune else named
             evaluate([entry], here, seeds, runner, folder, untuned=False)
         per_pair = pd.read_csv(
