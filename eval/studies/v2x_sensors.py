@@ -37,7 +37,7 @@ LEVEL = 0.95
 LIDAR_FAVOURS = "LiDAR favours it"
 CAMERA_FAVOURS = "cameras favour it"
 INCLUDES_ZERO = "the interval includes 0"
-NOT_AFTER_HOLM = "0 is outside the interval, but not after Holm's adjustment"
+NOT_AFTER_HOLM = "beyond 0 only before Holm's adjustment"
 FAMILIES = ((True, "with the prior"), (False, "without a prior"))
 COLUMNS = (
     "preset",
@@ -172,8 +172,12 @@ def sensor_lines(results: Path) -> list[str]:
     if not path.is_file():
         return []
     table = pd.read_csv(path, keep_default_na=False, na_values=[""])
+    chosen = table[table["chosen"].astype(str) == "True"]
+    presets = {p: k for k, p in enumerate(dict.fromkeys(chosen["preset"]))}
+    families = {f: k for k, (_, f) in enumerate(FAMILIES)}
+    order = sorted(range(len(chosen)), key=lambda i: (presets[chosen["preset"].iat[i]], families.get(chosen["family"].iat[i], 2)))  # fmt: skip
     out = []
-    for row in table[table["chosen"].astype(str) == "True"].itertuples(index=False):
+    for row in chosen.iloc[order].itertuples(index=False):
         interval = (
             f"[{_pp(row.ci_low)}, {_pp(row.ci_high)}]"
             if np.isfinite(row.ci_low) and np.isfinite(row.ci_high)

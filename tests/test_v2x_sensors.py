@@ -1,0 +1,220 @@
+"""Camera against LiDAR on the same frames: a two-sensor (``sensor = "both"``) split read as
+each sensor gives the same frames and truth; the runner keeps the two readings apart; the
+paired LiDAR − camera differences find a planted effect with episode-level intervals and Holm;
+the report's sensor lines come from the paired rows alone."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from cadsim.cli import main
+from cadsim.dataset import Dataset
+from cadsim.sensing.box_features import BOX_CUES
+from eval.core.tasks import MatcherSpec, RunSpec
+from eval.studies.v2x_sensors import (
+    CAMERA_FAVOURS,
+    INCLUDES_ZERO,
+    LIDAR_FAVOURS,
+    NAME,
+    mean_validation,
+    sensor_differences,
+    sensor_lines,
+)
+
+SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
+BOTH = SCENARIOS / "cad-v2x-both.toml"
+
+
+@pytest.fixture(scope="module")
+def both_dataset(tmp_path_factory) -> Path:
+    work = tmp_path_factory.mktemp("both")
+    shutil.copy(SCENARIOS / "cad-vtypes.add.xml", work / "cad-vtypes.add.xml")
+    scenario = work / "both.toml"
+    scenario.write_text(BOTH.read_text())
+    out = work / "ds"
+    args = ["generate", str(scenario), "--out", str(out), "--pairs", "2", "--workers", "1"]
+    assert main([*args, "--no-progress"]) == 0
+    return out
+
+
+@pytest.mark.render
+def test_both_split_read_as_camera_and_as_lidar_gives_the_same_frames(both_dataset):
+    camera, lidar = Dataset(both_dataset, verify=True), Dataset(both_dataset, sensor="lidar")
+    assert Dataset(both_dataset, sensor="camera").sensor is None  # the stored detections
+    assert len(camera) == len(lidar) == 2
+    for c, li in zip(camera, lidar, strict=True):
+        # the same record: frame, observers, time, world objects
+        assert (c.path, c.name, c.episode, c.sim_seed) == (li.path, li.name, li.episode, li.sim_seed)  # fmt: skip
+        assert c.time == li.time and c.observer_ids == li.observer_ids
+        assert c.record["objects"] == li.record["objects"]
+        # each sensor's own detections, truth from the same object ids
+        assert c.cues != BOX_CUES and li.cues == BOX_CUES and li.problem().pixels1 is None
+        objects = {o["id"] for o in c.record["objects"]}
+        for view in (li.view1, li.view2):
+            assert all(i in objects or i.startswith("clutter:lidar:") for i in view.object_ids)
+        for pair in (c, li):
+            i, j = pair.gt_pairs.T
+            ids1 = [pair.view1.object_ids[k] for k in i]
+            assert ids1 == [pair.view2.object_ids[k] for k in j] and set(ids1) <= objects
+        # the LiDAR reading is the LiDAR's: its pose is the sensor's, the boxes its detector's
+        sweep = c.lidar[0]
+        assert np.allclose(li.cameras[0].position, sweep.pose[:3, 3])
+        assert li.view1.object_ids == [str(v) for v in sweep.boxes["ids"]]
+        assert li.true_relative_pose() is not None and li.prior() is not None
+
+
+@pytest.mark.render
+def test_the_runner_keeps_the_two_readings_apart(both_dataset, tmp_path):
+    from cadsim.generation.executors import make_executor
+    from eval.core.cache import ResultCache
+    from eval.core.runner import Runner, requests_for
+
+    ds = Dataset(both_dataset)
+    spec = MatcherSpec("appearance")
+    with make_executor(1, None) as executor:
+        runner = Runner(ResultCache(tmp_path / "cache"), executor, progress=False)
+        runs = {
+            sensor: runner.run(
+                requests_for([(str(both_dataset), ds.checksum)], [spec], [0], sensor=sensor)
+            )[0]
+            for sensor in ("camera", "lidar")
+        }
+    camera, lidar = runs["camera"], runs["lidar"]
+    assert camera.spec.key() != lidar.spec.key()
+    assert [o.name for o in camera.outcomes] == [o.name for o in lidar.outcomes]
+    boxes = Dataset(both_dataset, sensor="lidar")
+    assert [o.n1 for o in lidar.outcomes] == [len(p.view1) for p in boxes]
+    assert [o.n1 for o in camera.outcomes] == [len(p.view1) for p in ds]
+
+
+def test_a_sensor_the_records_lack_is_a_one_line_error(tmp_path):
+    from cadsim.dataset.sensor_view import check_sensor
+
+    with pytest.raises(ValueError, match=r"m.json: sensor 'lidar'.*camera detections only"):
+        check_sensor("lidar", "camera", "m.json")
+    with pytest.raises(ValueError, match=r"sensor: expected one of camera, lidar"):
+        check_sensor("radar", "both", "m.json")
+    assert check_sensor("lidar", "both", "m.json") == "lidar"
+    assert check_sensor("lidar", "lidar", "m.json") is None
+
+
+def test_run_keys_of_other_runs_do_not_depend_on_the_sensor_field():
+    plain = RunSpec("c", MatcherSpec("sm"), 0, None, "v")
+    assert plain.key() == RunSpec("c", MatcherSpec("sm"), 0, None, "v", sensor=None).key()
+    assert plain.key() != RunSpec("c", MatcherSpec("sm"), 0, None, "v", sensor="lidar").key()
+
+
+def _per_pair(effects: dict[str, float], episodes: int = 12, per_episode: int = 2, seed: int = 0):
+    """Per-pair F1 rows of the same frames on two sensors: LiDAR = camera + effect + episode
+    effect + noise, 2 runs, preset gnss-urban."""
+    rng = np.random.default_rng(seed)
+    rows = {"lidar": [], "camera": []}
+    for matcher, effect in effects.items():
+        for e in range(episodes):
+            shift = rng.normal(scale=0.03)
+            for k in range(per_episode):
+                pair, base = e * per_episode + k, rng.uniform(0.3, 0.7)
+                for run in (0, 1):
+                    common = {"preset": "gnss-urban", "matcher": matcher, "seed": run}
+                    common |= {"pair": pair, "episode": e, "sim_seed": 100 + e}
+                    noise = rng.normal(scale=0.01)
+                    rows["camera"].append(common | {"f1": base})
+                    rows["lidar"].append(common | {"f1": base + effect + shift + noise})
+    return pd.DataFrame(rows["lidar"]), pd.DataFrame(rows["camera"])
+
+
+def test_paired_differences_find_a_planted_effect_with_episode_intervals_and_holm():
+    lidar, camera = _per_pair({"consistency": 0.2, "sm": -0.2, "freealign": 0.0})
+    validation = mean_validation(
+        {"gnss-urban": {"consistency": 0.6, "sm": 0.4, "freealign": 0.5}},
+        {"gnss-urban": {"consistency": 0.2, "sm": 0.5, "freealign": 0.5}},
+    )
+    assert validation["gnss-urban"]["consistency"] == pytest.approx(0.4)
+    table = sensor_differences(lidar, camera, validation).set_index("matcher")
+    assert (table["clusters"] == 12).all() and (table["pairs"] == 24).all()
+    up, down, flat = table.loc["consistency"], table.loc["sm"], table.loc["freealign"]
+    assert up["diff"] == pytest.approx(0.2, abs=0.03) and up.ci_low > 0
+    assert down["diff"] == pytest.approx(-0.2, abs=0.03) and down.ci_high < 0
+    assert (up.verdict, down.verdict) == (LIDAR_FAVOURS, CAMERA_FAVOURS)
+    assert flat.ci_low < 0 < flat.ci_high and flat.verdict == INCLUDES_ZERO
+    assert (table["p_holm"] >= table["p_value"]).all()
+    # lidar_f1 - camera_f1 is the mean difference: the same frames on both sides
+    assert (table["lidar_f1"] - table["camera_f1"]).to_numpy() == pytest.approx(table["diff"])
+    # one chosen row per family: the highest mean validation F1 (freealign, 0.5 > 0.45 > 0.4)
+    assert table.index[table["chosen"]].tolist() == ["freealign"]
+
+
+def _planted(diffs: dict[str, list[float]]) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """One frame pair per episode; LiDAR F1 = camera F1 (0.5) + the given difference."""
+    lidar, camera = [], []
+    for matcher, values in diffs.items():
+        for e, d in enumerate(values):
+            common = {"preset": "gnss-urban", "matcher": matcher, "seed": 0, "pair": e}
+            common |= {"episode": e, "sim_seed": e}
+            camera.append(common | {"f1": 0.5})
+            lidar.append(common | {"f1": 0.5 + d})
+    return pd.DataFrame(lidar), pd.DataFrame(camera)
+
+
+def test_holm_withholds_a_verdict_the_single_interval_would_give():
+    from eval.studies.v2x_sensors import NOT_AFTER_HOLM
+
+    effect = {"consistency": [0.1, 0.2, 0.05, 0.15]}  # t = 3.9 on 3 df: p = 0.03
+    single = sensor_differences(*_planted(effect)).iloc[0]
+    assert single.ci_low > 0 and single.p_holm == pytest.approx(single.p_value)
+    assert single.verdict == LIDAR_FAVOURS
+    nulls = {f"m{k}": [0.1, -0.1, 0.05 * (k % 3), -0.05] for k in range(20)}
+    many = sensor_differences(*_planted(effect | nulls)).set_index("matcher")
+    row = many.loc["consistency"]
+    assert row.ci_low > 0 and row.p_holm > 0.05 and row.verdict == NOT_AFTER_HOLM
+
+
+def test_frames_that_differ_between_the_sensors_are_refused():
+    lidar, camera = _per_pair({"sm": 0.1})
+    camera.loc[camera["pair"] == 3, "sim_seed"] = 999
+    with pytest.raises(ValueError, match="not the same frames"):
+        sensor_differences(lidar, camera)
+
+
+def test_a_prior_matcher_is_not_compared_where_it_has_no_input():
+    lidar, camera = _per_pair({"pose_refine": 0.1, "sm": 0.1})
+    for frame in (lidar, camera):
+        frame["preset"] = "denied"
+    table = sensor_differences(lidar, camera)
+    assert table["matcher"].tolist() == ["sm"]
+
+
+def _sensor_rows(rows) -> pd.DataFrame:
+    columns = ["preset", "matcher", "family", "chosen", "lidar_f1", "camera_f1", "diff"]
+    columns += ["ci_low", "ci_high", "clusters", "pairs", "p_value", "p_holm", "verdict"]
+    return pd.DataFrame(rows, columns=columns)
+
+
+def test_the_report_lines_come_from_the_paired_rows_only(tmp_path):
+    from eval.studies.v2x_lidar import NAME as LIDAR
+
+    # marginal tables that would tell another story (disjoint intervals the other way)
+    marginal = ["preset", "matcher", "f1_mean", "f1_low", "f1_high"]
+    pd.DataFrame([("gnss-urban", "pose_refine", 0.9, 0.85, 0.95)], columns=marginal).to_csv(
+        tmp_path / f"table_{LIDAR}.csv", index=False
+    )
+    pd.DataFrame([("gnss-urban", "pose_refine", 0.5, 0.45, 0.55)], columns=marginal).to_csv(
+        tmp_path / "table_v2x.csv", index=False
+    )
+    assert sensor_lines(tmp_path) == []  # no paired rows: no sensor line at all
+    _sensor_rows([
+        ("gnss-urban", "pose_refine", "with the prior", True, 0.7, 0.8, -0.1, -0.2, -0.01, 13, 25, 0.01, 0.02, CAMERA_FAVOURS),
+        ("gnss-urban", "sm", "without a prior", False, 0.5, 0.3, 0.2, 0.1, 0.3, 13, 25, 0.001, 0.001, LIDAR_FAVOURS),
+        ("gnss-urban", "freealign", "without a prior", True, 0.5, 0.45, 0.05, -0.05, 0.15, 13, 25, 0.3, 0.6, INCLUDES_ZERO),
+    ]).to_csv(tmp_path / f"table_{NAME}.csv", index=False)  # fmt: skip
+    lines = sensor_lines(tmp_path)
+    assert len(lines) == 2  # the chosen rows only
+    prior, free = lines
+    assert "`pose_refine`" in prior and prior.endswith(CAMERA_FAVOURS)
+    assert "-10.0 [-20.0, -1.0]" in prior and "13 episodes" in prior
+    assert "`freealign`" in free and free.endswith(INCLUDES_ZERO)
