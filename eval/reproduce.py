@@ -602,9 +602,10 @@ def main(argv: list[str] | None = None) -> int:
                     ROOT, data, lidar_pairs, VAL_SEED_OFFSET,
                     lambda path, folder, n, seed: _generate(path, folder, n, seed, args),
                 )  # fmt: skip
+                camera_table = None if v2x_entry is None else (v2x_entry.test_dir, v2x_entry.val_dir)  # fmt: skip
                 _, used = evaluate_lidar(
                     test, val, external_matchers(args.matchers), v2x_seeds, runner, out,
-                    tune=args.tune,
+                    tune=args.tune, camera_table=camera_table,
                 )  # fmt: skip
                 v2x_record["lidar"] |= used
         count("v2x_lidar", before)

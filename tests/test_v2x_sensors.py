@@ -218,3 +218,23 @@ def test_the_report_lines_come_from_the_paired_rows_only(tmp_path):
     assert "`pose_refine`" in prior and prior.endswith(CAMERA_FAVOURS)
     assert "-10.0 [-20.0, -1.0]" in prior and "13 episodes" in prior
     assert "`freealign`" in free and free.endswith(INCLUDES_ZERO)
+
+
+@pytest.mark.render
+def test_the_two_sensor_scenario_has_the_camera_scenarios_frames(both_dataset, tmp_path):
+    from eval.studies.v2x_sensors import same_camera_frames
+
+    shutil.copy(SCENARIOS / "cad-vtypes.add.xml", tmp_path / "cad-vtypes.add.xml")
+    scenario = tmp_path / "camera.toml"
+    scenario.write_text((SCENARIOS / "cad-v2x.toml").read_text())
+    camera = tmp_path / "camera"
+    args = ["generate", str(scenario), "--out", str(camera), "--pairs", "2", "--workers", "1"]
+    assert main([*args, "--no-progress"]) == 0
+    # cad-v2x and cad-v2x-both: the same records' camera detections, byte for byte
+    assert same_camera_frames(camera, both_dataset)
+    # a record whose detections differ is not the same frame
+    copy = tmp_path / "copy"
+    shutil.copytree(both_dataset, copy)
+    record = sorted((copy / "pairs").iterdir())[1] / "detections.npz"
+    record.write_bytes(record.read_bytes() + b"\0")
+    assert not same_camera_frames(camera, copy)

@@ -37,12 +37,16 @@ def npz_bytes(arrays: Mapping[str, np.ndarray]) -> bytes:
     return buf.getvalue()
 
 
-def load_npz(data: bytes | str, what: str) -> dict[str, np.ndarray]:
-    """All members of an ``.npz`` (bytes or path) as arrays; ``what`` names it in errors."""
+def load_npz(data: bytes | str, what: str, keys=None) -> dict[str, np.ndarray]:
+    """All members of an ``.npz`` (bytes or path) as arrays, or only those named in ``keys``
+    (the others are not decompressed); ``what`` names it in errors."""
     try:
         src = io.BytesIO(data) if isinstance(data, bytes) else data
         with np.load(src, allow_pickle=False) as z:
-            return {k: z[k] for k in z.files}
+            missing = [] if keys is None else [k for k in keys if k not in z.files]
+            if missing:
+                raise ValueError(f"missing arrays {missing}")
+            return {k: z[k] for k in (z.files if keys is None else keys)}
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
         raise ValueError(f"{what}: not a readable .npz file ({exc})") from exc
 

@@ -21,6 +21,7 @@ import numpy as np
 
 from cadsim.dataset import layout
 from cadsim.dataset.detections import ViewDetections
+from cadsim.dataset.encoding import load_npz
 from cadsim.dataset.manifest import DatasetError
 from cadsim.sensing.box_features import (
     BOX_CUES,
@@ -84,22 +85,54 @@ def lidar_pair(pair):
     (module docstring). ``DatasetError`` for a record without LiDAR boxes."""
     from cadsim.dataset.record_format import lidar_camera
 
-    sweeps = pair.lidar
-    if sweeps is None or any(s.boxes is None for s in sweeps):
-        raise DatasetError(f"{pair.path / layout.LIDAR_NPZ}: no LiDAR boxes to read the pair with")
+    poses, boxes = _lidar_boxes(pair)
     record = dict(pair.record)
     observers = [dict(o) for o in record["observers"]]
-    for v, sweep in zip(pair.view_numbers, sweeps, strict=True):
-        observers[v - 1]["camera"] = lidar_camera(sweep.pose).as_dict()
+    for v, pose in zip(pair.view_numbers, poses, strict=True):
+        observers[v - 1]["camera"] = lidar_camera(pose).as_dict()
         observers[v - 1]["sensor"] = "lidar"
     record |= {"observers": observers, "cues": list(BOX_CUES)}
-    views = tuple(lidar_detections(s.boxes, record["objects"]) for s in sweeps)
+    views = tuple(lidar_detections(b, record["objects"]) for b in boxes)
     out = type(pair)(
         pair.path, pair.index, pair._entry, pair._noise, pair._detection, views,
         record_files=layout.record_files(2, "lidar"), view_numbers=pair.view_numbers,
     )  # fmt: skip
     out.__dict__["record"] = record
     return out
+
+
+_BOX_ARRAYS = ("centres", "sizes", "yaws", "classes", "ids")
+
+
+def _lidar_boxes(pair) -> tuple[list[np.ndarray], list[dict]]:
+    """Per view of ``pair``: its LiDAR's pose (4 × 4, LiDAR → world) and its boxes, read from
+    ``lidar.npz`` without decoding the points (the pose and ``box_*`` arrays only); a one-line
+    ``DatasetError`` naming the file when they are missing or malformed."""
+    path = pair.path / layout.LIDAR_NPZ
+    names = [f"view{v}_{n}" for v in pair.view_numbers for n in ("pose", *(f"box_{b}" for b in _BOX_ARRAYS))]  # fmt: skip
+    try:
+        if layout.LIDAR_NPZ not in pair._record_files or not path.is_file():
+            raise ValueError('no LiDAR boxes to read the pair with (not a sensor = "both" record)')
+        arrays = load_npz(str(path), str(path), keys=names)
+        poses, boxes = [], []
+        for v in pair.view_numbers:
+            pose = np.asarray(arrays[f"view{v}_pose"], dtype=np.float64)
+            if pose.shape != (4, 4) or not np.isfinite(pose).all():
+                raise ValueError(f"view{v}_pose: expected a finite (4, 4) transform")
+            found = {b: arrays[f"view{v}_box_{b}"] for b in _BOX_ARRAYS}
+            k = len(found["ids"])
+            shapes = {"centres": (k, 3), "sizes": (k, 3), "yaws": (k,), "classes": (k,)}
+            for b, shape in shapes.items():
+                if np.shape(found[b]) != shape:
+                    raise ValueError(f"view{v}_box_{b}: expected shape {shape}")
+            poses.append(pose)
+            boxes.append(found)
+    except ValueError as exc:
+        message = str(exc).splitlines()[0]
+        raise DatasetError(
+            message if message.startswith(str(path)) else f"{path}: {message}"
+        ) from None
+    return poses, boxes
 
 
 __all__ = ["SENSORS", "check_sensor", "dataset_sensor", "lidar_detections", "lidar_pair"]

@@ -14,12 +14,14 @@ detections.
 
 Protocol. The camera table's (:func:`eval.studies.v2x_table.evaluate_v2x`): every matcher that
 runs without pixels (:func:`eval.studies.v2x_boxes.box_matchers`), every preset, the same tuning
-budget, τ and parameters on the validation split, oracle and prior rows — once on the LiDAR
-boxes (the LiDAR table) and once on the camera detections of the same records, whose per-pair
-F1 the paired sensor comparison (:mod:`eval.studies.v2x_sensors`) takes. Files:
-``table_v2x_lidar.{md,csv}``, ``table_v2x_lidar_intervals.csv``, ``v2x_lidar/<preset>/``; the
-camera side under ``v2x_lidar/`` (``table_camera.{md,csv}``, ``table_camera_intervals.csv``,
-``camera/<preset>/``); ``table_v2x_sensors.csv``.
+budget, τ and parameters on the validation split, oracle and prior rows — on the LiDAR boxes
+(the LiDAR table) and on the camera detections of the same records, whose per-pair F1 the
+paired sensor comparison (:mod:`eval.studies.v2x_sensors`) takes: the camera V2X table's runs
+where its splits hold these very camera records (checked record by record), else an evaluation
+of the two-sensor split as camera. Files: ``table_v2x_lidar.{md,csv}``,
+``table_v2x_lidar_intervals.csv``, ``v2x_lidar/<preset>/``; ``table_v2x_sensors.csv``; only
+when the camera side is evaluated here, under ``v2x_lidar/``: ``table_camera.{md,csv}``,
+``table_camera_intervals.csv``, ``camera/<preset>/``.
 """
 
 from __future__ import annotations
@@ -68,12 +70,17 @@ def evaluate_lidar(
     runner,
     out_dir: str | Path,
     tune: bool = True,
+    camera_table: tuple[str | Path, str | Path] | None = None,
 ) -> tuple[pd.DataFrame, dict]:
     """The full table's protocol on the two-sensor splits read as LiDAR, then as camera, and
-    the paired sensor comparison (module docstring); (LiDAR table, record)."""
+    the paired sensor comparison (module docstring); (LiDAR table, record). ``camera_table``:
+    the (test, validation) folders the camera V2X table was evaluated on in ``out_dir`` (same
+    seeds and tuning); where they hold the very camera records of the two-sensor splits
+    (:func:`eval.studies.v2x_sensors.same_camera_frames`), that table's runs are the camera
+    side and nothing is evaluated twice."""
     from eval.studies.v2x_boxes import box_matchers
-    from eval.studies.v2x_sensors import write_sensor_table
-    from eval.studies.v2x_table import evaluate_v2x
+    from eval.studies.v2x_sensors import same_camera_frames, write_sensor_table
+    from eval.studies.v2x_table import SUBDIR, evaluate_v2x
 
     out_dir = Path(out_dir)
     chosen = box_matchers(matchers)
@@ -82,13 +89,39 @@ def evaluate_lidar(
         test_dir, val_dir, LABEL, chosen, seeds, runner, out_dir, tune=tune, name=NAME,
         sensor="lidar",
     )  # fmt: skip
-    log.info("[v2x lidar] %s: the same records' camera detections", CAMERA_LABEL)
-    evaluate_v2x(
-        test_dir, val_dir, CAMERA_LABEL, chosen, seeds, runner, out_dir / NAME, tune=tune,
-        name=CAMERA_NAME, sensor="camera",
-    )  # fmt: skip
-    write_sensor_table(out_dir / NAME, out_dir / NAME / CAMERA_NAME, out_dir)
-    return table, {"matchers": [m.name for m in chosen]}
+    camera_dir = out_dir / SUBDIR
+    if not _camera_runs_cover(camera_dir, chosen, seeds) or not (
+        camera_table is not None
+        and same_camera_frames(camera_table[0], test_dir)
+        and same_camera_frames(camera_table[1], val_dir)
+    ):
+        log.info("[v2x lidar] %s: the same records' camera detections", CAMERA_LABEL)
+        camera_dir = out_dir / NAME / CAMERA_NAME
+        evaluate_v2x(
+            test_dir, val_dir, CAMERA_LABEL, chosen, seeds, runner, out_dir / NAME, tune=tune,
+            name=CAMERA_NAME, sensor="camera",
+        )  # fmt: skip
+    else:
+        log.info("[v2x lidar] camera side: the camera table's runs (the same camera records)")
+    write_sensor_table(out_dir / NAME, camera_dir, out_dir)
+    camera_side = str(camera_dir.relative_to(out_dir))
+    return table, {"matchers": [m.name for m in chosen], "camera_side": camera_side}
+
+
+def _camera_runs_cover(folder: Path, matchers: Sequence[MatcherSpec], seeds: Sequence[int]) -> bool:
+    """Whether ``folder/metrics_per_pair.csv`` (a V2X-protocol evaluation) has test runs of
+    every one of ``matchers`` under every preset for exactly ``seeds``."""
+    from eval.studies.v2x_table import PRESETS
+
+    path = folder / "metrics_per_pair.csv"
+    if not path.is_file():
+        return False
+    runs = pd.read_csv(path, usecols=["matcher", "seed", "preset"])
+    names = {m.label for m in matchers}
+    have = runs[runs["matcher"].isin(names)]
+    return set(have["seed"]) == set(seeds) and all(
+        names <= set(have.loc[have["preset"] == p, "matcher"]) for p in PRESETS
+    )
 
 
 def goal_line(results: Path) -> list[str]:

@@ -143,6 +143,32 @@ def mean_validation(*tables: Mapping[str, Mapping[str, float]]) -> dict[str, dic
     return out
 
 
+_SAME_OBSERVER_KEYS = ("id", "camera", "pose", "noise_seed", "attribute_seed", "localisation_seed")
+
+
+def same_camera_frames(camera_dir: str | Path, both_dir: str | Path) -> bool:
+    """Whether camera dataset ``camera_dir`` holds, record by record, what two-sensor dataset
+    ``both_dir`` gives when read as camera: the same record names, ``detections.npz`` bytes,
+    time, objects, observers (cameras, poses, seeds) and prior — so every run on one is the
+    same run on the other (its runs can stand for the other's)."""
+    from cadsim.dataset import Dataset, layout
+
+    a, b = Dataset(camera_dir), Dataset(both_dir)
+    if len(a) != len(b) or b.sensor is not None:
+        return False
+
+    def frame(pair) -> tuple:
+        r = pair.record
+        observers = [{k: o.get(k) for k in _SAME_OBSERVER_KEYS} for o in r["observers"]]
+        return pair.name, r["time"], r["objects"], observers, r.get("prior")
+
+    for pa, pb in zip(a, b, strict=True):
+        files = [p.path / layout.DETECTIONS_NPZ for p in (pa, pb)]
+        if frame(pa) != frame(pb) or files[0].read_bytes() != files[1].read_bytes():
+            return False
+    return True
+
+
 def write_sensor_table(
     lidar_dir: str | Path, camera_dir: str | Path, out_dir: str | Path
 ) -> pd.DataFrame:
