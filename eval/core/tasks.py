@@ -298,7 +298,11 @@ def execute(task: RunTask) -> list[RunResult]:
     ``("runs", task.token, runs)`` (``report_progress``): the share of its runs now done."""
     from cadsim.generation.executor import report_progress
 
-    dataset = open_dataset(task.dataset_dir, task.sensor)
+    dataset = (
+        open_dataset(task.dataset_dir)
+        if task.sensor is None
+        else open_dataset(task.dataset_dir, task.sensor)
+    )
     if dataset.checksum != task.dataset_checksum:
         raise ValueError(
             f"{task.dataset_dir}: dataset checksum {dataset.checksum[:12]} differs from the task's "

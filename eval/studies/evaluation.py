@@ -95,8 +95,9 @@ def open_entry(
     "camera" or "lidar"; None: as stored). Each is verified against its
     manifest's checksums (once per process for unchanged files): the result cache is keyed by
     the manifest's checksum, so a record modified after generation would otherwise go unseen."""
-    test = tasks.open_dataset(str(test_dir), sensor)
-    val = tasks.open_dataset(str(val_dir), sensor) if val_dir is not None else None
+    read = (lambda d: tasks.open_dataset(d)) if sensor is None else (lambda d: tasks.open_dataset(d, sensor))  # fmt: skip
+    test = read(str(test_dir))
+    val = read(str(val_dir)) if val_dir is not None else None
     for dataset in (test, val):
         if dataset is not None:
             dataset.verify_once()
@@ -128,7 +129,7 @@ def open_entry(
         val_checksum=None if val is None else val.checksum,
         val_pairs=0 if val is None else len(val),
         localisation=localisation,
-        sensor=test.sensor,
+        sensor=getattr(test, "sensor", None),
     )
 
 
