@@ -189,9 +189,7 @@ def _view(
     if prior:  # the reported pose moved with the agent: about its body origin when it sent
         reported = pm.matmul(agent.predicted, rigid_inverse(agent.body))
         stored = apply(reported, sent - offset) + offset
-    pose = ObserverPose(
-        tuple(float(v) for v in agent.body[:3, 3]), float(pm.arctan2(forward[1], forward[0]))
-    )
+    pose = ObserverPose(tuple(float(v) for v in agent.body[:3, 3]), heading)
     kind = "roadside" if agent.agent < 0 else "vehicle"
     det = box_detections(positions, sizes, headings, ids, classes, world=stored)
     view = BoxView(me, kind, camera, pose, det, sizes)
@@ -422,10 +420,10 @@ def import_opv2v(
         if use_prior:
             sigma = protocol.get("prior_sigma_m", DEFAULT_PRIOR_SIGMA_M)
             sigma = sigma if prior_sigma_m is None else prior_sigma_m
+        ids = protocol.get("ids", {})
         for k, (name, scenario_name, read) in enumerate(run):
             views, objects = [], {}
             for v, agent in enumerate(read):
-                ids = protocol.get("ids", {})
                 view, found = _view(agent, use_prior, ids, latency if v else 0.0)
                 views.append(view)
                 for obj in found:
