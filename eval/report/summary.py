@@ -57,12 +57,14 @@ def _row(cells: list[str]) -> str:
 def table1(results: Path) -> list[str]:
     """Per dataset: maximin's F1 and rank among the paper's methods (the paper's own rank of it
     by accuracy beside), the strongest other paper method and maximin − it with its interval, and
-    the strongest matcher of all."""
+    the strongest matcher of all — under the equal-cue protocol (``table1_equal_cues.csv``) when
+    the folder has it, else as published (``table1.csv``)."""
     results = Path(results)
-    table = read_csv(results / "table1.csv")
+    suffix = "_equal_cues" if (results / "table1_equal_cues.csv").is_file() else ""
+    table = read_csv(results / f"table1{suffix}.csv")
     if not _has(table, "dataset", "matcher", "f1_mean"):
         return []
-    paired = read_csv(results / "paired_differences.csv")
+    paired = read_csv(results / f"paired_differences{suffix}.csv")
     lines = [
         "| Dataset | Maximin F1 | its rank of the paper's 8 (paper's) | best other paper method "
         "| Maximin − it, F1 [95 % CI] | best of all matchers |",
