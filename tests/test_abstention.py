@@ -136,3 +136,29 @@ def test_the_readme_parts_say_n_a_for_a_prior_reader_under_denied(tmp_path):
     part = "\n".join(readme_part(tmp_path, "results"))
     assert "`denied`: chosen on validation `freealign`" in part
     assert "`gnss-urban`: chosen on validation `pose_refine`" in part
+
+
+def test_a_prior_reader_under_denied_gets_no_number_in_the_multiagent_table():
+    from test_multiagent_study import snapshot_row
+
+    from eval.studies import multiagent as ma
+
+    rows = []
+    for matcher in ("maximin", "pose_refine"):
+        for snapshot in range(4):
+            where = {"matcher": matcher, "preset": "denied"}
+            declared = 0 if matcher == "pose_refine" else 10  # it declares nothing
+            for fusion, tp in (("independent", 5), ("clear", 7)):
+                tp = tp if declared else 0
+                rows.append(
+                    snapshot_row(fusion, snapshot, snapshot // 2, tp, declared, 10, **where)
+                )
+    table = ma.multiagent_table(pd.DataFrame(rows), resamples=200)
+    assert list(table["matcher"]) == ["maximin", "maximin", "pose_refine", "pose_refine"]
+    mine = table[table["matcher"] == "pose_refine"]
+    figures = [c for c in ma.COLUMNS if c not in ma.BY]
+    assert mine[figures].isna().all().all()
+    fused = table[(table["matcher"] == "maximin") & (table["fusion"] == "clear")]
+    assert (fused["gain_family"] == 1).all()  # the reader's gain is in no Holm family
+    md = ma.to_markdown(table)
+    assert f"| denied | 4 | pose_refine | clear | {NO_NUMBER} |" in md

@@ -62,7 +62,8 @@ def cannot_run(name: str, localisation: str | tuple | None, temporal: bool = Fal
     >>> cannot_run("maximin", "denied"), cannot_run("temporal_pose", "denied", temporal=True)
     (False, True)
     """
-    return bool(absent_inputs(requirement(name, temporal), given_fields(localisation)))
+    needs = requirement(name, temporal)
+    return bool(needs) and bool(absent_inputs(needs, given_fields(localisation)))
 
 
 def problem_lacks(requires: Iterable[str], problem: object) -> bool:
