@@ -39,8 +39,10 @@ def given_fields(localisation: str | tuple | None) -> frozenset[str]:
 
 
 def requirement(name: str, temporal: bool = False) -> frozenset[str]:
-    """The ``requires`` attribute of matcher ``name`` (``temporal``: of the temporal matcher
-    ``name``, e.g. ``temporal_pose`` or ``windowed:pose_refine``); empty for an unknown name."""
+    """The ``requires`` attribute of matcher ``name`` — a registered name or a table's row label
+    with its options, ``pose_refine[gate=4.0]`` (``temporal``: of the temporal matcher ``name``,
+    e.g. ``temporal_pose`` or ``windowed:pose_refine``); empty for an unknown name."""
+    name = name.partition("[")[0]
     try:
         if temporal:
             from matchers.core.temporal_registry import get_temporal
@@ -61,6 +63,8 @@ def cannot_run(name: str, localisation: str | tuple | None, temporal: bool = Fal
     (True, False)
     >>> cannot_run("maximin", "denied"), cannot_run("temporal_pose", "denied", temporal=True)
     (False, True)
+    >>> cannot_run("pose[gate=4.0]", "denied")
+    True
     """
     needs = requirement(name, temporal)
     return bool(needs) and bool(absent_inputs(needs, given_fields(localisation)))
