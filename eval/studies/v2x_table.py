@@ -418,7 +418,7 @@ def _validation(results: Path, name: str = SUBDIR) -> dict[str, dict[str, float]
         return {}
     table = pd.read_csv(path)
     return {
-        p: {m: f for m, f in zip(g["matcher"], g["val_f1"], strict=True) if m in runnable([m], p)}
+        p: {m: f for m, f in zip(g["matcher"], g["val_f1"], strict=True) if not cannot_run(m, p)}
         for p, g in table.groupby("preset", sort=False)
     }
 
