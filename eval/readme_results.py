@@ -32,6 +32,7 @@ import numpy as np
 import pandas as pd
 
 from eval.core.result_files import write_text
+from eval.protocol.abstention import NO_NUMBER
 from eval.report import summary
 from eval.report.run_record import cold_record
 from eval.report.site import headings, write_site
@@ -866,7 +867,8 @@ SUMMARIES = (
         "The V2X task",
         "F1 in percent of the paper's method, two matchers without and two with the "
         "localisation prior (last column: the same data as 3-D boxes only, its matcher chosen on "
-        "validation); every matcher, the pose metrics and the verdicts in the report.",
+        f"validation; {NO_NUMBER}: no prior under `denied`, so no number); every matcher, the "
+        "pose metrics and the verdicts in the report.",
     ),
     (
         "Multi-agent — fusing the pairwise matchings of N views",
@@ -885,8 +887,11 @@ SUMMARIES = (
         "Temporal — association over sequences of 10 frames",
         summary.temporal,
         "The temporal table",
-        "Mean per-frame F1 in percent on CAD-V2X sequences, one frame (W = 1) against a 10-frame "
-        "window along each agent's own tracks; the goals and their verdicts in the report.",
+        "Pooled F1 in percent on CAD-V2X sequences (most frames of a sequence have no true pair, "
+        "so the per-frame mean is secondary, in the report), one frame (W = 1) against a "
+        f"10-frame window along each agent's own tracks; {NO_NUMBER}: the method reads the "
+        "localisation prior, which `denied` does not give; the goals and their verdicts in the "
+        "report.",
     ),
 )
 

@@ -72,10 +72,12 @@ def evaluate_lidar(
 
 def _best_of_family(table: pd.DataFrame, preset: str, validation, prior: bool):
     """(name, row) of the matcher with the highest validation F1 (test F1 without it) that does
-    (``prior``) or does not read the localisation prior, at ``preset``; None if there is none."""
-    from eval.studies.v2x_table import REFERENCE_ROWS, reads_prior
+    (``prior``) or does not read the localisation prior, at ``preset``; None if there is none
+    that can run there (a prior reader under ``denied`` is in no comparison)."""
+    from eval.studies.v2x_table import REFERENCE_ROWS, reads_prior, runnable
 
     rows = table[(table["preset"] == preset) & ~table["matcher"].isin(REFERENCE_ROWS)]
+    rows = rows[rows["matcher"].isin(runnable(list(rows["matcher"]), preset))]
     rows = rows[[reads_prior(m) == prior for m in rows["matcher"]]]
     if rows.empty:
         return None
