@@ -55,6 +55,7 @@ from eval.core.cache import ResultCache, code_version
 from eval.core.executor import add_scheduler_argument, make_executor
 from eval.core.result_files import write_csv
 from eval.core.runner import Runner
+from eval.protocol.cues import EQUAL_CUE_OPTIONS
 from eval.protocol.variants import PAPER_OPTIONS
 from eval.readme_results import update_readme, write_report
 from eval.report.figures import render_all
@@ -450,6 +451,11 @@ def main(argv: list[str] | None = None) -> int:
             )
             taus = evaluate(entries, matchers, seeds, runner, out, tune=args.tune)
         count("evaluate", {})
+        with timer.stage("equal_cues"):
+            before = asdict(runner.totals)
+            log.info("[equal cues] every paper matcher handed metric geometry and appearance")
+            evaluate(entries, matchers, seeds, runner, out, tune=args.tune, protocol="equal_cues")
+        count("equal_cues", before)
         with timer.stage("paper_protocol"):
             before = asdict(runner.totals)
             log.info("[paper protocol] image-space pairwise terms, full assignment, no τ")
@@ -726,6 +732,10 @@ def main(argv: list[str] | None = None) -> int:
         seeds=seeds,
         tuning=_tuning_record(out) if args.tune else {},
         paper_protocol={"options": PAPER_OPTIONS, "threshold": None, "tuned": False},
+        equal_cues={
+            "options": {k: dict(v) for k, v in EQUAL_CUE_OPTIONS.items()},
+            "tuned": bool(args.tune),
+        },
         noise_sweep={"datasets": [e.label for e in sweep_entries], "rates": rates}
         | {"seeds": sweep_seeds, "pairs": sweep_pairs},
         regime_sweep={"datasets": [e.label for e in entries] if keeps else [], "keep": keeps}

@@ -6,6 +6,7 @@ import time
 
 import numpy as np
 
+from matchers.blocks.cue_terms import weighted_tensor
 from matchers.blocks.memory_models import tensor_matcher
 from matchers.core.discretise import hungarian
 from matchers.core.matching import Matching
@@ -124,6 +125,8 @@ def bcagm(
     neighbours: int | None = None,
     sigma: float | None = None,
     max_tensor_entries: int | None = MAX_ENTRIES,
+    distance_scale: float | None = None,
+    appearance: bool = False,
     max_iter: int = 50,
 ) -> Matching:
     """BCAGM (:func:`bcagm_solve`; the plain 4-block variant, no MP/IPFP sub-solver), then the
@@ -134,13 +137,23 @@ def bcagm(
     pair's; every other candidate scores 0. Hungarian on these scores returns BCAGM's own
     assignment, and a threshold drops its least supported pairs. Tensor options as for every
     hypergraph matcher (see :func:`matchers.rrwhm.rrwhm`); ``max_iter`` 50 sweeps.
+    ``distance_scale`` (None, as published): multiply every tensor entry by the metric
+    affinity of its three edges, width ``distance_scale`` x the median within-view
+    distance (the equal-cue protocol; :mod:`matchers.blocks.cue_terms`).
+    ``appearance`` (False, as published): multiply every entry by the appearance
+    similarity of its three candidate matches.
     """
     started = time.perf_counter()
     check_problem(problem)
     rng = rng_from_seed(seed)
     check_count("max_iter", max_iter)
     n, m = problem.n1, problem.n2
-    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_tensor_entries)
+    built = weighted_tensor(
+        resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_tensor_entries),
+        problem,
+        distance_scale,
+        appearance,
+    )
     x, sweeps, info = bcagm_solve(built, max_iter)
     support = x * built.product(x)
     top = support.max() if support.size else 0.0

@@ -6,6 +6,7 @@ import time
 
 import numpy as np
 
+from matchers.blocks.cue_terms import weighted_tensor
 from matchers.blocks.memory_models import tensor_matcher
 from matchers.core.matching import Matching
 from matchers.core.memory_budget import budgeted
@@ -87,6 +88,8 @@ def hgm(
     neighbours: int | None = None,
     sigma: float | None = None,
     max_tensor_entries: int | None = MAX_ENTRIES,
+    distance_scale: float | None = None,
+    appearance: bool = False,
     max_iter: int = 1000,
     tol: float = 1e-3,
 ) -> Matching:
@@ -96,13 +99,23 @@ def hgm(
     Tensor options as for every hypergraph matcher (see :func:`matchers.rrwhm.rrwhm`).
     ``max_iter`` 1000 and ``tol`` 1e-3 for the projection (reference: 1000 loops, precision
     0.01). Scores: Z divided by its maximum; all zero for an empty tensor.
+    ``distance_scale`` (None, as published): multiply every tensor entry by the metric
+    affinity of its three edges, width ``distance_scale`` x the median within-view
+    distance (the equal-cue protocol; :mod:`matchers.blocks.cue_terms`).
+    ``appearance`` (False, as published): multiply every entry by the appearance
+    similarity of its three candidate matches.
     """
     started = time.perf_counter()
     check_problem(problem)
     rng = rng_from_seed(seed)
     check_count("max_iter", max_iter)
     check_range("tol", tol, 0.0, np.inf, open_low=True)
-    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_tensor_entries)
+    built = weighted_tensor(
+        resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_tensor_entries),
+        problem,
+        distance_scale,
+        appearance,
+    )
     z, cycles, converged = hgm_solve(built, max_iter, tol)
     scores = max_normalised(z, problem.n1, problem.n2)
     info = {"converged": converged, "tensor_entries": built.nnz, "tensor": built.info}

@@ -13,6 +13,7 @@ import time
 import numpy as np
 
 from matchers.blocks.appearance_similarity import appearance_similarity
+from matchers.blocks.cue_terms import weighted_tensor
 from matchers.blocks.memory_models import prior_evidence_memory, tensor_matcher
 from matchers.blocks.prior import PRIOR_FIELDS
 from matchers.blocks.sinkhorn import sinkhorn
@@ -120,6 +121,7 @@ def maximin(
     neighbours: int | None = None,
     sigma: float | None = None,
     max_tensor_entries: int | None = MAX_ENTRIES,
+    distance_scale: float | None = None,
     alpha: float = 0.3,
     beta: float = 1.0,
     max_iter: int = 100,
@@ -147,6 +149,9 @@ def maximin(
     ``first_order``: an (n, m) array in [0, 1] used as b instead of the features' cosine
     similarity (e.g. appearance times a localisation prior, :mod:`matchers.maximin`);
     default None.
+    ``distance_scale`` (None, as published): multiply every tensor entry by the metric
+    affinity of its three edges, width ``distance_scale`` x the median within-view
+    distance (the equal-cue protocol; :mod:`matchers.blocks.cue_terms`).
     """
     started = time.perf_counter()
     check_problem(problem)
@@ -163,7 +168,12 @@ def maximin(
     n, m = problem.n1, problem.n2
     if n == 0 or m == 0:
         return finish("maximin", np.zeros((n, m)), threshold, started, 0, {"converged": True})
-    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_tensor_entries)
+    built = weighted_tensor(
+        resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_tensor_entries),
+        problem,
+        distance_scale,
+        False,
+    )
     b = (
         appearance_similarity(problem).reshape(-1)
         if first_order is None

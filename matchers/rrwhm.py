@@ -7,6 +7,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from matchers.blocks.cue_terms import weighted_tensor
 from matchers.blocks.memory_models import tensor_matcher
 from matchers.blocks.sinkhorn import sinkhorn
 from matchers.core.matching import Matching
@@ -94,6 +95,8 @@ def rrwhm(
     neighbours: int | None = None,
     sigma: float | None = None,
     max_tensor_entries: int | None = MAX_ENTRIES,
+    distance_scale: float | None = None,
+    appearance: bool = False,
     jump: float = 0.8,
     beta: float = 30.0,
     max_iter: int = 300,
@@ -111,6 +114,11 @@ def rrwhm(
     Walk options (reference defaults): ``jump`` 0.8 (c = 0.2 on the walk), ``beta`` 30,
     ``max_iter`` 300, ``tol`` 1e-6 (squared L2 change), ``sinkhorn_iter`` 100 (our cap).
     Scores: the final distribution divided by its maximum; all zero for an empty tensor.
+    ``distance_scale`` (None, as published): multiply every tensor entry by the metric
+    affinity of its three edges, width ``distance_scale`` x the median within-view
+    distance (the equal-cue protocol; :mod:`matchers.blocks.cue_terms`).
+    ``appearance`` (False, as published): multiply every entry by the appearance
+    similarity of its three candidate matches.
     """
     started = time.perf_counter()
     check_problem(problem)
@@ -120,7 +128,12 @@ def rrwhm(
     check_count("max_iter", max_iter)
     check_range("tol", tol, 0.0, np.inf)
     check_count("sinkhorn_iter", sinkhorn_iter)
-    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_tensor_entries)
+    built = weighted_tensor(
+        resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_tensor_entries),
+        problem,
+        distance_scale,
+        appearance,
+    )
     x, iterations, converged = hypergraph_walk(built, jump, beta, max_iter, tol, sinkhorn_iter)
     scores = max_normalised(x, problem.n1, problem.n2)
     info = {"converged": converged, "tensor_entries": built.nnz, "tensor": built.info}

@@ -7,6 +7,7 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
+from matchers.blocks.cue_terms import appearance_weighted_affinity
 from matchers.blocks.memory_models import pairwise_matcher
 from matchers.blocks.pairwise import NEIGHBOURS, resolve_affinity
 from matchers.blocks.sinkhorn import sinkhorn
@@ -94,6 +95,7 @@ def rrwm(
     sigma_scale: float | None = None,
     pairwise: str = "positions",
     affinity_neighbours: int | None = NEIGHBOURS,
+    appearance: bool = False,
     jump: float = 0.8,
     beta: float = 30.0,
     max_iter: int = 300,
@@ -111,6 +113,9 @@ def rrwm(
     Defaults are the original code's: ``jump`` 0.8 (weight on the reweighted jump), ``beta`` 30,
     ``max_iter`` 300, ``tol`` 1e-25, conflicting entries zeroed; ``sinkhorn_iter`` 100 (ours;
     the original's cap is 1000). See :func:`reweighted_walk`.
+    ``appearance`` (False, as published): multiply every affinity entry by the appearance
+    similarity of the two candidate matches it joins (the equal-cue protocol;
+    :mod:`matchers.blocks.cue_terms`).
     Scores: the walk's distribution divided by its maximum. Deterministic (seed unused).
     """
     started = time.perf_counter()
@@ -125,6 +130,8 @@ def rrwm(
     affinity = resolve_affinity(
         problem, affinity, sigma2, sigma_scale, pairwise, affinity_neighbours
     )
+    if appearance:
+        affinity = appearance_weighted_affinity(affinity, problem)
     x, iterations, converged = reweighted_walk(
         affinity, n, m, jump, beta, max_iter, tol, bool(zero_conflicts), sinkhorn_iter
     )

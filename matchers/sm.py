@@ -7,6 +7,7 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
+from matchers.blocks.cue_terms import appearance_weighted_affinity
 from matchers.blocks.memory_models import pairwise_matcher
 from matchers.blocks.pairwise import NEIGHBOURS, resolve_affinity
 from matchers.core.matching import Matching
@@ -51,6 +52,7 @@ def sm(
     sigma_scale: float | None = None,
     pairwise: str = "positions",
     affinity_neighbours: int | None = NEIGHBOURS,
+    appearance: bool = False,
     max_iter: int = 200,
     tol: float = 1e-8,
 ) -> Matching:
@@ -64,6 +66,9 @@ def sm(
     iteration; ``affinity_neighbours`` (500): dense while a candidate
     match has at most that many partners, else each match keeps its 500 strongest (a precomputed
     ``affinity`` may be scipy sparse).
+    ``appearance`` (False, as published): multiply every affinity entry by the appearance
+    similarity of the two candidate matches it joins (the equal-cue protocol;
+    :mod:`matchers.blocks.cue_terms`).
     Scores: eigenvector divided by its maximum. Deterministic (uniform start; seed unused).
     """
     started = time.perf_counter()
@@ -75,6 +80,8 @@ def sm(
     affinity = resolve_affinity(
         problem, affinity, sigma2, sigma_scale, pairwise, affinity_neighbours
     )
+    if appearance:
+        affinity = appearance_weighted_affinity(affinity, problem)
     x, iterations, converged = spectral_vector(affinity, max_iter, tol)
     scores = max_normalised(x, n, m)
     return finish("sm", scores, threshold, started, iterations, {"converged": converged})

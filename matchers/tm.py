@@ -6,6 +6,7 @@ import time
 
 import numpy as np
 
+from matchers.blocks.cue_terms import weighted_tensor
 from matchers.blocks.memory_models import tensor_matcher
 from matchers.core.jit import njit
 from matchers.core.matching import Matching
@@ -232,6 +233,8 @@ def tm(
     neighbours: int | None = None,
     sigma: float | None = None,
     max_tensor_entries: int | None = MAX_ENTRIES,
+    distance_scale: float | None = None,
+    appearance: bool = False,
     max_iter: int = 100,
     normalisation: str = "doubly",
     sparsity: bool = True,
@@ -245,6 +248,11 @@ def tm(
     reference), ``normalisation`` "doubly" | "rows" | "global", ``sparsity`` True (l1
     relaxation). Scores: x o x divided by its maximum (with
     an empty tensor — no hyperedges — the scores are all 0: no evidence).
+    ``distance_scale`` (None, as published): multiply every tensor entry by the metric
+    affinity of its three edges, width ``distance_scale`` x the median within-view
+    distance (the equal-cue protocol; :mod:`matchers.blocks.cue_terms`).
+    ``appearance`` (False, as published): multiply every entry by the appearance
+    similarity of its three candidate matches.
     """
     started = time.perf_counter()
     check_problem(problem)
@@ -253,7 +261,12 @@ def tm(
     tol = check_range("tol", tol, 0.0, 1.0)
     if normalisation not in NORMALISATIONS:
         raise ValueError(f"normalisation: expected one of {NORMALISATIONS}, got {normalisation!r}")
-    built = resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_tensor_entries)
+    built = weighted_tensor(
+        resolve_tensor(problem, tensor, rng, triangles, neighbours, sigma, max_tensor_entries),
+        problem,
+        distance_scale,
+        appearance,
+    )
     x, products = (
         tensor_power(built, max_iter, normalisation, bool(sparsity), tol)
         if built.nnz

@@ -144,6 +144,35 @@ def test_opv2v_hostile_input_is_one_line(tmp_path, capsys, case):
     assert not (tmp_path / "PWNED").exists()
 
 
+# data_protocol.yaml's prior keys (written by cadsim export opv2v): key -> hostile values
+PRIOR_CASES = [
+    (key, value)
+    for key in ("prior_sigma_m", "prior_latency_s", "prior_position_sigma_m", "prior_yaw_sigma_deg")
+    for value in (-1.0, float("nan"), 1e300, 10**400, "3.2", [3.2], True)
+] + [("prior_sigma_m", 0), ("prior_sigma_m", float("inf")), ("prior_latency_s", 60.0)]
+PRESET_CASES = ["gnss-nowhere", 3, ["gnss-urban"], "gnss-urban*" + "9" * 100]
+
+
+@pytest.mark.parametrize(("key", "value"), PRIOR_CASES, ids=[f"{k}={str(v)[:12]}" for k, v in PRIOR_CASES])  # fmt: skip
+def test_opv2v_hostile_prior_keys_are_one_line(tmp_path, capsys, key, value):
+    src = write_opv2v(tmp_path / "split")
+    block = {"episode": 0, "slot": 0, "sim_seed": 5, "prior_sigma_m": 3.2, key: value}
+    path = src / "2021_08_22_21_41_24" / "data_protocol.yaml"
+    path.write_text(yaml.safe_dump({"cadsim": block}))
+    expected = f"cadsim.{key}: expected a number "
+    _refused(tmp_path, capsys, ["opv2v", str(src)], "data_protocol.yaml", expected)
+
+
+@pytest.mark.parametrize("value", PRESET_CASES, ids=[str(v)[:14] for v in PRESET_CASES])
+def test_opv2v_hostile_prior_preset_is_one_line(tmp_path, capsys, value):
+    src = write_opv2v(tmp_path / "split")
+    block = {"episode": 0, "slot": 0, "sim_seed": 5, "prior_preset": value}
+    path = src / "2021_08_22_21_41_24" / "data_protocol.yaml"
+    path.write_text(yaml.safe_dump({"cadsim": block}))
+    expected = "cadsim.prior_preset: expected a localisation preset"
+    _refused(tmp_path, capsys, ["opv2v", str(src)], "data_protocol.yaml", expected)
+
+
 def test_links_out_of_the_folder_are_not_followed(tmp_path, capsys):
     src = write_opv2v(tmp_path / "split", agents=(7, 3))
     outside = write_opv2v(tmp_path / "elsewhere", agents=(-1,))

@@ -1,7 +1,8 @@
 """The temporal table (issue 41's study, ``eval/studies/temporal.py``) on a tiny fake sequence
 dataset (the fake stages of tests/test_generate_fakes.py: no SUMO, no OpenGL): the table and its
 columns, W = 1 rows equal to the two-view matcher's per-frame outcome, τ from validation only,
-goal lines through goal_verdict, the README part."""
+goal lines through goal_verdict, the README part; a prior reader under ``denied`` gets no number
+and pooled F1 is the headline."""
 
 from __future__ import annotations
 
@@ -18,7 +19,7 @@ from eval.protocol.metrics import pair_metrics
 from eval.studies import temporal
 from matchers.core.registry import get
 
-METHODS = (("windowed:consistency", (1, 3)), ("temporal_pose", (1, 10)))
+METHODS = (("windowed:consistency", (1, 3, 10)), ("temporal_pose", (1, 10)))
 PRESETS = ("gnss-urban", "denied")
 
 
@@ -53,14 +54,68 @@ def test_the_study_writes_the_table_with_its_columns(study):
     gain = pd.read_csv(out / "table_temporal_gain.csv")
     assert list(gain.columns) == list(temporal.GAIN_COLUMNS)
     assert list(gain["preset"]) == list(PRESETS)
-    assert (csv["frames"] == 16).all() and (csv["sequences"] == 4).all()
+    ran = csv.dropna(subset=["f1_pooled"])  # all but the prior reader under denied
+    assert len(ran) == len(csv) - 2
+    assert (ran["frames"] == 16).all() and (ran["sequences"] == 4).all()
 
 
-def test_a_prior_reader_declares_nothing_under_denied(study):
-    _, table = study
-    rows = table[(table["method"] == "temporal_pose") & (table["preset"] == "denied")]
-    assert len(rows) == 2 and (rows["f1_mean"] == 0).all()
-    assert (rows["success_1m_2deg"] == 0).all()
+def test_a_prior_reader_under_denied_gets_no_number(study):
+    """Abstention is not a score (DESIGN §3): no F1 of the empty-frame convention, empty CSV
+    cells, "n/a (needs a prior)" in the Markdown and the README part, in no "best"."""
+    from eval.protocol.abstention import NO_NUMBER
+
+    out, table = study
+    csv = pd.read_csv(out / "table_temporal.csv")
+    rows = csv[(csv["method"] == "temporal_pose") & (csv["preset"] == "denied")]
+    assert len(rows) == 2
+    metrics = [c for c in temporal.COLUMNS if c not in ("method", "window", "preset", "params")]
+    assert rows[metrics].isna().all().all(), rows[metrics]
+    raw = (out / "table_temporal.csv").read_text().splitlines()
+    assert all(",,,," in line for line in raw if line.startswith("temporal_pose,1,denied"))
+    ran = csv[(csv["method"] == "temporal_pose") & (csv["preset"] == "gnss-urban")]
+    assert ran["f1_pooled"].notna().all()  # the same method where the prior is given
+    md = (out / "table_temporal.md").read_text()
+    assert f"| `denied` | `temporal_pose` | 10 | n/a | n/a | {NO_NUMBER} |" in md
+    assert temporal.best_long(table, "denied") == "windowed:consistency"
+    gain = pd.read_csv(out / "table_temporal_gain.csv").set_index("preset")
+    assert gain.loc["denied", "method"] == "windowed:consistency"
+    per_frame = pd.read_csv(out / "temporal" / "per_frame.csv")
+    assert not ((per_frame["method"] == "temporal_pose") & (per_frame["preset"] == "denied")).any()
+    part = "\n".join(temporal.readme_part(out, "results"))
+    assert f"`denied`: `temporal_pose` — {NO_NUMBER}; in no comparison" in part
+
+
+def test_f1_pooled_is_the_headline_and_sums_counts_over_frames(study):
+    out, table = study
+    csv = pd.read_csv(out / "table_temporal.csv")
+    per_frame = pd.read_csv(out / "temporal" / "per_frame.csv")
+    for row in csv.dropna(subset=["f1_pooled"]).itertuples(index=False):
+        mine = per_frame[
+            (per_frame["method"] == row.method)
+            & (per_frame["window"] == row.window)
+            & (per_frame["preset"] == row.preset)
+        ]
+        tp, declared, true = mine["tp"].sum(), mine["n_pred"].sum(), mine["n_gt"].sum()
+        assert row.f1_pooled == pytest.approx(2 * tp / (declared + true), abs=1e-6)
+        assert row.f1_pooled_low <= row.f1_pooled <= row.f1_pooled_high
+    md = (out / "table_temporal.md").read_text()
+    assert "| F1 pooled [95 % CI] | F1 per frame [95 % CI] |" in md  # pooled first
+
+
+def test_pooled_f1_on_a_planted_case_is_not_the_per_frame_mean():
+    """Three frames: 2 of 3 declared right with 4 true pairs, an empty frame (no truth, nothing
+    declared: F1 1 by the per-frame convention) and 1 of 1: pooled 2·3 / (4 + 5) = 2/3, where the
+    per-frame mean is (4/7 + 1 + 1) / 3."""
+    frames = pd.DataFrame(
+        {"seed": 0, "episode": [0, 0, 1], "tp": [2, 0, 1], "n_pred": [3, 0, 1], "n_gt": [4, 0, 1]}
+    )
+    frames["f1"] = [2 * (2 / 3) * 0.5 / (2 / 3 + 0.5), 1.0, 1.0]
+    point, low, high = temporal.pooled_f1(frames)
+    assert point == pytest.approx(2 / 3)
+    assert frames["f1"].mean() == pytest.approx((4 / 7 + 2) / 3)
+    assert low <= point <= high
+    nothing = frames.assign(tp=0, n_pred=0)  # declares nothing where there are true pairs
+    assert temporal.pooled_f1(nothing)[0] == 0.0 and nothing["f1"].mean() > 0
 
 
 def test_w1_rows_equal_the_two_view_matchers_per_frame_outcome(dirs, study):
@@ -138,6 +193,7 @@ def _table(f1_low: float, f1_high: float) -> pd.DataFrame:
                 dict.fromkeys(temporal.COLUMNS, np.nan)
                 | {"method": "m", "window": window, "preset": preset, "val_f1": 0.5}
                 | {"f1_mean": 0.85, "f1_low": f1_low, "f1_high": f1_high}
+                | {"f1_pooled": 0.85, "f1_pooled_low": f1_low, "f1_pooled_high": f1_high}
                 | {"success_1m_2deg": 0.7, "success_low": 0.65, "success_high": 0.75}
                 | {"switches_per_100": 0.5, "switches_low": 0.2, "switches_high": 0.9}
                 | {"share_of_oracle": 0.9}
@@ -156,11 +212,11 @@ def test_goal_lines_go_through_goal_verdict(monkeypatch, tmp_path):
     monkeypatch.setattr(temporal, "goal_line", spy)
     lines = temporal.goals(_table(0.81, 0.9), tmp_path)
     assert len(lines) == len(calls) == 3  # no per-frame or gain files: those goals left out
-    assert lines[0].startswith("`denied`, W = 10: best F1 ≥ 80: met")
+    assert lines[0].startswith("`denied`, W = 10: best pooled F1 ≥ 80: met")
     assert ": met" in lines[1]  # success [65, 75] ≥ 60
     assert ": met" in lines[2]  # switches [0.2, 0.9] ≤ 1
     crossing = temporal.goals(_table(0.79, 0.9), tmp_path)
-    assert crossing[0].startswith("`denied`, W = 10: best F1 ≥ 80: not shown")
+    assert crossing[0].startswith("`denied`, W = 10: best pooled F1 ≥ 80: not shown")
 
 
 def test_readme_part_is_compact_and_states_the_goals(study):
@@ -182,7 +238,7 @@ def test_every_method_gets_the_equal_budget_and_the_best_validation_f1_wins(stud
     assert list(tuning.columns) == list(temporal.TUNING_COLUMNS)
     sizes = tuning.groupby(["preset", "matcher", "window"]).size()
     assert (sizes == TUNING_BUDGET).all(), sizes
-    # a prior reader under denied declares nothing: not tuned, no candidates
+    # a prior reader under denied cannot run: not tuned, no candidates
     assert not ((tuning["preset"] == "denied") & (tuning["matcher"] == "temporal_pose")).any()
     assert "window" not in "".join(tuning["params"])  # W is the table's axis, never tuned
     for (preset, method, window), rows in tuning.groupby(["preset", "matcher", "window"]):
@@ -246,6 +302,9 @@ def test_the_run_record_states_every_rows_chosen_parameters(study):
     assert sum(len(w) for m in record.values() for w in m.values()) == len(rows)
     for row in rows.itertuples(index=False):
         entry = record[row.preset][row.method][str(row.window)]
+        if temporal.abstains(row.method, row.preset):  # no number: nothing was chosen
+            assert entry == {"params": None, "tau": None, "val_f1": None}
+            continue
         assert entry["params"] == json.loads(row.params)
         assert (entry["tau"] is None) == (not np.isfinite(row.tau))
     json.dumps(record)  # goes into run_record.json as it is

@@ -93,7 +93,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--prior-sigma",
         type=float,
         default=None,
-        help="stated uncertainty of the stored prior, metres (default 1.0)",
+        help="stated uncertainty of the stored prior, metres: overrides data_protocol.yaml's "
+        "prior_sigma_m, with a warning (default: the file's, else 1.0)",
     )
 
 
@@ -111,19 +112,14 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_boxes(args: argparse.Namespace) -> int:
-    import math
-
     if args.format == "v2x-seq":
         from cadsim.importers.v2x_seq import import_v2x_seq
 
         result = import_v2x_seq(args.src, args.out, args.sequences)
     else:
-        from cadsim.importers.opv2v import DEFAULT_PRIOR_SIGMA_M, import_opv2v
+        from cadsim.importers.opv2v import import_opv2v
 
-        sigma = DEFAULT_PRIOR_SIGMA_M if args.prior_sigma is None else args.prior_sigma
-        if not (math.isfinite(sigma) and sigma > 0):
-            raise ValueError(f"--prior-sigma: expected a finite number > 0, got {sigma}")
-        result = import_opv2v(args.src, args.out, args.agents, not args.no_prior, sigma)
+        result = import_opv2v(args.src, args.out, args.agents, not args.no_prior, args.prior_sigma)
     kind = "frame pairs" if result.views == 2 else f"{result.views}-view snapshots"
     print(
         f"{result.out}: {result.records} {kind} in {len(result.episodes)} episodes, box-only, "

@@ -22,9 +22,10 @@ ids. Per agent and frame (:func:`agent_document`):
 - ``camera0`` (records with images): ``cords`` (camera pose), ``intrinsic`` (3×3 K, pixels) and
   ``extrinsic`` (4×4 LiDAR → camera, OpenCV axes);
 - ``data_protocol.yaml``: ``cadsim`` {``episode``, ``slot``, ``sim_seed``, ``start_time``,
-  ``interval_s``, ``prior_sigma_m``, ``ids`` {actor id: cadsim object id}}, so a re-import
-  keeps the record identity, the object and observer ids (and with them the presets' draws)
-  and a stored prior's stated uncertainty.
+  ``interval_s``, ``ids`` {actor id: cadsim object id}, and for records with a prior the
+  ``prior_*`` keys of :func:`prior_protocol`}, so a re-import keeps the record identity, the
+  object and observer ids (and with them the presets' draws) and the prior the matchers saw:
+  its stated uncertainty and its message latency.
 
 Each agent's frame is written by :func:`write_agent_frame`; records with LiDAR points add the
 sweep as ``<frame>.pcd`` in the agent's sensor frame (``cadsim.exporters.pcd``). The output folder must be new or empty.
@@ -143,6 +144,25 @@ def _images(pair, view: ViewBoxes) -> dict[str, bytes]:
     return {"camera0.png": colour, "depth0.npy": buffer.getvalue()}
 
 
+def prior_protocol(pair) -> dict:
+    """The ``data_protocol.yaml`` keys that carry ``pair``'s localisation prior over to a
+    re-import (docs/external-data.md): ``prior_sigma_m`` (the stated position uncertainty a
+    matcher is told, metres: ``Problem.world_sigma``), ``prior_latency_s`` (the age of the
+    other agents' messages, seconds) and, for a simulated prior, the model it was drawn with
+    (``prior_position_sigma_m``, ``prior_yaw_sigma_deg``, ``prior_preset`` when one is set)."""
+    prior = pair.record.get("prior") or {}
+    if prior.get("kind") == "stored":  # an imported record: its messages are already as sent
+        return {"prior_sigma_m": float(prior["world_sigma_m"]), "prior_latency_s": 0.0}
+    config = pair.localisation[0]
+    out = {
+        "prior_sigma_m": float(config.stated_sigma_m),
+        "prior_latency_s": float(config.latency_s),
+        "prior_position_sigma_m": float(config.position_sigma_m),
+        "prior_yaw_sigma_deg": float(config.yaw_sigma_deg),
+    }
+    return out if config.preset is None else out | {"prior_preset": config.preset}
+
+
 def export_opv2v(dataset: str | Path, out: str | Path) -> ExportResult:
     """Write the dataset at ``dataset`` (verified first) in the OPV2V layout at ``out`` (a new
     or empty folder).
@@ -183,11 +203,12 @@ def export_opv2v(dataset: str | Path, out: str | Path) -> ExportResult:
         protocol["ids"] = {
             actor: oid for oid, actor in sorted(actors.items(), key=lambda kv: kv[1])
         }
-        prior = first.record.get("prior") or {}
-        if prior.get("kind") == "stored":
-            protocol["prior_sigma_m"] = float(prior["world_sigma_m"])
+        if frames[0][0].reported_body is not None:  # the records have a prior to carry over
+            protocol |= prior_protocol(first)
         (scenario / "data_protocol.yaml").write_bytes(_yaml({"cadsim": protocol}))
     return ExportResult(out, len(units), files)
 
 
-__all__ = ["ExportResult", "agent_document", "export_opv2v", "write_agent_frame"]
+__all__ = [
+    "ExportResult", "agent_document", "export_opv2v", "prior_protocol", "write_agent_frame",
+]  # fmt: skip

@@ -13,7 +13,8 @@ Per agent and frame:
   agent becomes an object of the record, so a message latency moves the sender);
   ``predicted_ego_pos``: the pose the
   agent's own localisation reported → the stored localisation prior (each box's world position
-  as that pose puts it; stated uncertainty ``prior_sigma_m``);
+  as that pose puts it; stated uncertainty: ``data_protocol.yaml``'s ``prior_sigma_m``, else
+  ``--prior-sigma``, else 1 m);
 - ``vehicles``: {actor id: {``location``, ``angle`` [roll, yaw, pitch], ``center`` (box centre
   offset in the actor's frame), ``extent`` (half length, width, height), ``speed`` (km/h),
   ``obj_type``}} — the boxes the agent sees; actor ids shared across agents are the ground
@@ -21,7 +22,11 @@ Per agent and frame:
 
 Mapping: a scenario is an episode, its frames the slots (``data_protocol.yaml``'s ``cadsim``
 block — written by ``cadsim export opv2v`` — restores the original episode, slot, simulation
-seed, time, object and observer ids and a stored prior's stated uncertainty); agents are ordered vehicles first (ascending id), then infrastructure (−1, −2,
+seed, time, object and observer ids and the prior's parameters: ``prior_sigma_m``, ``prior_latency_s``
+— the other agents' messages that much older, so views 2, 3, … of a record taken with the prior
+are moved back along their velocities as the source's evaluation moved them — and the model's
+``prior_preset``, ``prior_position_sigma_m``, ``prior_yaw_sigma_deg``, kept in each record's
+``meta.prior``); agents are ordered vehicles first (ascending id), then infrastructure (−1, −2,
 …); every record has ``agents`` views (default: the fewest agents of any frame, at least 2; a
 frame's first ones in that order), so frames with fewer are skipped. Two views: frame pairs,
 kept as sequences while a scenario's frames have the same two agents; more: N-view snapshots.
@@ -31,6 +36,8 @@ Lost: cameras, point clouds, speeds' directions (taken along the heading), other
 from __future__ import annotations
 
 import hashlib
+import logging
+import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -53,6 +60,8 @@ from cadsim.importers.sensor_frame import (
     sensor_camera,
 )
 from cadsim.observer_pose import ObserverPose
+from cadsim.sensing.gnss_error import parse_spec
+from cadsim.sensing.latency import sender_offset
 from cadsim.world import WorldObject
 
 SCENARIO_NAME = "opv2v"
@@ -69,6 +78,7 @@ PROTOCOL = "data_protocol.yaml"
 _AGENT = re.compile(r"^-?\d{1,9}$")
 _FRAME = re.compile(r"^\d{1,9}$")
 _KMH = 1.0 / 3.6
+log = logging.getLogger(__name__)
 _PRIOR_FRAME = "OPV2V predicted_ego_pos, y negated: right-handed, x and y horizontal, z up, metres"
 
 
@@ -148,35 +158,46 @@ def _ordered(agents: list[int]) -> list[int]:
     return sorted(agents, key=lambda a: (a < 0, a if a >= 0 else -a))
 
 
-def _view(agent: _Agent, prior: bool, names: dict[str, str]) -> tuple[BoxView, list[WorldObject]]:
+def _view(
+    agent: _Agent, prior: bool, names: dict[str, str], latency_s: float = 0.0
+) -> tuple[BoxView, list[WorldObject]]:
     """An agent's box view and its boxes as world objects; ``names``: {actor id: object id}
-    (``data_protocol.yaml``'s ``cadsim.ids``; an actor not in it keeps its number)."""
-    camera = sensor_camera(agent.sensor)
+    (``data_protocol.yaml``'s ``cadsim.ids``; an actor not in it keeps its number);
+    ``latency_s`` > 0: the view as the agent's message reports it that many seconds before the
+    frame (:mod:`cadsim.sensing.latency`: every box and the agent moved back along their
+    velocities, speed along the heading), its stored prior with it."""
     k = len(agent.boxes)
     world = mirrored_points([b["centre"] for b in agent.boxes]).reshape(k, 3)
     directions = mirrored_points([b["direction"] for b in agent.boxes]).reshape(k, 3)
-    positions, headings = boxes_in_view(camera, world, directions)
+    yaw = heading_of(directions)
+    forward = agent.body[:3, 0]
+    heading = float(pm.arctan2(forward[1], forward[0]))
+    speeds = np.array([b["speed"] for b in agent.boxes], dtype=float)
+    velocities = np.stack([speeds * np.cos(yaw), speeds * np.sin(yaw), np.zeros(k)], axis=1)
+    own = (agent.speed * np.cos(heading), agent.speed * np.sin(heading), 0.0)
+    offset = sender_offset(own, latency_s)  # zero without a latency
+    sensor = agent.sensor.copy()
+    sensor[:3, 3] += offset
+    sent = world - latency_s * velocities  # each box where it was latency_s ago
+    camera = sensor_camera(sensor)
+    positions, headings = boxes_in_view(camera, sent, directions)
     ids = [names.get(b["id"], b["id"]) for b in agent.boxes]
     classes = [b["cls"] for b in agent.boxes]
     me = names.get(str(agent.agent), str(agent.agent))
     sizes = np.array([b["size"] for b in agent.boxes], dtype=float).reshape(k, 3)
     stored = None
-    if prior:
-        stored = apply(pm.matmul(agent.predicted, rigid_inverse(agent.body)), world)
-    forward = agent.body[:3, 0]
-    pose = ObserverPose(
-        tuple(float(v) for v in agent.body[:3, 3]), float(pm.arctan2(forward[1], forward[0]))
-    )
+    if prior:  # the reported pose moved with the agent: about its body origin when it sent
+        reported = pm.matmul(agent.predicted, rigid_inverse(agent.body))
+        stored = apply(reported, sent - offset) + offset
+    pose = ObserverPose(tuple(float(v) for v in agent.body[:3, 3]), heading)
     kind = "roadside" if agent.agent < 0 else "vehicle"
     det = box_detections(positions, sizes, headings, ids, classes, world=stored)
     view = BoxView(me, kind, camera, pose, det, sizes)
-    yaw = heading_of(directions)
     objects = [
         WorldObject(i, c, "box", tuple(w), float(y), tuple(s), (0.5, 0.5, 0.5),
                     velocity=(b["speed"] * np.cos(y), b["speed"] * np.sin(y), 0.0))
         for i, c, w, y, s, b in zip(ids, classes, world.tolist(), yaw, sizes.tolist(), agent.boxes, strict=True)
     ]  # fmt: skip
-    heading = float(pm.arctan2(forward[1], forward[0]))
     objects.append(  # the agent itself (the sender of its messages), moving along its heading
         WorldObject(me, "agent", "box", tuple(float(v) for v in agent.body[:3, 3]),
                     heading, (0.1, 0.1, 0.1), (0.5, 0.5, 0.5), target=False,
@@ -202,11 +223,12 @@ def _protocol(folder: Path) -> dict:
                 path, f"cadsim.{key}: expected an integer >= 0, got {str(value)[:30]}"
             )
         out[key] = value
-    for key in ("start_time", "interval_s", "prior_sigma_m"):
+    for key in ("start_time", "interval_s"):
         if block.get(key) is not None:
             out[key] = number(block[key], path, f"cadsim.{key}", 1e12)
             if key != "start_time" and out[key] <= 0:
                 raise ImportFormatError(path, f"cadsim.{key}: expected a number > 0")
+    out |= _prior_keys(block, path)
     ids = block.get("ids", {})
     if not isinstance(ids, dict) or not all(
         _AGENT.match(str(k)) and isinstance(v, str) and 0 < len(v) <= 200 for k, v in ids.items()
@@ -216,6 +238,52 @@ def _protocol(folder: Path) -> dict:
     if len(set(names.values())) != len(names):
         raise ImportFormatError(path, "cadsim.ids: two actors with one object id")
     return out | ({"ids": names} if names else {})
+
+
+# data_protocol.yaml's prior keys (docs/external-data.md): name -> (bound, zero allowed, unit)
+PRIOR_KEYS = {
+    "prior_sigma_m": (1e4, False, "metres"),
+    "prior_latency_s": (10.0, True, "seconds"),
+    "prior_position_sigma_m": (1e4, True, "metres"),
+    "prior_yaw_sigma_deg": (180.0, True, "degrees"),
+}
+
+
+def _prior_keys(block: dict, path: Path) -> dict:
+    """The ``prior_*`` keys of a ``cadsim`` block, checked (one line naming file and key)."""
+    out = {}
+    for key, (bound, zero, unit) in PRIOR_KEYS.items():
+        if key not in block:
+            continue
+        value = block[key]
+        ok = isinstance(value, int | float) and not isinstance(value, bool)
+        try:
+            ok = ok and math.isfinite(value) and (value >= 0 if zero else value > 0)
+        except OverflowError:  # an integer beyond float range
+            ok = False
+        ok = ok and value <= bound
+        if not ok:
+            least = ">= 0" if zero else "> 0"
+            raise ImportFormatError(
+                path,
+                f"cadsim.{key}: expected a number {least} and <= {bound:g} ({unit}), "
+                f"got {str(value)[:40]}",
+            )
+        out[key] = float(value)
+    if "prior_preset" in block:
+        preset = block["prior_preset"]
+        try:
+            if not isinstance(preset, str) or len(preset) > 60:
+                raise ValueError
+            parse_spec(preset)
+        except ValueError:
+            raise ImportFormatError(
+                path,
+                f"cadsim.prior_preset: expected a localisation preset name such as "
+                f"gnss-urban, got {str(preset)[:40]}",
+            ) from None
+        out["prior_preset"] = preset
+    return out
 
 
 def _scenarios(root: Path) -> list[Path]:
@@ -253,22 +321,55 @@ def _frames(scenario: Path) -> dict[str, dict[int, Path]]:
     return dict(sorted(frames.items(), key=lambda kv: int(kv[0])))
 
 
+def _stated_sigmas(protocols: list[dict], given: float | None) -> None:
+    """Log where the stored prior's stated uncertainty comes from: one info line when
+    ``given`` (``--prior-sigma``) or the default fills scenarios whose ``data_protocol.yaml``
+    states none, one warning line when ``given`` overrides values the files state."""
+    stated = sorted({p["prior_sigma_m"] for p in protocols if "prior_sigma_m" in p})
+    lacking = sum("prior_sigma_m" not in p for p in protocols)
+    if given is not None and stated:
+        log.warning(
+            "prior sigma %g m from the command line (--prior-sigma) overrides the %s m that "
+            "data_protocol.yaml states (%d of %d scenarios)",
+            given, "/".join(f"{v:g}" for v in stated), len(protocols) - lacking, len(protocols),
+        )  # fmt: skip
+    if lacking and not (given is not None and stated):
+        source = (
+            "from the command line (--prior-sigma)"
+            if given is not None
+            else "the default (set it with --prior-sigma)"
+        )
+        log.info(
+            "prior sigma %g m, %s: data_protocol.yaml states none for %d of %d scenarios",
+            DEFAULT_PRIOR_SIGMA_M if given is None else given, source, lacking, len(protocols),
+        )  # fmt: skip
+
+
 def import_opv2v(
     src: str | Path,
     out: str | Path,
     agents: int | None = None,
     prior: bool = True,
-    prior_sigma_m: float = DEFAULT_PRIOR_SIGMA_M,
+    prior_sigma_m: float | None = None,
 ) -> ImportResult:
     """Convert the OPV2V-layout folder ``src`` (a split or one scenario) into a box-only dataset
     at ``out`` (a new or empty folder): ``agents`` views per record (default: the fewest of any
     frame); ``prior`` False ignores ``predicted_ego_pos`` (no stored prior: the localisation
-    presets can then draw one). ``ImportFormatError`` (one line naming file and key) for
-    malformed input; nothing is written then.
+    presets can then draw one). The stored prior's stated uncertainty (metres) is
+    ``prior_sigma_m`` when given (``--prior-sigma``: it overrides a ``data_protocol.yaml``'s
+    ``prior_sigma_m``, with a warning), else the file's, else :data:`DEFAULT_PRIOR_SIGMA_M`;
+    an info line says which came from where (:func:`_stated_sigmas`). ``ImportFormatError``
+    (one line naming file and key) for malformed input; nothing is written then.
 
     >>> import_opv2v("OPV2V/test", "data/opv2v-test")  # doctest: +SKIP
     ImportResult(out=PosixPath('data/opv2v-test'), episodes={0: 147, ...}, views=2, ...)
     """
+    if prior_sigma_m is not None and not (
+        math.isfinite(prior_sigma_m) and 0 < prior_sigma_m <= PRIOR_KEYS["prior_sigma_m"][0]
+    ):
+        raise ValueError(
+            f"--prior-sigma: expected a finite number in (0, 1e4] metres, got {prior_sigma_m}"
+        )
     root, out = Path(src), Path(out)
     check_out(out)
     scenarios = _scenarios(root)
@@ -306,14 +407,24 @@ def import_opv2v(
     if not pieces:
         raise ImportFormatError(root, f"no frame with {n} agents")
     use_prior = prior and stored
+    if use_prior:
+        _stated_sigmas([p for _, _, p in listing], prior_sigma_m)
     sequential = n == 2 and any(len(run) > 1 for *_, run in pieces)
     records = []
     for episode, slot, protocol, run in pieces:
         imported = []
+        # the other agents' messages are as old as the exported prior's latency (views 2, 3, …
+        # send to view 1); without the prior a preset's redraw applies its own latency
+        latency = protocol.get("prior_latency_s", 0.0) if use_prior else 0.0
+        sigma = None
+        if use_prior:
+            sigma = protocol.get("prior_sigma_m", DEFAULT_PRIOR_SIGMA_M)
+            sigma = sigma if prior_sigma_m is None else prior_sigma_m
+        ids = protocol.get("ids", {})
         for k, (name, scenario_name, read) in enumerate(run):
             views, objects = [], {}
-            for agent in read:
-                view, found = _view(agent, use_prior, protocol.get("ids", {}))
+            for v, agent in enumerate(read):
+                view, found = _view(agent, use_prior, ids, latency if v else 0.0)
                 views.append(view)
                 for obj in found:
                     objects.setdefault(obj.id, obj)
@@ -321,7 +432,12 @@ def import_opv2v(
             time = None if start is None else start + k * protocol.get("interval_s", 0.1)
             meta = {"source": SOURCE["kind"], "scenario": scenario_name, "frame": name}
             meta["agents"] = [a.agent for a in read]
-            sigma = protocol.get("prior_sigma_m", prior_sigma_m) if use_prior else None
+            if use_prior:
+                meta["prior"] = {"stated_sigma_m": sigma, "latency_s": latency} | {
+                    key.removeprefix("prior_"): protocol[key]
+                    for key in ("prior_preset", "prior_position_sigma_m", "prior_yaw_sigma_deg")
+                    if key in protocol
+                }
             imported.append(
                 ImportedFrame(time, tuple(views), list(objects.values()), meta,
                               sigma, _PRIOR_FRAME if use_prior else "")

@@ -8,6 +8,8 @@ from its declared grid on the validation dataset (:mod:`eval.protocol.tuning`); 
 one and the untuned one is written beside it (``table1_untuned``). ``--protocol paper`` runs the
 matchers as the paper describes them instead (image-space pairwise terms, full Hungarian
 assignment, no τ, no tuning; ``table1_paper_protocol``, :mod:`eval.protocol.variants`).
+``--protocol equal_cues`` hands every one of the paper's matchers the same cues (metric geometry
+and appearance, :mod:`eval.protocol.cues`; ``table1_equal_cues``).
 ``--no-calibration`` reports the full Hungarian assignment (τ = none) under the calibrated
 protocol's matcher options.
 """
@@ -98,8 +100,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--protocol",
         choices=PROTOCOLS,
         default="calibrated",
-        help="calibrated (default: τ from validation) or paper (image-space pairwise terms, "
-        "full assignment, no tuning)",
+        help="calibrated (default: τ from validation, each matcher with its published cues), "
+        "equal_cues (every paper matcher handed metric geometry and appearance; "
+        "table1_equal_cues) or paper (image-space pairwise terms, full assignment, no tuning)",
     )
     parser.add_argument(
         "--paper-table", default=str(PAPER_CSV), help="the paper's Table I (CSV) shown beside ours"

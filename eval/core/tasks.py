@@ -214,13 +214,17 @@ def harness_function(name: str, limit_s: float | None):
 
 
 def _has_what_it_needs(fn, problem) -> bool:
-    """Whether ``problem`` has every optional field matcher ``fn`` requires (``requires``)."""
-    return all(getattr(problem, f, None) is not None for f in getattr(fn, "requires", ()))
+    """Whether ``problem`` has every optional field matcher ``fn`` requires (``requires``; the
+    rule of :mod:`eval.protocol.abstention`)."""
+    from eval.protocol.abstention import problem_lacks
+
+    return not problem_lacks(getattr(fn, "requires", ()), problem)
 
 
 def _declares_nothing(name: str, problem):
     """The matching of a matcher whose input is not there (a prior under the ``denied``
-    localisation preset): no pair declared, all scores 0 — its row is kept, and scores 0."""
+    localisation preset): no pair declared, all scores 0 — its run is kept, and the tables give
+    it no number (:mod:`eval.protocol.abstention`)."""
     from matchers.core.matching import Matching
 
     return Matching(

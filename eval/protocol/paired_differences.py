@@ -87,14 +87,16 @@ def paired_differences(
     return pd.DataFrame(rows, columns=list(COLUMNS))
 
 
-def write_paired_differences(out_dir: str | Path) -> Path | None:
-    """``paired_differences.csv`` from the main ``metrics_per_pair.csv`` of `out_dir` (None when
-    that file is missing)."""
+def write_paired_differences(out_dir: str | Path, variant: str = "") -> Path | None:
+    """``paired_differences[_variant].csv`` from that variant's ``metrics_per_pair`` file in
+    `out_dir` (None when it is missing; variant "" is the main one)."""
+    from eval.protocol.variants import variant_path
+
     out_dir = Path(out_dir)
-    source = out_dir / "metrics_per_pair.csv"
+    source = variant_path(out_dir, "metrics_per_pair", variant, ".csv")
     if not source.is_file():
         return None
     per_pair = pd.read_csv(source, keep_default_na=False, na_values=[""])
-    path = out_dir / "paired_differences.csv"
+    path = variant_path(out_dir, "paired_differences", variant, ".csv")
     write_csv(paired_differences(per_pair).round(6), path)
     return path

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import json
 import logging
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 from eval.core.runner import Runner, requests_for
@@ -73,9 +73,13 @@ def grid(name: str) -> list[dict]:
 def candidates_of(base: MatcherSpec) -> list[tuple[MatcherSpec, dict]]:
     """(spec, configuration) for each configuration of `base`'s grid, in grid order: the
     configuration's options over `base`'s own; configurations giving the same spec are kept
-    once."""
+    once. A spec carrying its matcher's equal-cue options searches the equal-cue grid
+    (:mod:`eval.protocol.cues`)."""
+    from eval.protocol.cues import search_space_of
+
     out: dict[MatcherSpec, dict] = {}
-    for config in grid(base.name):
+    space = search_space_of(base)
+    for config in grid(base.name) if space is None else space:
         spec = MatcherSpec.of(base.name, **(dict(base.options) | dict(config)))
         out.setdefault(spec, dict(config))
     return list(out.items())
@@ -83,7 +87,7 @@ def candidates_of(base: MatcherSpec) -> list[tuple[MatcherSpec, dict]]:
 
 def tune_entry(
     entry,
-    matchers: Sequence[MatcherSpec],
+    matchers: Sequence[MatcherSpec] | Mapping[str, MatcherSpec],
     runner: Runner,
     limit: int | None = None,
     localisation: tuple[float, float] | None = None,
@@ -91,11 +95,15 @@ def tune_entry(
     """Pick each matcher's configuration on `entry`'s validation dataset (seed 0 runs only; its
     first `limit` frame pairs, None: all; with ``localisation`` = (position σ m, yaw σ °) the
     validation records' prior re-drawn at that error, as a sweep level sees it). `entry` is an
-    ``eval.studies.evaluation.DatasetEntry``; returns {matcher label: choice}."""
+    ``eval.studies.evaluation.DatasetEntry``; `matchers` a list of specs (labelled by their own
+    label) or {row label: spec}; returns {matcher label: choice}."""
     if entry.val_dir is None:
         raise ValueError(f"{entry.test_dir}: tuning needs a validation dataset")
-    grids = {m.label: candidates_of(m) for m in matchers}
-    for m in matchers:
+    labelled = (
+        matchers.items() if isinstance(matchers, Mapping) else [(m.label, m) for m in matchers]
+    )
+    grids = {label: candidates_of(m) for label, m in labelled}
+    for _, m in labelled:
         check_budget(m.name, len(grid(m.name)))
     specs = [spec for options in grids.values() for spec, _ in options]
     runs = runner.run(

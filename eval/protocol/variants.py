@@ -3,12 +3,16 @@
 - ``calibrated`` (Table I proper): pairwise terms on 3-D positions, τ calibrated on validation
   data, parameters optionally tuned there (``--tune``; the untuned result is the ``untuned``
   variant).
+- ``equal_cues`` (Table I's headline): every matcher handed the same cues — metric geometry and
+  appearance — each in its family's natural form (:mod:`eval.protocol.cues`), tuned with the
+  same budget and τ calibrated on validation. ``calibrated`` is then the "as published" table.
 - ``paper``: the matchers as the paper describes its baselines — SM, RRWM and MOS's second-order
   term compare edge lengths between box centres in the image (``pairwise="image"``), every
   matcher reports its full Hungarian assignment (no τ), no tuning.
 
 A variant's files carry its suffix: ``metrics_per_pair.csv`` (calibrated, tuned when tuning
-ran), ``metrics_per_pair_untuned.csv``, ``metrics_per_pair_paper_protocol.csv``, and likewise
+ran), ``metrics_per_pair_untuned.csv``, ``metrics_per_pair_paper_protocol.csv``,
+``metrics_per_pair_equal_cues.csv``, and likewise
 for thresholds, average precision, the evaluation record and Table I.
 """
 
@@ -18,9 +22,9 @@ from pathlib import Path
 
 from eval.core.tasks import MatcherSpec
 
-PROTOCOLS = ("calibrated", "paper")
-MAIN, UNTUNED, PAPER = "", "untuned", "paper_protocol"
-VARIANTS = (MAIN, UNTUNED, PAPER)
+PROTOCOLS = ("calibrated", "paper", "equal_cues")
+MAIN, UNTUNED, PAPER, EQUAL = "", "untuned", "paper_protocol", "equal_cues"
+VARIANTS = (MAIN, UNTUNED, PAPER, EQUAL)
 
 # Options that make a matcher follow the paper's protocol; matchers not listed run as they are.
 PAPER_OPTIONS: dict[str, dict] = {

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from eval.protocol.abstention import NO_NUMBER, cannot_run
 from eval.report.tables import PAPER_NAMES, dataset_order, method_name
 
 # The V2X matchers shown (those present in the table): the paper's method and the strongest
@@ -57,12 +58,14 @@ def _row(cells: list[str]) -> str:
 def table1(results: Path) -> list[str]:
     """Per dataset: maximin's F1 and rank among the paper's methods (the paper's own rank of it
     by accuracy beside), the strongest other paper method and maximin − it with its interval, and
-    the strongest matcher of all."""
+    the strongest matcher of all — under the equal-cue protocol (``table1_equal_cues.csv``) when
+    the folder has it, else as published (``table1.csv``)."""
     results = Path(results)
-    table = read_csv(results / "table1.csv")
+    suffix = "_equal_cues" if (results / "table1_equal_cues.csv").is_file() else ""
+    table = read_csv(results / f"table1{suffix}.csv")
     if not _has(table, "dataset", "matcher", "f1_mean"):
         return []
-    paired = read_csv(results / "paired_differences.csv")
+    paired = read_csv(results / f"paired_differences{suffix}.csv")
     lines = [
         "| Dataset | Maximin F1 | its rank of the paper's 8 (paper's) | best other paper method "
         "| Maximin − it, F1 [95 % CI] | best of all matchers |",
@@ -188,7 +191,9 @@ def v2x(results: Path) -> list[str]:
         "|:---|" + "---:|" * (len(shown) + len(extra)),
     ]
     for preset in dict.fromkeys(table["preset"]):
-        cells = [pct(f1.get((preset, m))) for m in shown]
+        cells = [
+            NO_NUMBER if cannot_run(m, str(preset)) else pct(f1.get((preset, m))) for m in shown
+        ]
         if boxes:
             cells.append(boxes.get(preset, "–"))
         lines.append(_row([str(preset), *cells]))
@@ -205,6 +210,7 @@ def _boxes_best(results: Path) -> dict[str, str]:
     out = {}
     for preset, rows in table.groupby("preset", sort=False):
         rows = rows[~rows["matcher"].isin(("oracle", "prior"))]
+        rows = rows[[not cannot_run(m, str(preset)) for m in rows["matcher"]]]
         val = validation[validation["preset"] == preset].set_index("matcher")["val_f1"]
         if rows.empty or val.empty:
             continue
@@ -217,18 +223,23 @@ TEMPORAL_METHODS = ("windowed:consistency", "temporal_pose")
 
 
 def temporal(results: Path) -> list[str]:
-    """CAD-V2X sequences: F1 at W = 1 and W = 10 of a fixed pair of methods, per preset."""
+    """CAD-V2X sequences: pooled F1 at W = 1 and W = 10 of a fixed pair of methods, per preset
+    (:data:`~eval.protocol.abstention.NO_NUMBER` where a method cannot run)."""
     table = read_csv(Path(results) / "table_temporal.csv")
-    if not _has(table, "method", "window", "preset", "f1_mean"):
+    if not _has(table, "method", "window", "preset", "f1_pooled"):
         return []
     shown = [m for m in TEMPORAL_METHODS if m in set(table["method"])]
     if not shown:
         return []
-    f1 = table.set_index(["preset", "method", "window"])["f1_mean"]
+    f1 = table.set_index(["preset", "method", "window"])["f1_pooled"]
     header = [f"{m}, W = {w}" for m in shown for w in (1, 10)]
     lines = ["| Preset | " + " | ".join(header) + " |", "|:---|" + "---:|" * len(header)]
     for preset in dict.fromkeys(table["preset"]):
-        cells = [pct(f1.get((preset, m, w))) for m in shown for w in (1, 10)]
+        cells = [
+            NO_NUMBER if cannot_run(m, str(preset), temporal=True) else pct(f1.get((preset, m, w)))
+            for m in shown
+            for w in (1, 10)
+        ]
         lines.append(_row([str(preset), *cells]))
     return lines
 

@@ -20,7 +20,7 @@ import pandas as pd
 from eval.core.pose_metrics import summarise_pose
 from eval.core.result_files import write_csv, write_text
 from eval.protocol.metrics import METRICS, POOLED, summarise_pooled, summarise_runs
-from eval.protocol.variants import MAIN, VARIANTS, variant_path
+from eval.protocol.variants import EQUAL, MAIN, VARIANTS, variant_path
 from eval.report.threshold_format import rounded, tau_text
 
 PAPER_CSV = Path(__file__).resolve().parents[1] / "data" / "paper-table1.csv"
@@ -315,6 +315,7 @@ def write_tables(out_dir: str | Path, paper_csv: str | Path = PAPER_CSV) -> str:
         for v in VARIANTS
         if variant_path(out_dir, "metrics_per_pair", v, ".csv").is_file()
     }
-    if MAIN in written:
-        write_paired_differences(out_dir)
+    for variant in (MAIN, EQUAL):
+        if variant in written:
+            write_paired_differences(out_dir, variant)
     return written.get(MAIN) or next(iter(written.values()), "")

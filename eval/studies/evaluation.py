@@ -22,6 +22,7 @@ from eval.core.result_files import write_csv, write_text
 from eval.core.runner import Runner, requests_for
 from eval.core.tasks import MatcherSpec, RunResult
 from eval.protocol import calibration, tuning
+from eval.protocol.cues import equal_cue_spec
 from eval.protocol.metrics import (
     RankedAssignments,
     average_precision,
@@ -29,6 +30,7 @@ from eval.protocol.metrics import (
     pooled_pr_curve,
 )
 from eval.protocol.variants import (
+    EQUAL,
     MAIN,
     PAPER,
     UNTUNED,
@@ -489,6 +491,10 @@ def evaluate(
     if len(set(labels)) != len(labels):
         raise ValueError(f"datasets: two test datasets of the same scenario kind {labels}")
     base = as_named(matchers)
+    main_variant = MAIN
+    if protocol == "equal_cues":
+        base = {label: equal_cue_spec(spec) for label, spec in base.items()}
+        main_variant, untuned, protocol = EQUAL, False, "calibrated"
     calibrate = calibrate and protocol == "calibrated"
     results: dict[str, list[EntryResult]] = {}
     choices: list[tuning.TuningChoice] = []
@@ -505,32 +511,35 @@ def evaluate(
             )
             continue
         if tune:
-            chosen = tuning.tune_entry(
-                entry, list(base.values()), runner, tune_limit, entry.localisation
-            )
+            chosen = tuning.tune_entry(entry, base, runner, tune_limit, entry.localisation)
             choices += chosen.values()
             named = {label: chosen[label].spec for label in base}
             if untuned:
                 results.setdefault(UNTUNED, []).append(
                     evaluate_entry(entry, base, seeds, runner, calibrate)
                 )
-            results.setdefault(MAIN, []).append(
+            results.setdefault(main_variant, []).append(
                 evaluate_entry(entry, named, seeds, runner, calibrate)
             )
         else:
-            results.setdefault(MAIN, []).append(
+            results.setdefault(main_variant, []).append(
                 evaluate_entry(entry, base, seeds, runner, calibrate)
             )
     for variant, variant_results in results.items():
         settings = {
             "protocol": protocol,
             "calibrated": calibrate,
-            "tuned": tune and variant == MAIN,
+            "tuned": tune and variant == main_variant,
         }
+        if variant == EQUAL:
+            settings["protocol"] = "equal_cues"
         _write_variant(out_dir, variant, variant_results, seeds, runner, settings)
     if tune:
-        write_csv(pd.DataFrame(tuning.tuning_rows(choices)), out_dir / "tuning.csv")
-    main = results.get(PAPER if protocol == "paper" else MAIN, [])
+        write_csv(
+            pd.DataFrame(tuning.tuning_rows(choices)),
+            variant_path(out_dir, "tuning", main_variant, ".csv"),
+        )
+    main = results.get(PAPER if protocol == "paper" else main_variant, [])
     return {r.entry.label: r.taus for r in main}
 
 

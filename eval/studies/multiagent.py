@@ -23,6 +23,9 @@ that p Holm-adjusted over every gain of the table (``gain_p_holm``, family size
 bootstrap interval. ``time_ratio``: ms per snapshot over that of the same matcher, fusion and
 preset at the smallest N, with its interval. The cycle-violation rate is 0 for every fused
 output by construction: :func:`goals` checks it as an invariant, not as a goal.
+A two-view matcher that cannot run under a preset (a prior reader under ``denied``,
+:mod:`eval.protocol.abstention`) keeps its rows with no number: it enters no bootstrap, no Holm
+family and no "best".
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ import pandas as pd
 from eval.core.result_files import write_csv, write_text
 from eval.core.runner import Runner, requests_for
 from eval.core.tasks import MatcherSpec, PairOutcome
+from eval.protocol.abstention import NO_NUMBER, cannot_run
 from eval.protocol.calibration import calibrate, predictions
 from eval.protocol.goal_verdict import NOT_SHOWN, goal_line
 from eval.protocol.holm import holm
@@ -272,7 +276,15 @@ def multiagent_table(
 ) -> pd.DataFrame:
     """One row per (N, matcher, fusion, preset) with :data:`COLUMNS`: the test snapshots'
     figures, their episode-bootstrap intervals (``resamples`` resamples of the episodes and runs,
-    seeded), and the validation snapshots' ``val_*`` figures (NaN without validation rows)."""
+    seeded), and the validation snapshots' ``val_*`` figures (NaN without validation rows). A
+    matcher that cannot run under the preset (:func:`eval.protocol.abstention.cannot_run`) keeps
+    its rows, every figure empty, and is in no gain family."""
+    keys = _split(per_snapshot, "test")[BY].drop_duplicates()
+    ran = [
+        not cannot_run(m, p)
+        for m, p in zip(per_snapshot["matcher"], per_snapshot["preset"], strict=True)
+    ]
+    per_snapshot = per_snapshot[ran]
     test, val = _split(per_snapshot, "test"), _split(per_snapshot, "val")
     table = _summary(test).merge(_intervals(test, resamples, seed, level), on=BY, how="left")
     if len(val):
@@ -289,6 +301,8 @@ def multiagent_table(
         table = table.merge(on_val, on=BY, how="left")
     else:
         table = table.assign(val_f1_pooled=np.nan, val_count_error=np.nan, val_f1_gain=np.nan)
+    table = keys.merge(table, on=BY, how="left")  # the rows that could not run: keys only
+    table[["snapshots", "runs"]] = table[["snapshots", "runs"]].astype("Int64")
     return table[list(COLUMNS)].reset_index(drop=True)
 
 
@@ -434,6 +448,12 @@ def to_markdown(table: pd.DataFrame) -> str:
     ]
     ordered = table.sort_values(["preset", "n_agents", "matcher"], kind="stable")
     for row in ordered.itertuples(index=False):
+        if cannot_run(row.matcher, row.preset):
+            lines.append(
+                f"| {row.preset} | {row.n_agents} | {row.matcher} | {row.fusion} | {NO_NUMBER} "
+                "| n/a | n/a | n/a | n/a | n/a |"
+            )
+            continue
         p_holm = getattr(row, "gain_p_holm", np.nan)
         gain = (
             "–"

@@ -10,7 +10,10 @@ tracks from its own detections and odometry (:func:`matchers.tracking.hungarian.
 never a true id); odometry and camera mounts from the pairs. Methods (:data:`METHODS`):
 ``windowed:<m>`` for the two-view matchers ``consistency`` and ``pose_refine`` at W in
 {1, 3, 10} and ``temporal_pose`` at W in {1, 10}. A method that reads the localisation prior
-declares nothing under ``denied`` (rows kept, F1 0, not tuned).
+cannot run under ``denied`` (:mod:`eval.protocol.abstention`, from its ``requires``): it is not
+run nor tuned, its rows are kept with no number (empty CSV cells,
+:data:`~eval.protocol.abstention.NO_NUMBER` in Markdown), and it is in no "best" and no
+comparison.
 
 Tuning (the equal budget of the two-view tables, :mod:`eval.protocol.tuning`). Per (method, W,
 preset) every configuration of the method's grid
@@ -23,7 +26,11 @@ wins (:func:`eval.protocol.tuning.best_candidate`, exact ties to the smallest pa
 The chosen parameters (``params``) and τ go to the table and ``temporal/tuning.csv`` (every
 candidate). The test split never enters the choice or τ.
 
-Metrics. Per frame: F1 of the declared pairs at τ against ``pair.gt_pairs``;
+Metrics. Headline: pooled F1 (``f1_pooled``: 2 ΣTP / (Σ|M| + Σ|G|) over every frame of every
+test sequence, :func:`eval.protocol.pooled_bootstrap.pooled_f1`; its interval an episode-level
+bootstrap, :mod:`eval.protocol.pooled_bootstrap`) — many frames of a sequence have no true pair,
+where the per-frame convention gives F1 1 to declaring nothing. Secondary, per frame: F1 of the
+declared pairs at τ against ``pair.gt_pairs`` (``f1_mean``);
 success@(1 m, 2°) of the planar fit of those pairs (:func:`eval.core.pose_metrics.
 matched_planar_error`, extrinsics ``pair.camera_extrinsics``, truth
 ``pair.true_relative_pose()``); the ``oracle`` row is the same fit of the true pairs. Over time
@@ -34,8 +41,9 @@ episode-level cluster t-intervals (:func:`eval.protocol.cluster_interval.t_inter
 sequence's episode is its simulation episode), on the per-frame values.
 
 What accumulation buys (``table_temporal_gain.csv``): per preset, the method with the best
-validation F1 at W = 10, its test F1 at W = 10 minus at W = 1, paired per frame, with its
-episode-level interval. Goals (issue 41) go through :func:`eval.protocol.goal_verdict.goal_line`.
+validation F1 at W = 10 (among those that can run there), its test pooled F1 at W = 10 minus at
+W = 1 with its paired episode-level bootstrap interval (headline), and the same for the mean
+per-frame F1 (paired per frame, cluster t-interval). Goals (issue 41) go through :func:`eval.protocol.goal_verdict.goal_line`.
 """
 
 from __future__ import annotations
@@ -53,6 +61,8 @@ import pandas as pd
 from eval.core.pose_metrics import matched_planar_error
 from eval.core.result_files import write_csv, write_text
 from eval.core.tasks import MatcherSpec
+from eval.protocol import pooled_bootstrap
+from eval.protocol.abstention import NO_NUMBER, cannot_run
 from eval.protocol.calibration import calibrate_ranked
 from eval.protocol.cluster_interval import t_interval
 from eval.protocol.goal_verdict import goal_line
@@ -96,6 +106,9 @@ COLUMNS = (
     "tau",
     "val_f1",
     "params",
+    "f1_pooled",
+    "f1_pooled_low",
+    "f1_pooled_high",
     "f1_mean",
     "f1_low",
     "f1_high",
@@ -115,7 +128,22 @@ COLUMNS = (
     "episodes",
     "ms_per_frame",
 )
-GAIN_COLUMNS = ("preset", "method", "f1_w10", "f1_w1", "diff", "ci_low", "ci_high", "episodes")
+GAIN_COLUMNS = (
+    "preset",
+    "method",
+    "f1_pooled_w10",
+    "f1_pooled_w1",
+    "pooled_diff",
+    "pooled_low",
+    "pooled_high",
+    "f1_w10",
+    "f1_w1",
+    "diff",
+    "ci_low",
+    "ci_high",
+    "episodes",
+)
+COUNT_COLUMNS = ("never_matched", "frames", "sequences", "episodes")  # integers, or no number
 TABLE, GAIN = "table_temporal", "table_temporal_gain"
 TUNING_FILE = "temporal/tuning.csv"
 TUNING_COLUMNS = ("preset", "window", "matcher", "config", "params", "val_f1", "tau", "chosen")
@@ -135,13 +163,10 @@ class Sequenced:
     sequence: int
 
 
-def reads_prior(method: str) -> bool:
-    """Whether ``method`` reads the localisation prior (``temporal_pose`` always does)."""
-    if method == "temporal_pose":
-        return True
-    from eval.studies.v2x_table import reads_prior as two_view_reads_prior
-
-    return two_view_reads_prior(method.partition(":")[2])
+def abstains(method: str, preset: str) -> bool:
+    """Whether temporal method ``method`` cannot run under ``preset`` (it requires the prior and
+    the preset gives none, :func:`eval.protocol.abstention.cannot_run`)."""
+    return cannot_run(method, preset, temporal=True)
 
 
 def _true_ids(object_ids: Sequence[str], names: dict[str, int]) -> np.ndarray:
@@ -213,8 +238,8 @@ def run_method(
     options: dict | None = None,
 ):
     """Per frame (assigned (k, 2), assigned scores (k,)) of ``method`` at ``window`` with its
-    ``options`` (None: defaults) and no threshold; nothing under ``denied`` for a prior reader.
-    Plus the seconds it took."""
+    ``options`` (None: defaults) and no threshold; nothing declared where it cannot run (a prior
+    reader under ``denied``, :func:`abstains`). Plus the seconds it took."""
     return run_windows(method, (window,), item, seed, preset, options)[window]
 
 
@@ -232,7 +257,7 @@ def run_windows(
     from matchers.core.temporal_registry import get_temporal
 
     empty = [(np.zeros((0, 2), np.int64), np.zeros(0)) for _ in item.seq.frames]
-    if preset == "denied" and reads_prior(method):
+    if abstains(method, preset):
         return {w: (empty, 0.0) for w in windows}
     fn = get_temporal(method)
     options = dict(options or {})
@@ -299,7 +324,7 @@ def tune_windows(
     run once for all of them (:func:`run_windows`); every W chooses on its own."""
     from matchers.core.temporal_registry import temporal_search_space
 
-    declares_nothing = preset == "denied" and reads_prior(method)
+    declares_nothing = abstains(method, preset)
     configs = temporal_search_space(method) if tune and not declares_nothing else [{}]
     if len(configs) > 1:
         check_budget(method, len(configs))
@@ -345,7 +370,7 @@ def score_test(item: Sequenced, frames: list, tau: float, seed: int) -> tuple[li
                 "sequence": item.sequence,
                 "episode": item.episode,
                 "frame": t,
-                "f1": pair_metrics(pairs, item.gt[t], f.n1, f.n2).f1,
+                **_frame_counts(pair_metrics(pairs, item.gt[t], f.n1, f.n2)),
                 "success": _pose_success(item, t, pairs),
             }
         )
@@ -365,6 +390,35 @@ def score_test(item: Sequenced, frames: list, tau: float, seed: int) -> tuple[li
         "assa": h["AssA"],
     }
     return rows, temporal
+
+
+def _frame_counts(metrics) -> dict:
+    """A frame's per-frame F1 and the counts pooled F1 sums: true positives, declared pairs,
+    true pairs."""
+    return {"f1": metrics.f1, "tp": metrics.tp, "n_pred": metrics.n_pred, "n_gt": metrics.n_gt}
+
+
+def _pooled_sums(per_frame: pd.DataFrame) -> pooled_bootstrap.Sums:
+    """Per-frame counts summed per episode and run (one group) for the pooled bootstrap."""
+    counts = per_frame.rename(
+        columns={"tp": "true_positives", "n_pred": "declared", "n_gt": "true_pairs"}
+    ).assign(_all=0)
+    return pooled_bootstrap.group_sums(counts, ["_all"], pooled_bootstrap.F1_COUNTS)
+
+
+def pooled_f1(per_frame: pd.DataFrame) -> tuple[float, float, float]:
+    """(pooled F1, low, high): 2 ΣTP / (Σ|M| + Σ|G|) over every frame of ``per_frame`` (its
+    ``tp``, ``n_pred``, ``n_gt`` columns, all runs together) with its 95 % episode-level
+    bootstrap interval (NaN with one episode)."""
+    if not len(per_frame):
+        return (float("nan"),) * 3
+    sums = _pooled_sums(per_frame)
+    point = float(pooled_bootstrap.f1_of(sums)[0])
+    if not pooled_bootstrap.resamplable(sums):
+        return point, float("nan"), float("nan")
+    resampled = pooled_bootstrap.f1_of(sums, pooled_bootstrap.weights_for(sums))
+    low, high = pooled_bootstrap.interval(resampled)
+    return point, float(low[0]), float(high[0])
 
 
 def _interval(values, episodes, bounds=(0.0, 1.0)) -> tuple[float, float, float, int]:
@@ -393,10 +447,14 @@ def _switch_interval(temporal: list[dict]) -> tuple[float, float, float]:
 def summarise(per_frame: pd.DataFrame, temporal: list[dict]) -> dict:
     """One table row's metric columns from a method's per-frame rows and sequence metrics."""
     f1, f1_low, f1_high, episodes = _interval(per_frame["f1"], per_frame["episode"])
+    pooled, pooled_low, pooled_high = pooled_f1(per_frame)
     success, s_low, s_high, _ = _interval(per_frame["success"], per_frame["episode"])
     sw, sw_low, sw_high = _switch_interval(temporal)
     first = [v for s in temporal for v in s["first"]]
     return {
+        "f1_pooled": pooled,
+        "f1_pooled_low": pooled_low,
+        "f1_pooled_high": pooled_high,
         "f1_mean": f1,
         "f1_low": f1_low,
         "f1_high": f1_high,
@@ -451,6 +509,12 @@ def evaluate_preset(task: tuple) -> PresetOutcome:
     per_frame_all = [oracle_frames.assign(method=ORACLE_ROW, window=0, preset=preset)]
     frames_by: dict[tuple[str, int], pd.DataFrame] = {}
     for method, windows in methods:
+        if abstains(method, preset):  # no number: not run, not tuned, in no comparison
+            rows += [
+                {"method": method, "window": w, "preset": preset, "params": ""} for w in windows
+            ]
+            log.info("[temporal] %s %s: %s", preset, method, NO_NUMBER)
+            continue
         choices = tune_windows(method, windows, val, preset, tune)
         for window in windows:
             choice = choices[window]
@@ -519,6 +583,7 @@ def evaluate_temporal(
     per_frame_all = [f for o in outcomes for f in o.per_frame]
     tuned = [t for o in outcomes for t in o.tuned]
     table = pd.DataFrame(rows, columns=list(COLUMNS))
+    table[list(COUNT_COLUMNS)] = table[list(COUNT_COLUMNS)].astype("Int64")  # empty: no number
     oracle = table[table["method"] == ORACLE_ROW].set_index("preset")["success_1m_2deg"]
     ceiling = table["preset"].map(oracle).to_numpy(dtype=float)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -540,9 +605,11 @@ def evaluate_temporal(
 
 
 def best_long(table: pd.DataFrame, preset: str) -> str | None:
-    """The method with the best validation F1 at W = 10 under ``preset`` (None: none)."""
+    """The method with the best validation F1 at W = 10 under ``preset`` among those that can run
+    there (None: none)."""
     rows = table[(table["preset"] == preset) & (table["window"] == LONG)]
     rows = rows[rows["method"] != ORACLE_ROW]
+    rows = rows[[not abstains(m, preset) for m in rows["method"]]]
     if not len(rows):
         return None
     return str(rows.sort_values(["val_f1", "method"], ascending=[False, True]).iloc[0]["method"])
@@ -556,9 +623,15 @@ def _gain(preset: str, rows: list[dict], frames_by: dict) -> dict | None:
     long, short = frames_by[(method, LONG)], frames_by[(method, SHORT)]
     diff = long["f1"].to_numpy(float) - short["f1"].to_numpy(float)
     mean, low, high, episodes = t_interval(diff, long["episode"].to_numpy(), bounds=(-1.0, 1.0))
+    pooled = pooled_bootstrap.f1_difference(_pooled_sums(long), _pooled_sums(short))
     return {
         "preset": preset,
         "method": method,
+        "f1_pooled_w10": float(pooled_bootstrap.f1_of(_pooled_sums(long))[0]),
+        "f1_pooled_w1": float(pooled_bootstrap.f1_of(_pooled_sums(short))[0]),
+        "pooled_diff": float(pooled.point[0]),
+        "pooled_low": float(pooled.low[0]),
+        "pooled_high": float(pooled.high[0]),
         "f1_w10": float(long["f1"].mean()),
         "f1_w1": float(short["f1"].mean()),
         "diff": mean,
@@ -595,23 +668,33 @@ def _num(value: float, digits: int = 2) -> str:
 def to_markdown(table: pd.DataFrame, gain: pd.DataFrame | None = None) -> str:
     """The table as markdown: per preset every (method, W) and the oracle row."""
     lines = [
-        f"**{LABEL}** — temporal matchers × window W × localisation preset; F1 and success in "
-        "percent with episode-level 95 % intervals; parameters "
+        f"**{LABEL}** — temporal matchers × window W × localisation preset; pooled F1 (the "
+        "headline: frames without a true pair are common in a sequence), mean per-frame F1 and "
+        "success in percent with episode-level 95 % intervals; parameters "
         f"({TUNING_BUDGET} configurations each) and τ per "
         "(method, W, preset) from validation; "
         "switches per 100 covisible object-frames; frames to the first correct association "
         "(mean over objects matched at all; never: objects never matched correctly); HOTA/AssA "
-        "of the declared pairs over the own tracks.",
+        f"of the declared pairs over the own tracks; {NO_NUMBER}: the method reads the "
+        "localisation prior, which the preset does not give (no number, in no comparison).",
         "",
-        "| Preset | Method | W | τ | parameters | F1 [95 % CI] | success@(1 m, 2°) [95 % CI] "
-        "| of oracle | switches/100 | frames to first | never | HOTA | AssA |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| Preset | Method | W | τ | parameters | F1 pooled [95 % CI] | F1 per frame [95 % CI] "
+        "| success@(1 m, 2°) [95 % CI] | of oracle | switches/100 | frames to first | never "
+        "| HOTA | AssA |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for row in table.itertuples(index=False):
         oracle = row.method == ORACLE_ROW
+        if not oracle and abstains(row.method, row.preset):
+            lines.append(
+                f"| `{row.preset}` | `{row.method}` | {row.window} | n/a | n/a | {NO_NUMBER} |"
+                + " n/a |" * 8
+            )
+            continue
         lines.append(
             f"| `{row.preset}` | `{row.method}` | {'' if oracle else row.window} "
             f"| {'' if oracle else _num(row.tau, 3)} | {'' if oracle else _params(row.params)} "
+            f"| {_ranged(row.f1_pooled, row.f1_pooled_low, row.f1_pooled_high)} "
             f"| {_ranged(row.f1_mean, row.f1_low, row.f1_high)} "
             f"| {_ranged(row.success_1m_2deg, row.success_low, row.success_high)} "
             f"| {_pct(row.share_of_oracle, 0)} | {_num(row.switches_per_100)} "
@@ -621,16 +704,19 @@ def to_markdown(table: pd.DataFrame, gain: pd.DataFrame | None = None) -> str:
     if gain is not None and len(gain):
         lines += [
             "",
-            "What accumulation buys (best method at W = 10 by validation F1; test F1 at W = 10 "
-            "minus W = 1, paired per frame, episode-level 95 % interval):",
+            "What accumulation buys (best method at W = 10 by validation F1 among those that can "
+            "run; test F1 at W = 10 minus W = 1: pooled, episode-level bootstrap 95 % interval; "
+            "per frame, paired per frame, episode-level t-interval):",
             "",
-            "| Preset | Method | F1 W = 10 | F1 W = 1 | difference [95 % CI] |",
-            "|---|---|---|---|---|",
+            "| Preset | Method | F1 pooled W = 10 | F1 pooled W = 1 | pooled difference [95 % CI] "
+            "| F1 per frame W = 10 | F1 per frame W = 1 | per-frame difference [95 % CI] |",
+            "|---|---|---|---|---|---|---|---|",
         ]
         for g in gain.itertuples(index=False):
             lines.append(
-                f"| `{g.preset}` | `{g.method}` | {_pct(g.f1_w10)} | {_pct(g.f1_w1)} "
-                f"| {_ranged(g.diff, g.ci_low, g.ci_high)} |"
+                f"| `{g.preset}` | `{g.method}` | {_pct(g.f1_pooled_w10)} | {_pct(g.f1_pooled_w1)} "
+                f"| {_ranged(g.pooled_diff, g.pooled_low, g.pooled_high)} "
+                f"| {_pct(g.f1_w10)} | {_pct(g.f1_w1)} | {_ranged(g.diff, g.ci_low, g.ci_high)} |"
             )
     return "\n".join(lines)
 
@@ -649,10 +735,10 @@ def goals(table: pd.DataFrame, results: Path) -> list[str]:
         row = _row(table, denied, LONG, "denied")
         lines.append(
             goal_line(
-                "`denied`, W = 10: best F1 ≥ 80",
-                row.f1_mean,
-                row.f1_low,
-                row.f1_high,
+                "`denied`, W = 10: best pooled F1 ≥ 80",
+                row.f1_pooled,
+                row.f1_pooled_low,
+                row.f1_pooled_high,
                 0.80,
                 detail=f"`{denied}`, chosen on validation",
             )
@@ -705,13 +791,14 @@ def goals(table: pd.DataFrame, results: Path) -> list[str]:
         g = g[g["preset"] == "denied"]
         if len(g):
             g = g.iloc[0]
-            above = "above 0" if np.isfinite(g.ci_low) and g.ci_low > 0 else "not above 0"
+            low = g.pooled_low
+            above = "above 0" if np.isfinite(low) and low > 0 else "not above 0"
             lines.append(
                 goal_line(
-                    "`denied`: W = 10 beats W = 1 by ≥ +10 F1 points",
-                    g["diff"],
-                    g.ci_low,
-                    g.ci_high,
+                    "`denied`: W = 10 beats W = 1 by ≥ +10 pooled F1 points",
+                    g.pooled_diff,
+                    g.pooled_low,
+                    g.pooled_high,
                     0.10,
                     detail=f"`{g.method}`; interval {above}",
                 )
@@ -756,13 +843,14 @@ def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[s
         "`windowed:<m>` (a two-view matcher's scores averaged along the own tracks over W "
         "frames) and `temporal_pose` (one planar motion per window), parameters "
         f"({TUNING_BUDGET} configurations each) and τ per (method, W, preset) on validation. Per preset the method with the best validation F1 "
-        "at W = 10: test F1 at W = 10 and W = 1, their paired difference (episode-level 95 % "
-        f"interval), success@(1 m, 2°) at W = 10 and the oracle's. Every row: "
-        f"[{rel}/{TABLE}.md]({rel}/{TABLE}.md).",
+        "at W = 10 (among those that can run there: a prior reader has no number under `denied`): "
+        "test pooled F1 at W = 10 and W = 1 and their difference (episode-level bootstrap 95 % "
+        "interval), the per-frame mean's difference, success@(1 m, 2°) at W = 10 and the "
+        f"oracle's. Every row: [{rel}/{TABLE}.md]({rel}/{TABLE}.md).",
         "",
-        "| Preset | Method | F1 W = 10 | F1 W = 1 | W = 10 − W = 1 [95 % CI] | success W = 10 "
-        "| oracle success |",
-        "|---|---|---|---|---|---|---|",
+        "| Preset | Method | F1 pooled W = 10 | F1 pooled W = 1 | W = 10 − W = 1 [95 % CI] "
+        "| per-frame F1 W = 10 − W = 1 | success W = 10 | oracle success |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for g in gain.itertuples(index=False):
         mine = table[
@@ -774,23 +862,33 @@ def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[s
         success = float(mine["success_1m_2deg"].iloc[0]) if len(mine) else float("nan")
         ceiling = float(oracle["success_1m_2deg"].iloc[0]) if len(oracle) else float("nan")
         lines.append(
-            f"| `{g.preset}` | `{g.method}` | {_pct(g.f1_w10)} | {_pct(g.f1_w1)} "
+            f"| `{g.preset}` | `{g.method}` | {_pct(g.f1_pooled_w10)} | {_pct(g.f1_pooled_w1)} "
+            f"| {_ranged(g.pooled_diff, g.pooled_low, g.pooled_high)} "
             f"| {_ranged(g.diff, g.ci_low, g.ci_high)} | {_pct(success)} | {_pct(ceiling)} |"
         )
     findings = []
     for g in gain.itertuples(index=False):
-        if not (np.isfinite(g.ci_low) and np.isfinite(g.ci_high)):
+        if not (np.isfinite(g.pooled_low) and np.isfinite(g.pooled_high)):
             verdict = "no interval (one episode)"
-        elif g.ci_low > 0:
+        elif g.pooled_low > 0:
             verdict = "a gain, interval above 0"
-        elif g.ci_high < 0:
+        elif g.pooled_high < 0:
             verdict = "a loss, interval below 0"
         else:
             verdict = "no measurable change, interval across 0"
         findings.append(
             f"`{g.preset}`: W = 10 against W = 1 for `{g.method}`: "
-            f"{100 * g.diff:+.1f} F1 points — {verdict}"
+            f"{100 * g.pooled_diff:+.1f} pooled F1 points — {verdict}"
         )
+    abstained = table[
+        [
+            m != ORACLE_ROW and abstains(m, p)
+            for m, p in zip(table["method"], table["preset"], strict=True)
+        ]
+    ]
+    for preset, rows in abstained.groupby("preset", sort=False):
+        names = ", ".join(f"`{m}`" for m in dict.fromkeys(rows["method"]))
+        findings.append(f"`{preset}`: {names} — {NO_NUMBER}; in no comparison")
     oracle = table[(table["method"] == ORACLE_ROW) & (table["preset"] == "gnss-urban")]
     if len(oracle) and float(oracle["success_high"].iloc[0]) < 0.60:
         o = oracle.iloc[0]
@@ -810,12 +908,14 @@ def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[s
 
 def temporal_tuning_record(table: pd.DataFrame) -> dict:
     """The run record's ``temporal.tuning``: {preset: {method: {W: {"params": chosen options,
-    "tau": τ, "val_f1": validation F1}}}} of every row but the oracle."""
+    "tau": τ, "val_f1": validation F1}}}} of every row but the oracle; all three None for a
+    method that cannot run under the preset (:func:`abstains`)."""
     record: dict = {}
     for row in table[table["method"] != ORACLE_ROW].itertuples(index=False):
+        ran = not abstains(row.method, row.preset)
         record.setdefault(row.preset, {}).setdefault(row.method, {})[str(row.window)] = {
-            "params": json.loads(row.params),
+            "params": json.loads(row.params) if ran else None,
             "tau": None if not np.isfinite(row.tau) else round(float(row.tau), 6),
-            "val_f1": round(float(row.val_f1), 6),
+            "val_f1": round(float(row.val_f1), 6) if ran else None,
         }
     return record

@@ -9,8 +9,9 @@ mean with the cluster-robust t-interval over episodes (:mod:`eval.protocol.clust
 equal episode sizes give the t-interval of episode means), and the two-sided p-value of the
 same t-statistic. Holm's adjustment (:mod:`eval.protocol.holm`) runs over every comparison of
 the file; a sensor is said to favour a matcher only where the Holm-adjusted p is at most
-:data:`ALPHA` (so the 95 % interval excludes 0 too). A matcher that reads the prior is not
-compared under ``denied`` (it has no input there: no number, DESIGN §3).
+:data:`ALPHA` (so the 95 % interval excludes 0 too). A matcher that cannot run under a preset
+(a prior reader under ``denied``, :func:`eval.protocol.abstention.cannot_run`) is not compared
+there: no input, no number (DESIGN §3).
 
 Per preset and matcher family (with / without the prior) one row is marked ``chosen``: the
 matcher of that family with the highest validation F1 averaged over the two sensors — a choice
@@ -78,7 +79,8 @@ def sensor_differences(
     ``preset`` column); ``validation``: {preset: {matcher: validation F1 averaged over the two
     sensors}} to mark the ``chosen`` rows (module docstring). ValueError when a frame pair's
     episode or simulation seed differs between the two: they are not the same frames."""
-    from eval.studies.v2x_table import NO_PRIOR_PRESET, reads_prior
+    from eval.protocol.abstention import cannot_run
+    from eval.studies.v2x_table import reads_prior
 
     joined = _pair_means(lidar).merge(
         _pair_means(camera), on=["preset", "matcher", "pair"], suffixes=("_lidar", "_camera")
@@ -94,9 +96,9 @@ def sensor_differences(
         )
     rows = []
     for (preset, matcher), group in joined.groupby(["preset", "matcher"], sort=False):
+        if cannot_run(matcher, preset):
+            continue  # no input, no number (eval.protocol.abstention)
         prior = reads_prior(matcher)
-        if prior and preset == NO_PRIOR_PRESET:
-            continue  # no input, no number
         d = (group["f1_lidar"] - group["f1_camera"]).to_numpy()
         episodes = group["episode_lidar"].to_numpy()
         diff, low, high, clusters = t_interval(d, episodes, level, bounds=(-1.0, 1.0))

@@ -11,7 +11,9 @@ other preset on that preset's validation draw (the same 8-configuration budget; 
 ``gnss-urban`` choice. τ is calibrated on the validation split at each preset (``DIR/v2x/<preset>/``
 holds each preset's evaluation files, ``tuning.csv`` among them). A matcher that does not read
 the prior is computed once per latency (``exact+0ms``, ``exact+100ms``). Under ``denied`` the
-prior matchers declare nothing (their rows are kept, F1 0).
+prior matchers cannot run (:mod:`eval.protocol.abstention`): their rows are kept with no number
+(empty CSV cells, :data:`~eval.protocol.abstention.NO_NUMBER` in Markdown) and they are left out
+of every ranking, "chosen on validation" and comparison.
 
 Reference rows per preset: ``oracle`` — the planar fit of the *true* association (the ceiling
 detection error leaves to every matcher; ``share_of_oracle`` states each matcher's success as a
@@ -41,6 +43,7 @@ from eval.core.result_files import write_csv, write_text
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
 from eval.protocol import tuning
+from eval.protocol.abstention import NO_NUMBER, cannot_run
 from eval.protocol.cluster_interval import t_interval
 from eval.protocol.goal_verdict import goal_line
 from eval.protocol.metrics import summarise_pooled, summarise_runs
@@ -95,6 +98,12 @@ def reads_prior(name: str) -> bool:
         return False
 
 
+def runnable(names: Sequence[str], preset: str) -> list[str]:
+    """``names`` less the matchers that cannot run under ``preset`` (a prior reader under
+    ``denied``, :func:`eval.protocol.abstention.cannot_run`), in order."""
+    return [m for m in names if not cannot_run(m, preset)]
+
+
 def evaluate_v2x(
     test_dir: str | Path,
     val_dir: str | Path,
@@ -119,7 +128,7 @@ def evaluate_v2x(
     tuned = open_entry(test_dir, val_dir, label, localisation=TUNE_PRESET, sensor=sensor)
     evaluate([tuned], matchers, seeds, runner, tuned_dir, tune=tune, untuned=False)
     named, _ = chosen_specs(tuned_dir, label, matchers)
-    frames, validation = [], {}
+    frames, validation, recorded = [], {}, {}
     for preset in presets:
         folder = base / preset
         if preset != TUNE_PRESET:
@@ -130,7 +139,9 @@ def evaluate_v2x(
             folder / "metrics_per_pair.csv", keep_default_na=False, na_values=[""]
         )
         frames.append(per_pair.assign(preset=preset))
-        validation[preset] = validation_f1(folder / "thresholds.csv", label)
+        found = validation_f1(folder / "thresholds.csv", label)
+        validation[preset] = {m: found[m] for m in runnable(list(found), preset)}
+        recorded[preset] = {m: validation[preset].get(m, np.nan) for m in found}
     per_pair = pd.concat(frames, ignore_index=True)
     write_csv(per_pair, base / "metrics_per_pair.csv")
     table = v2x_table(per_pair)
@@ -138,7 +149,7 @@ def evaluate_v2x(
     val_table = pd.DataFrame(
         [
             {"preset": p, "matcher": m, "val_f1": f}
-            for p, fs in validation.items()
+            for p, fs in recorded.items()
             for m, f in fs.items()
         ]
     )
@@ -215,7 +226,10 @@ def v2x_table(per_pair: pd.DataFrame) -> pd.DataFrame:
     order = {p: k for k, p in enumerate(PRESETS)}
     table["_p"] = table["preset"].map(lambda p: order.get(p, len(order)))
     table = table.sort_values(["_p"], kind="stable").drop(columns="_p")
-    return table.reindex(columns=list(COLUMNS)).reset_index(drop=True)
+    table = table.reindex(columns=list(COLUMNS)).reset_index(drop=True)
+    abstains = [cannot_run(m, p) for m, p in zip(table["matcher"], table["preset"], strict=True)]
+    table.loc[abstains, list(COLUMNS[2:])] = np.nan  # no number, never the empty-frame value
+    return table
 
 
 def _intervals(per_pair: pd.DataFrame, prefix: str) -> pd.DataFrame:
@@ -277,8 +291,13 @@ def _reference_rows(per_pair: pd.DataFrame, row: str) -> pd.DataFrame:
 def ranked_on_validation(group: pd.DataFrame, validation: Mapping[str, float] | None) -> list[str]:
     """The matchers of one preset's per-pair rows, best first by validation F1 (``validation``:
     {matcher: val F1}; a matcher without one ranks last). Without validation figures (a table
-    built in memory) the ranking is by test F1 — callers that state a verdict pass them."""
+    built in memory) the ranking is by test F1 — callers that state a verdict pass them. A
+    matcher that cannot run under the preset is not ranked."""
+    presets = set(group["preset"]) if "preset" in group.columns else set()
     names = list(dict.fromkeys(group["matcher"]))
+    for preset in presets:
+        names = runnable(names, preset)
+    group = group[group["matcher"].isin(names)]
     if validation:
         return sorted(names, key=lambda m: -validation.get(m, -np.inf))
     test = group.groupby("matcher", sort=False)["f1"].mean()
@@ -292,7 +311,8 @@ def best_against_runner_up(
 ) -> pd.DataFrame:
     """Per preset: the matcher of highest validation F1 (``validation``: {preset: {matcher: val
     F1}}) against the second, the mean per-pair *test* F1 difference (runs averaged first) and
-    its cluster t-interval over episodes."""
+    its cluster t-interval over episodes. Matchers that cannot run under the preset are in no
+    comparison (:func:`ranked_on_validation`)."""
     rows = []
     for preset, group in per_pair.groupby("preset", sort=False):
         ranking = ranked_on_validation(group, (validation or {}).get(preset))
@@ -347,6 +367,9 @@ def to_markdown(table: pd.DataFrame, intervals: pd.DataFrame, label: str) -> str
         "|:---|:---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for row in table.itertuples(index=False):
+        if cannot_run(row.matcher, row.preset):
+            lines.append(f"| {row.preset} | {row.matcher} | {NO_NUMBER} |" + " n/a |" * 9)
+            continue
         f1 = _ranged(row.f1_mean, row.f1_low, row.f1_high)
         lines.append(
             f"| {row.preset} | {row.matcher} | {f1} | {_cell(row.f1_pooled)} "
@@ -356,6 +379,16 @@ def to_markdown(table: pd.DataFrame, intervals: pd.DataFrame, label: str) -> str
             f"| {_cell(row.pose_failure_rate)} | {_cell(getattr(row, SECONDARY))} "
             f"| {_cell(row.ms_per_pair, False)} |"
         )
+    abstained = sorted(
+        {str(r.preset) for r in table.itertuples(index=False) if cannot_run(r.matcher, r.preset)}
+    )
+    if abstained:
+        lines += [
+            "",
+            f"{NO_NUMBER}: the matcher reads the localisation prior, which "
+            + ", ".join(f"`{p}`" for p in abstained)
+            + " does not give; it has no number there and is in no ranking or comparison.",
+        ]
     lines += [
         "",
         "Best against runner-up, both chosen by validation F1 (test F1, percentage points; 95 % "
@@ -387,7 +420,7 @@ def _validation(results: Path, name: str = SUBDIR) -> dict[str, dict[str, float]
         return {}
     table = pd.read_csv(path)
     return {
-        p: dict(zip(g["matcher"], g["val_f1"], strict=True))
+        p: {m: f for m, f in zip(g["matcher"], g["val_f1"], strict=True) if not cannot_run(m, p)}
         for p, g in table.groupby("preset", sort=False)
     }
 
@@ -397,12 +430,13 @@ def compact(
     validation: Mapping[str, Mapping[str, float]] | None = None,
     top: int = TOP,
 ) -> pd.DataFrame:
-    """Per preset: the `top` matchers by validation F1 (test F1 without validation figures),
-    the best one that reads no prior (if not among them) and the reference rows, in table
-    order."""
+    """Per preset: the `top` matchers by validation F1 (test F1 without validation figures)
+    among those that can run there, the best one that reads no prior (if not among them) and
+    the reference rows, in table order."""
     keep = []
     for preset, group in table.groupby("preset", sort=False):
         rows = group[~group["matcher"].isin(REFERENCE_ROWS)]
+        rows = rows[rows["matcher"].isin(runnable(list(rows["matcher"]), preset))]
         val = (validation or {}).get(preset)
         if val:
             ranked = sorted(rows.index, key=lambda i: -val.get(rows.at[i, "matcher"], -np.inf))
@@ -444,8 +478,10 @@ def chosen_row(
     table: pd.DataFrame, preset: str, validation: Mapping[str, Mapping[str, float]] | None
 ) -> tuple[str, pd.Series] | None:
     """(name, row) of the matcher of ``preset`` with the highest validation F1 (test F1 without
-    validation figures: a table built in memory); None when the preset has no matcher row."""
+    validation figures: a table built in memory); None when the preset has no matcher row that
+    can run there."""
     rows = table[(table["preset"] == preset) & ~table["matcher"].isin(REFERENCE_ROWS)]
+    rows = rows[rows["matcher"].isin(runnable(list(rows["matcher"]), preset))]
     if rows.empty:
         return None
     rows = rows.set_index("matcher")
