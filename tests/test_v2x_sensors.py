@@ -238,3 +238,19 @@ def test_the_two_sensor_scenario_has_the_camera_scenarios_frames(both_dataset, t
     record = sorted((copy / "pairs").iterdir())[1] / "detections.npz"
     record.write_bytes(record.read_bytes() + b"\0")
     assert not same_camera_frames(camera, copy)
+
+
+def test_the_camera_tables_runs_stand_in_only_when_they_cover_every_compared_run(tmp_path):
+    from eval.studies.v2x_lidar import _camera_runs_cover
+    from eval.studies.v2x_table import PRESETS
+
+    specs = [MatcherSpec("sm"), MatcherSpec("pose_refine")]
+    rows = [(m, s, p) for m in ("sm", "pose_refine", "mos") for s in (0, 1) for p in PRESETS]
+    table = pd.DataFrame(rows, columns=["matcher", "seed", "preset"])
+    table.to_csv(tmp_path / "metrics_per_pair.csv", index=False)
+    assert _camera_runs_cover(tmp_path, specs, [0, 1])
+    assert not _camera_runs_cover(tmp_path, specs, [0, 1, 2])  # a run seed missing
+    assert not _camera_runs_cover(tmp_path, [*specs, MatcherSpec("freealign")], [0, 1])
+    table[table["preset"] != "rtk"].to_csv(tmp_path / "metrics_per_pair.csv", index=False)
+    assert not _camera_runs_cover(tmp_path, specs, [0, 1])  # a preset missing
+    assert not _camera_runs_cover(tmp_path / "nothing", specs, [0, 1])

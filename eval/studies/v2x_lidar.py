@@ -110,8 +110,9 @@ def evaluate_lidar(
 
 def _camera_runs_cover(folder: Path, matchers: Sequence[MatcherSpec], seeds: Sequence[int]) -> bool:
     """Whether ``folder/metrics_per_pair.csv`` (a V2X-protocol evaluation) has test runs of
-    every one of ``matchers`` under every preset for exactly ``seeds``."""
-    from eval.studies.v2x_table import PRESETS
+    every one of ``matchers`` that can run under a preset, under every preset, for exactly
+    ``seeds``."""
+    from eval.studies.v2x_table import PRESETS, runnable
 
     path = folder / "metrics_per_pair.csv"
     if not path.is_file():
@@ -120,7 +121,8 @@ def _camera_runs_cover(folder: Path, matchers: Sequence[MatcherSpec], seeds: Seq
     names = {m.label for m in matchers}
     have = runs[runs["matcher"].isin(names)]
     return set(have["seed"]) == set(seeds) and all(
-        names <= set(have.loc[have["preset"] == p, "matcher"]) for p in PRESETS
+        set(runnable(sorted(names), p)) <= set(have.loc[have["preset"] == p, "matcher"])
+        for p in PRESETS
     )
 
 
