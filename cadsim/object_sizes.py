@@ -19,6 +19,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+SIZE_MODEL = 2
+"""Version of the object-size model, stated in a SUMO dataset's manifest (``generation.object_sizes``):
+1 (datasets without the key) one size per vType and fixed street furniture; 2 per-object draws
+(this module), roadside clutter (``[traffic.scene] clutter_spacing``), reported sizes in clutter
+detections. Datasets of another model cannot be resumed by this one (their records differ)."""
 SIZE_STREAM = 7
 """Spawn-key head of the per-object size streams (beside ``cadsim.dataset.seeds``' streams)."""
 CLIP_SD = 2.5
@@ -95,6 +100,7 @@ def draw_size(
 
 __all__ = [
     "CLIP_SD",
+    "SIZE_MODEL",
     "SIZE_SPREADS",
     "SIZE_STREAM",
     "SizeSpread",
