@@ -233,6 +233,12 @@ def _cauchy_weights(
     return 1.0 / (scales**2 * (1.0 + (residual / (CAUCHY_C * scales)) ** 2))
 
 
+def _to_body(points: np.ndarray, to_body: np.ndarray) -> np.ndarray:
+    """(k, 3) camera-frame ``points`` in the body frame of the 4x4 camera → body ``to_body``,
+    written out elementwise (no BLAS: the same bits on every CPU)."""
+    return (points[:, None, :] * to_body[None, :3, :3]).sum(axis=2) + to_body[:3, 3]
+
+
 def planar_fit(
     src: np.ndarray, dst: np.ndarray, src_to_body: np.ndarray, dst_to_body: np.ndarray
 ) -> np.ndarray | None:
@@ -251,8 +257,7 @@ def planar_fit(
         return None
     src_to_body = np.asarray(src_to_body, dtype=float)
     dst_to_body = np.asarray(dst_to_body, dtype=float)
-    a = src @ src_to_body[:3, :3].T + src_to_body[:3, 3]
-    b = dst @ dst_to_body[:3, :3].T + dst_to_body[:3, 3]
+    a, b = _to_body(src, src_to_body), _to_body(dst, dst_to_body)
     spread = np.sqrt(((a[:, :2] - a[:, :2].mean(axis=0)) ** 2).sum(axis=1)).max()
     if not spread >= MIN_SPREAD_M:
         return None
