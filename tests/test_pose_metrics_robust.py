@@ -75,6 +75,30 @@ def test_the_fit_is_deterministic_to_the_bit():
     assert fits[0].tobytes() == fits[1].tobytes()
 
 
+def test_the_2d_motion_does_not_move_when_numpys_transcendentals_move_by_an_ulp():
+    """As on a CPU whose SIMD exp/log/arctan differ in the last bit (tests/cpu_dispatch.py)."""
+    from cpu_dispatch import TRANSCENDENTAL, inject_ulp_faults
+
+    p1, p2, pairs, mounts, _, _ = _with_outliers(8, noise=0.5)
+    src, dst = p2[pairs[:, 1]], p1[pairs[:, 0]]
+    a = src @ mounts[1][:3, :3].T + mounts[1][:3, 3]
+    b = dst @ mounts[0][:3, :3].T + mounts[0][:3, 3]
+
+    def motion() -> bytes:
+        fit = robust_ground_motion(a[:, :2], b[:, :2], match_scales(src, dst))
+        return b"".join(np.asarray(x).tobytes() for x in fit)
+
+    clean = motion()
+    originals = {name: getattr(np, name) for name in TRANSCENDENTAL}
+    try:
+        inject_ulp_faults(share=1.0)
+        faulty = motion()
+    finally:
+        for name, ufunc in originals.items():
+            setattr(np, name, ufunc)
+    assert faulty == clean
+
+
 def test_the_oracle_is_at_least_as_good_as_a_matcher_that_drops_the_outliers():
     """Over planted frames with detection noise and gross outliers, the oracle's success (every
     true match) is not below that of a matcher declaring only the good true matches, nor of one
