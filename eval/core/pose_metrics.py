@@ -45,6 +45,7 @@ has with no matching at all.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -144,19 +145,26 @@ def match_scales(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
     return SIGMA_AT_REFERENCE_M * np.sqrt((d1**4 + d2**4) / 2.0) / REFERENCE_RANGE_M**2
 
 
-def _weighted_motion(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(cos, sin, t (2,)) of the ground motion minimising sum_k w_k ||R a_k + t − b_k||² (closed
-    form; a, b (k, 2) metres, w (k,) > 0): the weighted 2-D Procrustes solution, with cos/sin
-    from the normalised dot and cross products (no arctan, no BLAS: the same bits on every
-    CPU). Identity rotation when the points carry no direction."""
-    w = w / w.sum()
-    ma, mb = (w[:, None] * a).sum(axis=0), (w[:, None] * b).sum(axis=0)
-    u, v = a - ma, b - mb
-    dot = (w * (u[:, 0] * v[:, 0] + u[:, 1] * v[:, 1])).sum()
-    cross = (w * (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0])).sum()
-    norm = float(np.hypot(dot, cross))
+def _moments(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(7, k) per-match terms whose weighted sums give the weighted Procrustes solution of
+    (k, 2) points a -> b: 1, a_x, a_y, b_x, b_y, a·b, a × b."""
+    ax, ay, bx, by = a[:, 0], a[:, 1], b[:, 0], b[:, 1]
+    return np.stack([np.ones(len(a)), ax, ay, bx, by, ax * bx + ay * by, ax * by - ay * bx])
+
+
+def _weighted_motion(moments: np.ndarray, w: np.ndarray) -> tuple[float, float, float, float]:
+    """(cos, sin, tx, ty) of the ground motion minimising sum_k w_k ||R a_k + t − b_k||² (the
+    weighted 2-D Procrustes solution, closed form) from :func:`_moments` of a, b and weights w
+    (k,) > 0; cos/sin from the normalised dot and cross products of the centred points (no
+    arctan, no BLAS: the same bits on every CPU). Identity rotation when the points carry no
+    direction."""
+    total, sax, say, sbx, sby, sdot, scross = (moments * w).sum(axis=1).tolist()
+    cax, cay, cbx, cby = sax / total, say / total, sbx / total, sby / total
+    dot = sdot - total * (cax * cbx + cay * cby)
+    cross = scross - total * (cax * cby - cay * cbx)
+    norm = math.hypot(dot, cross)
     cos, sin = (dot / norm, cross / norm) if norm > 0 else (1.0, 0.0)
-    return np.array([cos, sin]), mb - _turned(np.array([cos, sin]), ma)
+    return cos, sin, cbx - (cos * cax - sin * cay), cby - (sin * cax + cos * cay)
 
 
 def _turned(cos_sin: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -167,12 +175,15 @@ def _turned(cos_sin: np.ndarray, points: np.ndarray) -> np.ndarray:
     return np.concatenate([c * x - s * y, s * x + c * y], axis=-1)
 
 
-def _hypotheses(a: np.ndarray, b: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _hypotheses(
+    a: np.ndarray, b: np.ndarray, moments: np.ndarray, w: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Candidate ground motions a -> b ((k, 2) each, metres): the ``w``-weighted least-squares
     one of all k points first, then the exact one of every pair of points (k < l) at least
     :data:`MIN_SPREAD_M` apart in ``a`` — yaw turns a_l − a_k onto b_l − b_k, the midpoints
     meet. ((H, 2) cos/sin, (H, 2) translations)."""
-    first_turn, first_shift = _weighted_motion(a, b, w)
+    cos, sin, tx, ty = _weighted_motion(moments, w)
+    first_turn, first_shift = np.array([cos, sin]), np.array([tx, ty])
     first, second = np.triu_indices(len(a), 1)
     u, v = a[second] - a[first], b[second] - b[first]
     keep = np.hypot(u[:, 0], u[:, 1]) >= MIN_SPREAD_M
@@ -209,28 +220,32 @@ def robust_ground_motion(
     weights w_k = 1 / (s_k² (1 + (r_k / (c s_k))²)), the weighted Procrustes solution each round —
     descends the loss until the motion changes by < 1e-12 or :data:`ROBUST_MAX_ITER` rounds.
     Deterministic (no sampling); noise-free matches give the exact motion."""
-    inverse_square = 1.0 / scales**2
-    turns, shifts = _hypotheses(a, b, inverse_square)
+    square = scales**2
+    moments = _moments(a, b)
+    turns, shifts = _hypotheses(a, b, moments, 1.0 / square)
     moved = _turned(turns[:, None, :], a[None]) + shifts[:, None, :]
     residual = np.hypot(*(moved - b[None]).transpose(2, 0, 1))  # (H, k)
     best = int(np.argmin(cauchy_loss(residual / scales).sum(axis=1)))
-    turn, shift = turns[best], shifts[best]
+    motion = (*turns[best].tolist(), *shifts[best].tolist())
     for _ in range(ROBUST_MAX_ITER):
-        weight = _cauchy_weights(a, b, turn, shift, scales)
-        new_turn, new_shift = _weighted_motion(a, b, weight)
-        change = np.abs(new_turn - turn).max() + np.abs(new_shift - shift).max()
-        turn, shift = new_turn, new_shift
+        new = _weighted_motion(moments, _cauchy_weights(a, b, motion, square))
+        change = max(abs(x - y) for x, y in zip(new, motion, strict=True))
+        motion = new
         if change < 1e-12:
             break
-    return turn, shift, _cauchy_weights(a, b, turn, shift, scales)
+    cos, sin, tx, ty = motion
+    return np.array([cos, sin]), np.array([tx, ty]), _cauchy_weights(a, b, motion, square)
 
 
 def _cauchy_weights(
-    a: np.ndarray, b: np.ndarray, turn: np.ndarray, shift: np.ndarray, scales: np.ndarray
+    a: np.ndarray, b: np.ndarray, motion: tuple[float, float, float, float], square: np.ndarray
 ) -> np.ndarray:
-    """IRLS weights (k,) of Cauchy's loss on the residuals of the motion (turn, shift)."""
-    residual = np.hypot(*(_turned(turn, a) + shift - b).T)
-    return 1.0 / (scales**2 * (1.0 + (residual / (CAUCHY_C * scales)) ** 2))
+    """IRLS weights (k,) of Cauchy's loss, 1 / (s_k² + r_k² / c²), on the residuals r_k of the
+    motion (cos, sin, tx, ty); ``square``: the scales squared s_k² (m²)."""
+    cos, sin, tx, ty = motion
+    rx = cos * a[:, 0] - sin * a[:, 1] + (tx - b[:, 0])
+    ry = sin * a[:, 0] + cos * a[:, 1] + (ty - b[:, 1])
+    return 1.0 / (square + (rx * rx + ry * ry) / CAUCHY_C**2)
 
 
 def _to_body(points: np.ndarray, to_body: np.ndarray) -> np.ndarray:
