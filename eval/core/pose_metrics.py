@@ -8,8 +8,9 @@ motion of the ground plane — yaw θ and (tx, ty) — and a height offset tz. T
 (i, j) (view 1 detection i is view 2 detection j) are put into each observer's body frame (x
 forward, y left, z up) through its known camera mount, a robust 2-D motion is fitted to their
 (x, y) (below), tz is the mean height difference under the fit's final weights, and the result
-is carried back to the camera frames. Fewer than :data:`MIN_PLANAR_MATCHES` matches, or view-2 points within
-:data:`MIN_SPREAD_M` of their centroid (the yaw is then free), make the fit *fail*. The 6-DoF
+is carried back to the camera frames. Fewer than :data:`MIN_PLANAR_MATCHES` matches, or view-2
+points within :data:`MIN_SPREAD_M` of their centroid (the yaw is then free), make the fit
+*fail*. The 6-DoF
 Kabsch fit on the 3-D positions (≥ 3 non-collinear matches, :func:`rigid_fit`) is kept as a
 secondary column (``success_1m_2deg_6dof``): with the detections' ~0.6 m position error on 3–7
 points it cannot fix the tilt, which caps its success far below the planar fit's. It stays a
