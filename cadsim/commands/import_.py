@@ -119,10 +119,13 @@ def _run_boxes(args: argparse.Namespace) -> int:
         result = import_v2x_seq(args.src, args.out, args.sequences)
     else:
         from cadsim.importers.opv2v import DEFAULT_PRIOR_SIGMA_M, import_opv2v
+        from cadsim.limits import MAX_PRIOR_SIGMA_M
 
         sigma = DEFAULT_PRIOR_SIGMA_M if args.prior_sigma is None else args.prior_sigma
-        if not (math.isfinite(sigma) and sigma > 0):
-            raise ValueError(f"--prior-sigma: expected a finite number > 0, got {sigma}")
+        if not (math.isfinite(sigma) and 0 < sigma <= MAX_PRIOR_SIGMA_M):
+            raise ValueError(
+                f"--prior-sigma: expected metres in (0, {MAX_PRIOR_SIGMA_M:g}], got {sigma:g}"
+            )
         result = import_opv2v(args.src, args.out, args.agents, not args.no_prior, sigma)
     kind = "frame pairs" if result.views == 2 else f"{result.views}-view snapshots"
     print(
