@@ -322,17 +322,15 @@ def _check_sequence(record: dict, where: Path, entry: dict | None) -> None:
         odometry = observer.get("odometry")
         position = odometry.get("position") if isinstance(odometry, dict) else None
         fine = (
-            isinstance(position, list)
-            and len(position) == 2
-            and all(_is_number(p) for p in position)
+            _is_position(position, 2)
             and _is_number(odometry.get("yaw"))
             and _is_number(odometry.get("distance_m"))
-            and odometry["distance_m"] >= 0
+            and 0 <= odometry["distance_m"] <= MAX_POSITION_M
         )
         if not fine:
             raise DatasetError(
                 f"{key}.odometry: expected position [x, y], yaw and distance_m >= 0 (finite "
-                f"numbers), got {_shown(odometry)}"
+                f"numbers, metres within ±{MAX_POSITION_M:g}), got {_shown(odometry)}"
             )
         if frame == 0 and (any(position) or odometry["yaw"] or odometry["distance_m"]):
             raise DatasetError(f"{key}.odometry: frame 0 is the origin, got {_shown(odometry)}")
