@@ -450,3 +450,18 @@ def test_an_import_killed_outright_is_cleared_by_the_next_one(tmp_path, capsys):
     (out / "pairs" / "e00010_s00" / "notes.txt").write_text("mine")
     assert main(["import", "v2x-seq", str(src), "--out", str(out)]) == 2
     assert (out / "pairs" / "e00010_s00" / "notes.txt").read_text() == "mine"
+
+
+# --- the newcomer's first hour: generate's closing line adds up ------------------------------
+
+
+def test_generates_closing_line_explains_surplus_records_and_refused_candidates(tmp_path):
+    from types import SimpleNamespace
+
+    from cadsim.commands.generate import _summary
+
+    result = SimpleNamespace(out=tmp_path / "missing", pairs=3, new_records=4, views=14,
+                             candidates=7, seconds=2.0, checksum="c")  # fmt: skip
+    line = _summary(result)
+    assert "3 frame pairs (3 new, 1 more written by parallel episodes and dropped; " in line
+    assert "14 views rendered in 2.0 s for 7 candidates, those with too few shared objects" in line
