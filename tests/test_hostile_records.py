@@ -460,7 +460,8 @@ def test_generates_closing_line_explains_surplus_records_and_refused_candidates(
 
     from cadsim.commands.generate import _summary
 
-    result = SimpleNamespace(out=tmp_path / "missing", pairs=3, new_records=4, views=14,
+    (tmp_path / "manifest.json").write_text('{"views": 2}')
+    result = SimpleNamespace(out=tmp_path, pairs=3, new_records=4, views=14,
                              candidates=7, seconds=2.0, checksum="c")  # fmt: skip
     line = _summary(result)
     assert "3 frame pairs (3 new, 1 more written by parallel episodes and dropped; " in line
