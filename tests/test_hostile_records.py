@@ -466,3 +466,14 @@ def test_generates_closing_line_explains_surplus_records_and_refused_candidates(
     line = _summary(result)
     assert "3 frame pairs (3 new, 1 more written by parallel episodes and dropped; " in line
     assert "14 views rendered in 2.0 s for 7 candidates, those with too few shared objects" in line
+
+
+def test_a_failing_plugin_prints_its_one_line_and_no_task_dump(generated, tmp_path, capsys):
+    argv = ["evaluate", str(generated), "--no-calibration", "--matchers", "plugin_fakes:nan_scores",
+            "--runs", "1", "--workers", "1", "--no-progress", "--out", str(tmp_path / "r"),
+            "--cache", str(tmp_path / "c")]  # fmt: skip
+    assert main(argv) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert not [line for line in lines if "RunTask" in line or line.startswith("ERROR")], lines
+    assert lines[-1].startswith("cadsim evaluate: error: 1 of 1 tasks failed")
+    assert "'plugin_fakes:nan_scores' returned scores with 1 NaN" in lines[-1]
