@@ -477,3 +477,24 @@ def test_a_failing_plugin_prints_its_one_line_and_no_task_dump(generated, tmp_pa
     assert not [line for line in lines if "RunTask" in line or line.startswith("ERROR")], lines
     assert lines[-1].startswith("cadsim evaluate: error: 1 of 1 tasks failed")
     assert "'plugin_fakes:nan_scores' returned scores with 1 NaN" in lines[-1]
+
+
+def test_sweep_noise_prints_f1_by_rate_and_fig4_has_an_f1_panel(tmp_path):
+    import pandas as pd
+
+    from eval.commands.sweep_noise import f1_summary
+    from eval.report.figures import PANELS, write_fig4
+
+    rows = [
+        {"dataset": "MRC", "matcher": m, "noise_rate": r, "seed": s, "accuracy": 0.5,
+         "balanced_accuracy": 0.5, "precision": 0.5, "recall": 0.5, "f1": f}
+        for m, f0 in (("sm", 0.4), ("maximin", 0.6))
+        for r in (0.0, 0.01)
+        for s, f in ((0, f0), (1, f0 + 0.02))
+    ]  # fmt: skip
+    table = f1_summary(pd.DataFrame(rows))
+    assert table.splitlines()[1] == "| Method | 0 | 0.01 |"
+    assert "| Maximin | 61.0 ± 1.4 | 61.0 ± 1.4 |" in table
+    assert ("f1", "F1") in PANELS
+    pd.DataFrame(rows).to_csv(tmp_path / "noise_runs.csv", index=False)
+    assert [p.name for p in write_fig4(tmp_path)] == ["fig4.png", "fig4.pdf"]
