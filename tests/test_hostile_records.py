@@ -387,7 +387,7 @@ def test_lidar_npz_boxes_elevations_and_poses_are_checked(case):
     "scenario, old, new, expected",
     [
         ("cad-v2x-lidar.toml", "dropout = 0.05", "dropout = 1.0",
-         "lidar.dropout: invalid value: [lidar] (hdl-64e+custom) dropout must be below 1"),
+         "lidar.dropout: invalid value: [lidar] dropout must be below 1"),
         ("cad-intersection.toml", "min_shared_area_m2 = 900.0", "min_shared_area_m2 = 100000",
          "observers.min_shared_area_m2: is 100000 m², more than one camera's footprint"),
     ],

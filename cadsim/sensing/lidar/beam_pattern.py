@@ -103,8 +103,6 @@ class BeamPattern:
             raise ValueError(f"{where} min_range_m must be below max_range_m")
         check_number(where, "range_noise_m", self.range_sigma_m, minimum=0.0, maximum=1.0)
         check_number(where, "dropout", self.dropout, minimum=0.0, maximum=1.0)
-        if self.dropout == 1.0:  # no ray would return: generation would search for ever
-            raise ValueError(f"{where} dropout must be below 1 (at 1 no ray returns), got 1.0")
         if self.mount not in ("roof", "roadside"):
             raise ValueError(f"{where} mount must be 'roof' or 'roadside', got {self.mount!r}")
 
@@ -196,6 +194,8 @@ class LidarConfig:
                 raise ValueError(
                     "[lidar] vertical_fov_deg must be [lowest, highest] with lowest < highest"
                 )
+        if self.dropout == 1.0:  # no ray would return: generation would search for ever
+            raise ValueError("[lidar] dropout must be below 1 (at 1 no ray returns), got 1.0")
         if self.elevations_deg is not None and not isinstance(self.elevations_deg, (list, tuple)):
             raise ValueError("[lidar] elevations_deg must be a list of degrees")
         if self.horizontal_resolution_deg is not None:
