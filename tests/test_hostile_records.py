@@ -498,3 +498,15 @@ def test_sweep_noise_prints_f1_by_rate_and_fig4_has_an_f1_panel(tmp_path):
     assert ("f1", "F1") in PANELS
     pd.DataFrame(rows).to_csv(tmp_path / "noise_runs.csv", index=False)
     assert [p.name for p in write_fig4(tmp_path)] == ["fig4.png", "fig4.pdf"]
+
+
+def test_result_files_record_paths_inside_the_working_directory_relatively(tmp_path, monkeypatch):
+    from eval.core.result_files import recorded_path
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "data" / "cad-val").mkdir(parents=True)
+    assert recorded_path(tmp_path / "data" / "cad-val") == "data/cad-val"
+    assert recorded_path(str(tmp_path / "data" / "cad-val")) == "data/cad-val"
+    assert recorded_path("data/cad-val") == "data/cad-val"
+    assert recorded_path("/elsewhere/cad-val") == "/elsewhere/cad-val"
+    assert recorded_path(None) is None
