@@ -34,8 +34,9 @@ MAX_POSITION_M = 1e7
 """A stored coordinate (object centre, camera, pose, LiDAR box), metres: Earth-scale, as the
 importers' ``MAX_MAGNITUDE``. Squared distances of larger ones overflow float64 in matching."""
 
-MAX_SIZE_M = 1e3
-"""A stored object's or box's side, metres (the largest real vehicle is about 30 m)."""
+MAX_SIZE_M = 1e5
+"""A stored object's or box's side, metres: static surfaces (a road, the ground under a whole
+SUMO network) are objects too, 380 m in the shipped scenarios; 100 km leaves room for any map."""
 
 MAX_PRIOR_SIGMA_M = 1e4
 """A localisation prior's position σ, metres (scenario, record, ``--prior-sigma``): at 10 km

@@ -203,7 +203,7 @@ RECORD_CASES = {
     ),  # fmt: skip
     "negative size": (
         lambda r: r["objects"][0].__setitem__("size", [-1.0, 1.0, 1.0]),
-        "objects[0].size: expected [length, width, height] in (0, 1000] m",
+        "objects[0].size: expected [length, width, height] in (0, 100000] m",
     ),
     "zero size": (
         lambda r: r["objects"][0].__setitem__("size", [0, 1.0, 1.0]),
@@ -341,7 +341,7 @@ LIDAR_CASES = {
     ),  # fmt: skip
     "negative box size": (
         _set_array("view1_box_sizes", -np.ones((2, 3))),
-        "view1_box_sizes: expected sizes in (0, 1000]",
+        "view1_box_sizes: expected sizes in (0, 100000]",
     ),  # fmt: skip
     "elevation NaN": (
         _set_array("view1_elevations_deg", np.array([np.nan, 5.0])),
