@@ -162,7 +162,7 @@ def test_opv2v_sources_that_were_merged_silently(tmp_path, capsys, case):
 def test_a_prior_sigma_beyond_10_km_is_refused(tmp_path, capsys):
     src = write_opv2v(tmp_path / "split", agents=(7, 3))
     args = ["import", "opv2v", str(src), "--out", str(tmp_path / "o"), "--prior-sigma", "1e308"]
-    _refused(capsys, tmp_path, args, "--prior-sigma: expected metres in (0, 10000]")
+    _refused(capsys, tmp_path, args, "--prior-sigma: expected a finite number in (0, 1e4] metres")
 
 
 # --- resealed records (findings 9, 10, 12) -----------------------------------------------------
