@@ -30,5 +30,17 @@ MAX_NOISE_RATE = 1.0
 MAX_SEED = 2**63 - 1
 """Seeds: the largest TOML integer."""
 
+MAX_POSITION_M = 1e7
+"""A stored coordinate (object centre, camera, pose, LiDAR box), metres: Earth-scale, as the
+importers' ``MAX_MAGNITUDE``. Squared distances of larger ones overflow float64 in matching."""
+
+MAX_SIZE_M = 1e5
+"""A stored object's or box's side, metres: static surfaces (a road, the ground under a whole
+SUMO network) are objects too, 380 m in the shipped scenarios; 100 km leaves room for any map."""
+
+MAX_PRIOR_SIGMA_M = 1e4
+"""A localisation prior's position σ, metres (scenario, record, ``--prior-sigma``): at 10 km
+the prior says nothing; its square still fits every likelihood computed from it."""
+
 MAX_SIMULATED_SECONDS = 7 * 86400.0
 """Simulated time (warm-up, sampling interval, max_time, demand end): one week."""

@@ -554,6 +554,7 @@ def load_scenario(path: str | Path) -> Scenario:
     traffic = _validate_traffic(raw.get("traffic"), ctx)
     camera = CameraConfig(**validate_table(raw.get("camera", {}), CAMERA, ctx, "camera"))
     observers = validate_table(raw.get("observers", {}), OBSERVERS, ctx, "observers")
+    _check_shared_area(observers, camera, ctx)
     if view_count(observers) != 2 and traffic["source"] != "sumo":
         key = "count" if observers["count"] != 2 else "roadside_units"
         raise ctx.error(
@@ -602,6 +603,26 @@ def load_scenario(path: str | Path) -> Scenario:
         sensor=top["sensor"],
         lidar=lidar,
     )
+
+
+def _check_shared_area(observers: dict, camera: CameraConfig, ctx) -> None:
+    """``min_shared_area_m2`` no larger than one camera's footprint (its hfov wedge out to
+    ``overlap_range_m``): two footprints never share more, so no pair would ever qualify and
+    generation would search until its time limit."""
+    from cadsim.camera import Camera
+    from cadsim.sources.frustum_overlap import ground_footprint, polygon_area
+
+    wanted, reach = observers["min_shared_area_m2"], observers["overlap_range_m"]
+    most = polygon_area(
+        ground_footprint(Camera((0.0, 0.0, 0.0), 0.0, hfov_deg=camera.hfov_deg), reach)
+    )
+    if wanted > most:
+        raise ctx.error(
+            "observers.min_shared_area_m2",
+            f"is {wanted:g} m², more than one camera's footprint ({most:.0f} m² for hfov_deg "
+            f"{camera.hfov_deg:g} within overlap_range_m {reach:g})",
+            f"at most {most:.0f} m² (or a larger overlap_range_m / hfov_deg)",
+        )
 
 
 def _check_sensor(sensor: str, has_lidar: bool, views: int, sequence, ctx) -> None:

@@ -1,6 +1,6 @@
 """A tour of cadsim's Python API, on the DMGM CAD pairs shipped in eval/data (no simulation).
 
-    python examples/api_tour.py [OUT_DIR]     # OUT_DIR default: api-tour (created)
+    python examples/api_tour.py [OUT_DIR]     # OUT_DIR default: a new temporary folder
 
 1. load a dataset and iterate its frame pairs; 2. build a matching problem; 3. call any matcher;
 4. score the matching with the suite's metrics; 5. register a matcher of your own; 6. evaluate
@@ -10,6 +10,7 @@ several matchers (yours included) on a dataset and get Table I as a pandas DataF
 from __future__ import annotations
 
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -66,7 +67,13 @@ def main(out: Path) -> None:
         [TEST], ["sm", "maximin", "nearest_appearance"], val_dirs=[VAL], out=out, runs=1
     )
     print(table[["dataset", "matcher", "precision_mean", "recall_mean", "f1_mean"]].to_string())
+    print(f"Table I and its files are in {out}")
 
 
 if __name__ == "__main__":
-    main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path("api-tour"))
+    # never into the checkout by default: a temporary folder unless one is named
+    main(
+        Path(sys.argv[1])
+        if len(sys.argv) > 1
+        else Path(tempfile.mkdtemp(prefix="cadsim-api-tour-"))
+    )

@@ -183,7 +183,7 @@ def test_the_prior_survives_export_and_import(v2x_camera, tmp_path):
         assert pb.record["meta"]["prior"]["latency_s"] == 0.1
     a = _scores(v2x_camera, v2x_camera.parent / "cam-val", tmp_path / "a")
     b = _scores(boxes_dir, val_dir, tmp_path / "b")
-    assert a.loc["pose_refine", "f1_pooled_mean"] > 0.5  # a score that can move
+    assert a.loc["pose_refine", "f1_pooled_mean"] > 0.2  # a score that can move
     np.testing.assert_allclose(b[["f1_mean", "f1_pooled_mean"]], a[["f1_mean", "f1_pooled_mean"]], atol=1e-3)  # fmt: skip
     np.testing.assert_allclose(b["tau"], a["tau"], atol=1e-6)
 

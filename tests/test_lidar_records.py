@@ -182,6 +182,12 @@ def test_the_regime_card_reports_recall_by_range_and_centre_error(lidar_dataset)
     err = card["centre_error_m"]
     assert err["boxes"] > 0 and err["median"] < 0.5  # completed boxes: centres within half a metre
     assert 0.0 <= card["false_positive_share"] < 1.0
+    # every false positive is attributed to a source; the shares add up to the whole
+    sources = card["false_positive_sources"]
+    assert sum(sources.values()) == pytest.approx(card["false_positive_share"])
+    assert "other" not in sources and list(sources.values()) == sorted(
+        sources.values(), reverse=True
+    )
     assert len(card_lines(card)) == 4
     # camera datasets have no card
     assert lidar_detector_card([]) is None

@@ -151,7 +151,9 @@ def test_snapshots_hold_every_kind_of_object(runs):
             if o.cls in VEHICLES:
                 assert o.shape == o.cls and o.variant  # variant = the SUMO vType
             if o.cls == "person":
-                assert o.shape == "person" and 1.6 < o.size[2] < 1.9
+                # adults' statures, each person's own (cadsim.object_sizes: 1.71 m, sd 0.095 m,
+                # around its vType's height, within 2.5 sd)
+                assert o.shape == "person" and 1.4 < o.size[2] < 2.05
     assert VEHICLES | {"person", "traffic_light", "sign", "building", "road", "ground"} <= set(
         classes
     )
@@ -174,7 +176,9 @@ def test_pedestrians_are_near_the_junction_when_sampling_starts(runs):
 
 def test_identical_looking_vehicles_occur(runs):
     snap = objects_of(runs["first"]["snapshots"][0])
-    looks = Counter((o.cls, o.color, o.size) for o in snap if o.cls in VEHICLES)
+    # look-alikes share class and colour; their sizes differ within the class's spread, as real
+    # cars of one colour do (each vehicle draws its own size: cadsim.object_sizes)
+    looks = Counter((o.cls, o.color) for o in snap if o.cls in VEHICLES)
     assert max(looks.values()) >= 2
 
 

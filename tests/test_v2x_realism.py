@@ -192,17 +192,19 @@ def test_appearance_draws_one_light_per_episode_and_a_gain_per_camera():
 
 # -- generated data -----------------------------------------------------------------------------
 
-# e00000_s00 of a 2-pair cad-intersection dataset: images, depth and instance maps as before the
-# V2X realism; detections as since features and positions stopped going through BLAS (whose
-# kernel, and so the last bits, depends on the CPU: the same bytes on every CPU now). A two-view
-# scenario's records are also unchanged by N-view snapshots (docs/multi-agent.md).
+# e00000_s00 of a 2-pair cad-intersection dataset. Re-pinned for per-object sizes (size model 2,
+# cadsim.object_sizes): every vehicle, person, sign and signal pole now has its own size, so the
+# images, depth, instance maps and detections of the record changed once; they are pinned again
+# here so that any later change shows. Detections' features and positions do not go through BLAS
+# (the same bytes on every CPU), and a two-view scenario's records are unchanged by N-view
+# snapshots (docs/multi-agent.md).
 CAD_FIRST_RECORD_SHA256 = {
-    "view1.png": "70c56e241a3a1fb7ed3b9a04d331ee466b78830062d8faa7fd2ebf8fbc22c164",
-    "view2.png": "b62907d3d134c1da90fc0ab95932a58096bc6fcd5093ebb281d085884cebb2c0",
-    "depth.npz": "c32da99931e813f050e7b89dbebe559339fabf98549f1fc45707595c04082aa0",
-    "instance.npz": "bdae9f703818d0474879b0816b54d76aca5bfa5573a9f76e6187acc7624ed063",
-    # format 5 stores true_classes and reported_classes (was: classes); the arrays are unchanged
-    "detections.npz": "5bb4fb59ba4047647deee7102b45d31ce8cb286da17dac3ab6dc71dbad410b3a",
+    "view1.png": "96d06a082a7f639ccdfddcc10dfb36aaf3252fed8f73211da0e050a826e202e3",
+    "view2.png": "f2c651886d7b1685d9cb50ad18dd84eb5ddb582dfdd78f76f0283fe67a34f12b",
+    "depth.npz": "267c98327ed0bd47c36a323e438c27d045097ae7d705de0b77a12d2cd3e7c8fe",
+    "instance.npz": "8c84616686465575c96da07163fe625a90a8359f20fbb317462943df34b9001b",
+    # format 5 stores true_classes and reported_classes (was: classes)
+    "detections.npz": "921bc3d1031a86877467d1f6e9c7ba1dd01ec9fdbba37ae6bb59f10c6b347709",
 }
 
 
@@ -226,7 +228,7 @@ def v2x_pair(tmp_path_factory):
     return made
 
 
-def test_existing_scenarios_render_and_detect_exactly_as_before(tmp_path):
+def test_existing_scenarios_render_and_detect_as_pinned(tmp_path):
     from cadsim.generation.pipeline import generate_dataset
     from cadsim.scenario import load_scenario
 

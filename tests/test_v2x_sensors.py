@@ -254,3 +254,17 @@ def test_the_camera_tables_runs_stand_in_only_when_they_cover_every_compared_run
     table[table["preset"] != "rtk"].to_csv(tmp_path / "metrics_per_pair.csv", index=False)
     assert not _camera_runs_cover(tmp_path, specs, [0, 1])  # a preset missing
     assert not _camera_runs_cover(tmp_path / "nothing", specs, [0, 1])
+
+
+def test_the_two_sensor_scenario_is_cad_v2x_with_a_lidar():
+    """cad-v2x-both must stay cad-v2x plus the LiDAR (else its frames drift away from cad-v2x's
+    and the camera table's runs no longer stand for its camera side)."""
+    from cadsim.scenario import load_scenario
+
+    camera, both = load_scenario(SCENARIOS / "cad-v2x.toml"), load_scenario(BOTH)
+    assert (both.sensor, camera.sensor) == ("both", "camera")
+    assert both.lidar == load_scenario(SCENARIOS / "cad-v2x-lidar.toml").lidar
+    for key in ("seed", "traffic", "camera", "observers", "noise", "detection", "sampling"):
+        assert getattr(both, key) == getattr(camera, key), key
+    for key in ("localisation", "appearance"):
+        assert getattr(both, key, None) == getattr(camera, key, None), key

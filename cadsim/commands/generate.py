@@ -58,11 +58,22 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 130
-    print(
-        f"{result.out}: {result.pairs} {_records_word(result.out)} ({result.new_records} new, "
-        f"{result.views} views rendered in {result.seconds:.1f} s); checksum {result.checksum}"
-    )
+    print(_summary(result))
     return 0
+
+
+def _summary(result) -> str:
+    """The closing line. Parallel episodes may write records beyond the N asked for (the
+    surplus is dropped at the end), and views are rendered for every candidate pair, also those
+    refused for too few objects in common: both are said, so the counts add up."""
+    kept = min(result.new_records, result.pairs)
+    surplus = result.new_records - kept
+    dropped = f", {surplus} more written by parallel episodes and dropped" if surplus else ""
+    return (
+        f"{result.out}: {result.pairs} {_records_word(result.out)} ({kept} new{dropped}; "
+        f"{result.views} views rendered in {result.seconds:.1f} s for {result.candidates} "
+        f"candidates, those with too few shared objects included); checksum {result.checksum}"
+    )
 
 
 def _records_word(out) -> str:

@@ -9,6 +9,7 @@ malformed input file is one error line naming the file (and key), exit status 2.
 from __future__ import annotations
 
 import argparse
+import sys
 
 
 def _sequences(text: str) -> list[str]:
@@ -100,7 +101,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     if args.format in ("v2x-seq", "opv2v"):
-        return _run_boxes(args)
+        try:
+            return _run_boxes(args)
+        except KeyboardInterrupt:
+            print(
+                f"cadsim import: interrupted; no dataset was written to {args.out} (its partial "
+                "records are removed). Run the same command again.",
+                file=sys.stderr,
+            )
+            return 130
     from cadsim.importers.dmgm_dataset import import_dmgm
 
     result = import_dmgm(

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cadsim.limits import MAX_POSITION_M, MAX_SIZE_M
 from cadsim.sensing.lidar.beam_pattern import (
     MAX_AZIMUTH_STEPS,
     MAX_CHANNELS,
@@ -113,10 +114,15 @@ def check_lidar_arrays(arrays: dict[str, np.ndarray], views: int, objects: int, 
         el, steps = arrays[p + "elevations_deg"], arrays[p + "azimuth_steps"]
         if el.dtype != np.float64 or el.ndim != 1 or not 1 <= len(el) <= MAX_CHANNELS:
             raise ValueError(f"{what}: {p}elevations_deg: expected 1..{MAX_CHANNELS} float64 angles")  # fmt: skip
+        if not (np.all(np.abs(el) <= 90.0) and np.all(np.diff(el) >= 0)):  # NaN fails both
+            raise ValueError(f"{what}: {p}elevations_deg: expected ascending angles in [-90, 90] degrees")  # fmt: skip
         if steps.shape != (1,) or steps.dtype != np.int64 or not 1 <= int(steps[0]) <= MAX_AZIMUTH_STEPS:  # fmt: skip
             raise ValueError(f"{what}: {p}azimuth_steps: expected one int64 in 1..{MAX_AZIMUTH_STEPS}")  # fmt: skip
-        if arrays[p + "pose"].shape != (4, 4) or not np.isfinite(arrays[p + "pose"]).all():
-            raise ValueError(f"{what}: {p}pose: expected a finite (4, 4) transform")
+        if not is_rigid(arrays[p + "pose"]):
+            raise ValueError(
+                f"{what}: {p}pose: expected a rigid (4, 4) float64 transform (rotation, "
+                f"translation within ±{MAX_POSITION_M:g} m, last row 0 0 0 1)"
+            )
         rays = len(el) * int(steps[0])
         hits = arrays[p + "hits"]
         if hits.dtype != np.uint8 or hits.shape != ((rays + 7) // 8,):
@@ -134,6 +140,40 @@ def check_lidar_arrays(arrays: dict[str, np.ndarray], views: int, objects: int, 
         present = [p + b in arrays for b in _BOX_KEYS]
         if any(present) and not all(present):
             raise ValueError(f"{what}: {p}box_*: expected all of {list(_BOX_KEYS)} or none")
+        if all(present):
+            _check_boxes({b: arrays[p + b] for b in _BOX_KEYS}, f"{what}: {p}")
+
+
+def is_rigid(pose: np.ndarray) -> bool:
+    """Whether ``pose`` is a (4, 4) float64 rigid transform: orthonormal rotation of
+    determinant +1 (±1e-6), translation within :data:`MAX_POSITION_M`, last row 0 0 0 1."""
+    if pose.shape != (4, 4) or pose.dtype != np.float64 or not np.isfinite(pose).all():
+        return False
+    r = pose[:3, :3]
+    return bool(
+        np.allclose(r @ r.T, np.eye(3), atol=1e-6)
+        and np.linalg.det(r) > 0
+        and np.array_equal(pose[3], [0.0, 0.0, 0.0, 1.0])
+        and np.all(np.abs(pose[:3, 3]) <= MAX_POSITION_M)
+    )
+
+
+def _check_boxes(boxes: dict[str, np.ndarray], where: str) -> None:
+    """The detector's boxes of one view: (b, 3) centres and sizes (metres, sizes > 0), (b,)
+    yaws (radians), classes and ids (strings), all finite and of one b."""
+    b = len(boxes["box_ids"]) if boxes["box_ids"].ndim == 1 else -1
+    shapes = {"box_centres": (b, 3), "box_sizes": (b, 3), "box_yaws": (b,)}
+    for name, shape in shapes.items():
+        arr = boxes[name]
+        if arr.dtype != np.float64 or arr.shape != shape or not np.isfinite(arr).all():
+            raise ValueError(f"{where}{name}: expected {shape} finite float64 (b = len(box_ids))")
+    for name in ("box_classes", "box_ids"):
+        if boxes[name].dtype.kind != "U" or boxes[name].shape != (b,):
+            raise ValueError(f"{where}{name}: expected ({b},) strings")
+    if not (np.all(boxes["box_sizes"] > 0) and np.all(boxes["box_sizes"] <= MAX_SIZE_M)):
+        raise ValueError(f"{where}box_sizes: expected sizes in (0, {MAX_SIZE_M:g}] metres")
+    if not np.all(np.abs(boxes["box_centres"]) <= MAX_POSITION_M):
+        raise ValueError(f"{where}box_centres: expected within ±{MAX_POSITION_M:g} m")
 
 
 def read_lidar_view(arrays: dict[str, np.ndarray], k: int) -> LidarView:

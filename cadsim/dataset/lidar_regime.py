@@ -8,7 +8,11 @@ the observer's own vehicle) whose centre lies within a band of planar range from
 and over those its sweep hit with at least ``MIN_HIT_POINTS`` points (the detector's own share,
 occlusion aside). *Centre error*: planar distance (metres) between each true box's centre and
 its object's true centre, in the world frame. *False-positive share*: boxes that are no object
-(``clutter:…``). Intervals: a t-interval over episode means (frames of one episode are
+(``clutter:…``); *by source*: the share of all boxes that are false positives of each source
+(``cadsim.sensing.lidar.box_truth.false_positive_source``: ``building`` slivers, ``split``
+pieces, roadside ``tree``/``pole``/``bin``/``trailer``, ``ground``; ``other`` for a false
+positive whose id names none, e.g. of data made before sources were recorded); the shares add
+up to the false-positive share. Intervals: a t-interval over episode means (frames of one episode are
 correlated; docs/evaluation.md), rates' clipped to [0, 1], None with fewer than two episodes.
 """
 
@@ -19,6 +23,8 @@ from collections import defaultdict
 from collections.abc import Iterable
 
 import numpy as np
+
+from cadsim.sensing.lidar.box_truth import false_positive_source
 
 RANGE_BANDS_M = ((0.0, 20.0), (20.0, 40.0), (40.0, 60.0), (60.0, 80.0))
 MIN_HIT_POINTS = 10
@@ -52,14 +58,16 @@ def _lidar_frame_to_world(pose: np.ndarray, positions_camera: np.ndarray) -> np.
 
 def lidar_detector_card(pairs: Iterable) -> dict | None:
     """The card (module docstring) over ``pairs`` (``FramePair`` objects), None when none has
-    LiDAR points. Keys: ``range_bands_m``, ``recall`` and ``recall_hit`` (one entry per band:
-    ``objects``, ``recall``, ``ci``), ``centre_error_m`` (``boxes``, ``median``, ``mean``,
-    ``ci``), ``false_positive_share``."""
+        LiDAR points. Keys: ``range_bands_m``, ``recall`` and ``recall_hit`` (one entry per band:
+        ``objects``, ``recall``, ``ci``), ``centre_error_m`` (``boxes``, ``median``, ``mean``,
+        ``ci``), ``false_positive_share``, ``false_positive_sources`` (source -> share of boxes,
+    largest first)."""
     found = False
     seen = [defaultdict(list) for _ in RANGE_BANDS_M]  # band -> episode -> 1/0 per object
     seen_hit = [defaultdict(list) for _ in RANGE_BANDS_M]
     errors: dict[int, list[float]] = defaultdict(list)
     boxes = clutter = 0
+    sources: dict[str, int] = defaultdict(int)
     for pair in pairs:
         sweeps = pair.lidar
         if sweeps is None:
@@ -86,7 +94,10 @@ def lidar_detector_card(pairs: Iterable) -> dict | None:
                     d = world[detected[obj.id], :2] - np.asarray(obj.center[:2])
                     errors[pair.episode].append(float(np.hypot(*d)))
             boxes += len(view)
-            clutter += sum(oid.startswith("clutter:") for oid in view.object_ids)
+            for oid in view.object_ids:
+                if oid.startswith("clutter:"):
+                    clutter += 1
+                    sources[false_positive_source(oid) or "other"] += 1
     if not found:
         return None
 
@@ -113,7 +124,15 @@ def lidar_detector_card(pairs: Iterable) -> dict | None:
             "ci": _interval(errors),
         },
         "false_positive_share": clutter / boxes if boxes else None,
+        "false_positive_sources": {
+            k: n / boxes for k, n in sorted(sources.items(), key=lambda kv: (-kv[1], kv[0]))
+        },
     }
+
+
+def sources_text(shares: dict[str, float]) -> str:
+    """``{source: share of boxes}`` as one cell, e.g. ``building 12%; split 5%`` (``-``: none)."""
+    return "; ".join(f"{k} {100 * v:.0f}%" for k, v in shares.items()) or "-"
 
 
 def card_lines(card: dict) -> list[str]:
@@ -137,5 +156,6 @@ def card_lines(card: dict) -> list[str]:
         f"  LiDAR recall by range   {'; '.join(cell(e) for e in card['recall'])}",
         f"  ... of objects hit      {'; '.join(cell(e) for e in card['recall_hit'])} (>= {MIN_HIT_POINTS} points)",
         f"  LiDAR centre error      {error}",
-        f"  LiDAR false positives   {'-' if fp is None else f'{100 * fp:.0f}% of boxes'}",
+        f"  LiDAR false positives   {'-' if fp is None else f'{100 * fp:.0f}% of boxes'}"
+        + ("" if fp is None else f" ({sources_text(card.get('false_positive_sources', {}))})"),
     ]

@@ -25,6 +25,7 @@ from cadsim.dataset.record_format import (
     SEQUENCE_FORMAT,
     jsonable,
 )
+from cadsim.object_sizes import SIZE_MODEL
 from cadsim.provenance import git_state, package_versions
 from cadsim.scenario_views import MULTI_VIEW_KEYS, view_count
 
@@ -32,7 +33,11 @@ FORMAT_NAME = "cadsim-frame-pairs"
 SEED_DERIVATION = (
     "numpy SeedSequence(root, spawn_key=(0, episode)) -> simulation seed; "
     "(1, episode, slot, view) -> depth-noise seed (also FramePair.redetect's, with its seed as root); "
-    "(3, episode, slot, view) -> detector-attribute seed (class confusion, size noise; stored per view)"
+    "(3, episode, slot, view) -> detector-attribute seed (class confusion, size noise; stored per view); "
+    "SUMO sources (object-size model 2): SeedSequence(simulation seed, spawn_key=(7, crc32(id), "
+    "crc32(reversed id + '#'))) -> a vehicle's or person's size, the same under the scenario seed "
+    "for signs, signal poles and roadside clutter; SeedSequence(scenario seed, spawn_key=(8,)) -> "
+    "roadside clutter placement"
 )
 # Distributions whose versions shape the records (metadata only: nothing is imported).
 _PACKAGES = (
@@ -92,6 +97,8 @@ def generation_config(scenario, seed: int, pairs_per_episode: int, criteria: dic
         "localisation": _plain(getattr(scenario, "localisation", {})),
         "appearance": _plain(getattr(scenario, "appearance", {})),
     }
+    if _plain(scenario.traffic).get("source") == "sumo":  # per-object sizes (cadsim.object_sizes)
+        config["object_sizes"] = SIZE_MODEL
     if sequence:  # only then: the configuration of a dataset without one is as before
         config["sequence"] = _plain(sequence)
     sensor = getattr(scenario, "sensor", "camera")

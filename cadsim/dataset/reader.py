@@ -20,6 +20,7 @@ from cadsim.dataset.frame_pair import FramePair
 from cadsim.dataset.manifest import DatasetError, read_manifest
 from cadsim.dataset.multi_view import SnapshotViews
 from cadsim.dataset.sensor_view import check_sensor, dataset_sensor, lidar_pair
+from cadsim.dataset.sequence_check import check_sequences
 from cadsim.dataset.verification import RecordLayout, record_layout, verify_record
 
 __all__ = ["Dataset", "FramePair"]  # FramePair: defined in cadsim.dataset.frame_pair
@@ -202,5 +203,7 @@ class Dataset(Sequence[FramePair]):
         record (file and key) that does not pass."""
         for index in range(len(self._records)):
             self.verify_record(index)
+        if self.is_sequential:
+            check_sequences(self.path, self._records)
         if dataset_checksum(r["checksum"] for r in self._records) != self.checksum:
             raise DatasetError(f"{self.path / layout.MANIFEST}: dataset checksum mismatch")

@@ -8,6 +8,13 @@ stream 3: detector attributes of (e, s, v)     spawn_key (3, e, s, v)   (class c
 stream 4: localisation error of (e, s, v)      spawn_key (4, e, s, v)
 stream 6: odometry of a sequence's view v      spawn_key (6, e, s0, v)  s0: the sequence's first slot
 
+Object sizes (``cadsim.object_sizes``, size model 2; SUMO sources) are drawn per object, not per
+record: stream 7 under the episode's *simulation seed* for a vehicle or person
+(spawn_key (7, crc32(id), crc32(reversed id + "#"))), the same under the *scenario seed* for
+signs, signal poles and roadside clutter, whose placement is stream 8 under the scenario seed
+(``cadsim.sources.sumo.roadside_clutter``). An object's size depends on its id and that seed
+only, never on which other objects exist.
+
 Redraws at evaluation time (seed scheme 2). ``FramePair.redetect(rate, seed)`` and
 ``FramePair.localise(…, seed)`` / ``localise_preset(preset, seed)`` draw a *run*'s depth noise and
 pose errors from :func:`redraw_seed`: the run seed together with the record's identity *including

@@ -53,6 +53,7 @@ from cadsim.dataset.record_format import (
     SEQUENCE_FORMAT,
     TRUE_CLASS_VERSION,
 )
+from cadsim.limits import MAX_POSITION_M, MAX_PRIOR_SIGMA_M, MAX_SIZE_M
 from cadsim.sensing.localisation import LocalisationConfig
 from cadsim.world import WorldObject
 
@@ -107,6 +108,15 @@ def _is_int(value) -> bool:
 
 def _is_number(value) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _is_position(value, length: int) -> bool:
+    """A list of ``length`` finite coordinates within ±:data:`MAX_POSITION_M` metres."""
+    return (
+        isinstance(value, list)
+        and len(value) == length
+        and all(_is_number(p) and abs(p) <= MAX_POSITION_M for p in value)
+    )
 
 
 def record_layout(manifest: dict, path: Path) -> RecordLayout:
@@ -262,6 +272,7 @@ def check_record_json(
             WorldObject.from_dict(obj)
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             raise DatasetError(f"{where}: objects[{i}]: not an object entry ({exc!r})") from None
+        _check_object_geometry(obj, f"{where}: objects[{i}]")
     _check_prior(record.get("prior"), where)
     if "cues" in record and (problem := cue_problem(record["cues"])) is not None:
         raise DatasetError(f"{where}: cues: {problem}")
@@ -311,23 +322,43 @@ def _check_sequence(record: dict, where: Path, entry: dict | None) -> None:
         odometry = observer.get("odometry")
         position = odometry.get("position") if isinstance(odometry, dict) else None
         fine = (
-            isinstance(position, list)
-            and len(position) == 2
-            and all(_is_number(p) for p in position)
+            _is_position(position, 2)
             and _is_number(odometry.get("yaw"))
             and _is_number(odometry.get("distance_m"))
-            and odometry["distance_m"] >= 0
+            and 0 <= odometry["distance_m"] <= MAX_POSITION_M
         )
         if not fine:
             raise DatasetError(
                 f"{key}.odometry: expected position [x, y], yaw and distance_m >= 0 (finite "
-                f"numbers), got {_shown(odometry)}"
+                f"numbers, metres within ±{MAX_POSITION_M:g}), got {_shown(odometry)}"
             )
         if frame == 0 and (any(position) or odometry["yaw"] or odometry["distance_m"]):
             raise DatasetError(f"{key}.odometry: frame 0 is the origin, got {_shown(odometry)}")
         seed = observer.get("odometry_seed")
         if not (_is_int(seed) and seed >= 0):
             raise DatasetError(f"{key}.odometry_seed: expected an integer >= 0, got {_shown(seed)}")
+
+
+def _check_object_geometry(obj: dict, key: str) -> None:
+    """An object's centre within ±MAX_POSITION_M, its sizes in (0, MAX_SIZE_M] metres, its yaw
+    finite."""
+    if not _is_position(obj["center"], 3):
+        raise DatasetError(
+            f"{key}.center: expected [x, y, z] within ±{MAX_POSITION_M:g} m, got "
+            f"{_shown(obj['center'])}"
+        )
+    size = obj["size"]
+    if not (
+        isinstance(size, list)
+        and len(size) == 3
+        and all(_is_number(s) and 0 < s <= MAX_SIZE_M for s in size)
+    ):
+        raise DatasetError(
+            f"{key}.size: expected [length, width, height] in (0, {MAX_SIZE_M:g}] m, got "
+            f"{_shown(size)}"
+        )
+    if not _is_number(obj["yaw"]):
+        raise DatasetError(f"{key}.yaw: expected a finite number, got {_shown(obj['yaw'])}")
 
 
 def _check_observer(observer, key: str) -> None:
@@ -345,31 +376,28 @@ def _check_observer(observer, key: str) -> None:
         return  # imported data: no camera, no pose, no seeds
     position = camera.get("position") if isinstance(camera, dict) else None
     fine = (
-        isinstance(position, list)
-        and len(position) == 3
-        and all(_is_number(p) for p in position)
+        _is_position(position, 3)
         and all(_is_number(camera.get(a, 0.0)) for a in ("yaw", "pitch", "hfov_deg"))
         and "yaw" in camera
         and all(_is_int(camera.get(a)) and camera.get(a) > 0 for a in ("width", "height"))
     )
     if not fine:
         raise DatasetError(
-            f"{key}.camera: expected position [x, y, z], yaw, pitch, hfov_deg (finite numbers) "
-            f"and width, height (integers > 0), got {_shown(camera)}"
+            f"{key}.camera: expected position [x, y, z] within ±{MAX_POSITION_M:g} m, yaw, "
+            f"pitch, hfov_deg (finite numbers) and width, height (integers > 0), got "
+            f"{_shown(camera)}"
         )
+    hfov = camera.get("hfov_deg", 90.0)  # Camera.from_dict's default
+    if not 0 < hfov < 180:
+        raise DatasetError(f"{key}.camera.hfov_deg: expected degrees in (0, 180), got {hfov!r}")
     pose = observer.get("pose")
     if pose is not None:
         position = pose.get("position") if isinstance(pose, dict) else None
-        fine = (
-            isinstance(position, list)
-            and len(position) == 3
-            and all(_is_number(p) for p in position)
-            and _is_number(pose.get("yaw"))
-        )
+        fine = _is_position(position, 3) and _is_number(pose.get("yaw"))
         if not fine:
             raise DatasetError(
-                f"{key}.pose: expected position [x, y, z] and yaw (finite numbers), got "
-                f"{_shown(pose)}"
+                f"{key}.pose: expected position [x, y, z] within ±{MAX_POSITION_M:g} m and yaw "
+                f"(finite numbers), got {_shown(pose)}"
             )
     for seed in _SEEDS:
         value = observer.get(seed)
@@ -383,9 +411,10 @@ def _check_prior(prior, where: Path) -> None:
     kind = prior.get("kind") if isinstance(prior, dict) else None
     if kind == "stored":
         sigma = prior.get("world_sigma_m")
-        if not (_is_number(sigma) and sigma >= 0):
+        if not (_is_number(sigma) and 0 <= sigma <= MAX_PRIOR_SIGMA_M):
             raise DatasetError(
-                f"{where}: prior.world_sigma_m: expected a finite number >= 0, got {_shown(sigma)}"
+                f"{where}: prior.world_sigma_m: expected metres in [0, {MAX_PRIOR_SIGMA_M:g}], "
+                f"got {_shown(sigma)}"
             )
     elif kind == "pose_error":
         fields = {

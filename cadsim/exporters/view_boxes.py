@@ -3,7 +3,11 @@
 A view of a camera record (``cadsim generate``) is its camera and its detections: the box centre
 is the detection's position (the noisy depth estimate, as a matcher sees it) taken to the world
 through the true camera pose, the size and heading are the detected object's (``record.json``'s
-objects). A view of a box-only record is its sensor and its boxes (stored sizes and headings).
+objects), the size the one the view's detector *reported* (its estimate, with the detector's size
+noise; read back from the detection's attribute features, ``cadsim.sensing.features.reported_sizes``
+— never the object's true size, which would name its class and tie the two views together).
+A view of a box-only record is its sensor and its boxes (stored sizes — for LiDAR the fitted,
+completed boxes — and headings).
 Either way :class:`ViewBoxes` holds world centres and length directions (cadsim's right-handed
 world), the view-frame centres and headings (camera-frame convention), sizes (l, w, h, metres),
 the class a matcher sees (the reported one where the record has it), speeds (m/s), the
@@ -28,6 +32,7 @@ from cadsim.importers.sensor_frame import (
 )
 from cadsim.observer_pose import ObserverPose
 from cadsim.sensing.box_features import BOX_CUES
+from cadsim.sensing.features import reported_sizes
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,7 +109,9 @@ def record_views(pair, views: list[ViewDetections], errors: list) -> list[ViewBo
             headings = det.headings if det.headings is not None else np.zeros(len(det))
             directions = world_directions(camera, headings)
         else:
-            sizes = np.array([o["size"] if o else (0.5, 0.5, 0.5) for o in found], dtype=float)
+            sizes = reported_sizes(det.features) if len(det) else np.zeros((0, 3))
+            if sizes is None:  # a foreign feature layout: the objects' sizes are all there is
+                sizes = np.array([o["size"] if o else (0.5, 0.5, 0.5) for o in found], dtype=float)
             directions = yaw_directions([o["yaw"] if o else 0.0 for o in found])
             _, headings = boxes_in_view(camera, world, directions)
         stored = det.world

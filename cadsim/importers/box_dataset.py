@@ -12,6 +12,7 @@ it was. Must not import matchers or eval.
 
 from __future__ import annotations
 
+import shutil
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,7 +23,7 @@ from cadsim.dataset.box_record import RECORD_FILES, BoxRecord, encode_box_record
 from cadsim.dataset.checksum import dataset_checksum, record_checksum
 from cadsim.dataset.encoding import json_bytes
 from cadsim.dataset.manifest import FORMAT_NAME
-from cadsim.dataset.output_folder import check_output_folder
+from cadsim.dataset.output_folder import OutputFolderError, check_output_folder
 from cadsim.provenance import git_state, package_versions
 
 
@@ -41,8 +42,36 @@ class ImportResult:
 
 
 def check_out(out: str | Path) -> Path:
-    """The output rule: a new or empty folder, never a link, a file or inside a dataset."""
-    return check_output_folder(out, resumable=False)
+    """The output rule: a new or empty folder, never a link, a file or inside a dataset — or a
+    folder holding only what an interrupted import left (:func:`_leftovers`), which the write
+    clears first."""
+    try:
+        return check_output_folder(out, resumable=False)
+    except OutputFolderError:
+        if _leftovers(Path(out)) is None:
+            raise
+        return Path(out)
+
+
+def _leftovers(out: Path) -> Path | None:
+    """``out/pairs`` when ``out`` holds nothing but an interrupted import's records (no
+    manifest, no link, only record folders of record files and temporary names), else None."""
+    pairs = out / layout.PAIRS_DIR
+    if out.is_symlink() or not out.is_dir() or [e.name for e in out.iterdir()] != [pairs.name]:
+        return None
+    if pairs.is_symlink() or not pairs.is_dir():
+        return None
+    for entry in pairs.iterdir():
+        temporary = entry.name.startswith(layout.TEMP_PREFIX)
+        if entry.is_symlink() or not entry.is_dir():
+            return None
+        if not temporary and layout.parse_record_name(entry.name) is None:
+            return None
+        for file in entry.iterdir():
+            own = file.name in RECORD_FILES or file.name.startswith(layout.TEMP_PREFIX)
+            if file.is_symlink() or not file.is_file() or not own:
+                return None
+    return pairs
 
 
 def write_box_dataset(
@@ -53,6 +82,19 @@ def write_box_dataset(
     out = check_out(out)
     if not records:
         raise ValueError("no records to write")
+    leftovers = _leftovers(out)
+    if leftovers is not None:
+        shutil.rmtree(leftovers)
+    try:
+        return _write(out, records, scenario, source)
+    except BaseException:  # Ctrl-C too: no manifest was written, so nothing of this run is kept
+        if not (out / layout.MANIFEST).exists() and _leftovers(out) is not None:
+            shutil.rmtree(out / layout.PAIRS_DIR)
+        raise
+
+
+def _write(out: Path, records: Sequence[BoxRecord], scenario: str, source: dict) -> ImportResult:
+    """:func:`write_box_dataset` once ``out`` is checked and clear."""
     views = len(records[0].views)
     sequential = records[0].sequence is not None
     version = record_version(views, sequential)

@@ -75,8 +75,8 @@ SOURCE = {
 }
 DEFAULT_PRIOR_SIGMA_M = 1.0
 PROTOCOL = "data_protocol.yaml"
-_AGENT = re.compile(r"^-?\d{1,9}$")
-_FRAME = re.compile(r"^\d{1,9}$")
+_AGENT = re.compile(r"-?[0-9]{1,9}\Z")  # ASCII digits only, no trailing newline
+_FRAME = re.compile(r"[0-9]{1,9}\Z")
 _KMH = 1.0 / 3.6
 log = logging.getLogger(__name__)
 _PRIOR_FRAME = "OPV2V predicted_ego_pos, y negated: right-handed, x and y horizontal, z up, metres"
@@ -101,6 +101,10 @@ def _pose(value, path: Path, key: str) -> np.ndarray:
         return mirrored(transform)
     if isinstance(value, list) and len(value) == 4 and all(isinstance(r, list) for r in value):
         m = matrix(value, path, key, 4, 4)
+        if not np.array_equal(m[3], [0.0, 0.0, 0.0, 1.0]):
+            raise ImportFormatError(
+                path, f"{key}[3]: expected the row [0, 0, 0, 1] of a rigid transform"
+            )
         return mirrored(rigid(m[:3, :3].tolist(), m[:3, 3].tolist(), path, key))
     return pose_matrix(numbers(value, path, key, 6))
 
@@ -110,15 +114,23 @@ def _boxes(vehicles, path: Path) -> list[dict]:
         return []
     if not isinstance(vehicles, dict):
         raise ImportFormatError(path, "vehicles: expected a mapping of actor ids")
-    out = []
+    out, seen = [], {}
     for actor, entry in vehicles.items():
-        key = f"vehicles.{str(actor)[:20]}"
+        key = (
+            f"vehicles.{str(actor)[:20]!r}"
+            if isinstance(actor, str)
+            else f"vehicles.{str(actor)[:20]}"
+        )
         if (
             isinstance(actor, bool)
             or not isinstance(actor, int | str)
             or not _AGENT.match(str(actor))
         ):
-            raise ImportFormatError(path, f"{key}: expected an integer actor id")
+            raise ImportFormatError(path, f"{key}: expected an integer actor id (ASCII digits)")
+        if seen.setdefault(int(actor), actor) is not actor:
+            raise ImportFormatError(
+                path, f"{key}: actor {int(actor)} given twice ({seen[int(actor)]!r} and {actor!r})"
+            )
         location = numbers(field(entry, "location", path, key), path, f"{key}.location", 3)
         angle = numbers(field(entry, "angle", path, key), path, f"{key}.angle", 3, 1e4)
         center = numbers(entry.get("center", [0.0, 0.0, 0.0]), path, f"{key}.center", 3, 1e3)
@@ -307,17 +319,32 @@ def _scenarios(root: Path) -> list[Path]:
 def _frames(scenario: Path) -> dict[str, dict[int, Path]]:
     """{frame name: {agent id: yaml path}}; links are not followed."""
     frames: dict[str, dict[int, Path]] = {}
-    for folder in scenario.iterdir():
+    spelling: dict[int, str] = {}
+    for folder in sorted(scenario.iterdir()):
         if not (folder.is_dir() and not folder.is_symlink() and _AGENT.match(folder.name)):
             continue
-        for path in folder.iterdir():
+        for path in sorted(folder.iterdir()):
             if (
                 path.suffix == ".yaml"
                 and _FRAME.match(path.stem)
                 and path.is_file()
                 and not path.is_symlink()
             ):
-                frames.setdefault(path.stem, {})[int(folder.name)] = path
+                # one spelling per frame and agent: 70.yaml beside 000070.yaml, or 3/ beside
+                # 03/ (0/ beside -0/), would be one frame or agent read twice
+                stem = spelling.setdefault(int(path.stem), path.stem)
+                if stem != path.stem:
+                    raise ImportFormatError(
+                        path,
+                        f"frame {int(path.stem)} is also named {stem}.yaml: one name per frame",
+                    )
+                by_agent = frames.setdefault(stem, {})
+                if int(folder.name) in by_agent:
+                    other = by_agent[int(folder.name)].parent.name
+                    raise ImportFormatError(
+                        path, f"agent {int(folder.name)} is also the folder {other}/: one per agent"
+                    )
+                by_agent[int(folder.name)] = path
     return dict(sorted(frames.items(), key=lambda kv: int(kv[0])))
 
 

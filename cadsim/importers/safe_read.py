@@ -1,7 +1,8 @@
 """Reading a foreign dataset's text files without trusting them: the importers' one reader of
 JSON and YAML, and of the paths those files name.
 
-- YAML through PyYAML's safe loader only (no ``!!python/...`` tag constructs anything), after
+- YAML through PyYAML's safe loader only (no ``!!python/...`` tag constructs anything; a key
+  given twice in one mapping refused, :mod:`~cadsim.importers.strict_yaml`), after
   walking its events: nesting deeper than :data:`MAX_DEPTH` or more than :data:`MAX_ALIASES`
   aliases is refused before anything is built;
 - JSON with the standard parser, ``NaN`` / ``Infinity`` refused, nesting deeper than
@@ -24,6 +25,7 @@ from pathlib import Path, PurePosixPath
 import numpy as np
 
 from cadsim.importers import ImportFormatError
+from cadsim.importers.strict_yaml import UniqueKeyLoader
 
 MAX_BYTES = 64 * 2**20
 MAX_DEPTH = 32
@@ -107,7 +109,7 @@ def read_yaml(path: Path):
                 aliases += 1
                 if aliases > MAX_ALIASES:
                     raise ImportFormatError(path, f"more than {MAX_ALIASES} aliases")
-        return yaml.load(text, Loader=yaml.SafeLoader)  # noqa: S506 (the safe loader)
+        return yaml.load(text, Loader=UniqueKeyLoader)  # noqa: S506 (the safe loader)
     except yaml.YAMLError as exc:
         problem = str(getattr(exc, "problem", None) or exc).splitlines()[0][:80]
         raise ImportFormatError(path, f"not safe YAML ({problem})") from None

@@ -31,6 +31,7 @@ unit's. No localisation prior is stored (the data has no noisy pose): a preset d
 from __future__ import annotations
 
 import hashlib
+import itertools
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -87,6 +88,9 @@ class _Reader:
         out = {}
         for k, entry in enumerate(entries):
             frame = str(field(entry, "frame_id", path, f"[{k}]"))
+            if frame in out:
+                first = out[frame]["_where"]
+                raise ImportFormatError(path, f"[{k}].frame_id: {frame[:20]!r} already at {first}")
             out[frame] = entry | {"_where": f"[{k}]"}
         return out
 
@@ -218,6 +222,12 @@ def _frame(reader: _Reader, coop: dict, where: Path, key: str) -> tuple[str, Imp
     inf_id = str(field(coop, "infrastructure_frame", where, key))
     sequence = str(field(coop, "vehicle_sequence", where, key))
     offset_entry = coop.get("system_error_offset") or {}
+    if not isinstance(offset_entry, dict):
+        raise ImportFormatError(
+            where,
+            f"{key}.system_error_offset: expected {{delta_x, delta_y}} (metres), "
+            f"got {type(offset_entry).__name__}",
+        )
     offset = tuple(
         number(offset_entry.get(a, 0.0), where, f"{key}.system_error_offset.{a}", 1e3)
         for a in ("delta_x", "delta_y")
@@ -255,7 +265,10 @@ def _frame(reader: _Reader, coop: dict, where: Path, key: str) -> tuple[str, Imp
 
 
 def _episode(sequence: str, index: int) -> int:
-    return int(sequence) if sequence.isdigit() and len(sequence) <= 9 else index
+    """The episode of a sequence id: the id itself when it is ASCII digits ('0010' → 10;
+    '²' or '١٠' are names like any other), else its index."""
+    plain = sequence.isascii() and sequence.isdigit() and len(sequence) <= 9
+    return int(sequence) if plain else index
 
 
 def _digest(root: Path, files: Iterable[Path]) -> str:
@@ -289,11 +302,19 @@ def import_v2x_seq(
         )
     wanted = None if sequences is None else {str(s) for s in sequences}
     grouped: dict[str, list[ImportedFrame]] = {}
+    listed: dict[str, str] = {}  # vehicle frame -> the key that lists it
     for k, coop in enumerate(coops):
         sequence = str(field(coop, "vehicle_sequence", coop_path, f"[{k}]"))
         if wanted is not None and sequence not in wanted:
             continue
         sequence, frame = _frame(reader, coop, coop_path, f"[{k}]")
+        first = listed.setdefault(frame.meta["vehicle_frame"], f"[{k}]")
+        if first != f"[{k}]":
+            raise ImportFormatError(
+                coop_path,
+                f"[{k}].vehicle_frame: {frame.meta['vehicle_frame'][:20]!r} "
+                f"already listed at {first}",
+            )
         grouped.setdefault(sequence, []).append(frame)
     if not grouped:
         raise ImportFormatError(
@@ -307,6 +328,13 @@ def import_v2x_seq(
             raise ImportFormatError(coop_path, f"sequence {sequence!r}: episode {episode} twice")
         used.add(episode)
         frames = sorted(grouped[sequence], key=lambda f: f.time)
+        for a, b in itertools.pairwise(frames):
+            if a.time == b.time:
+                raise ImportFormatError(
+                    reader.root / "vehicle-side" / "data_info.json",
+                    f"frames {a.meta['vehicle_frame'][:20]!r} and {b.meta['vehicle_frame'][:20]!r} "
+                    f"of sequence {sequence[:20]!r}: same pointcloud_timestamp",
+                )
         records += sequence_records(episode, 0, episode, frames, sequential)
     files = [p for p in root.rglob("*.json") if p.is_file() and not p.is_symlink()]
     source = SOURCE | {

@@ -1,7 +1,7 @@
 """Mesh builders for the built-in object shapes (see ``cadsim.render.meshes`` for the contract).
 
 SUMO's own models draw cars, vans, persons and traffic lights; trimesh primitives draw the rest
-(bus, truck, bicycle, sign, building, road, box, cylinder, cone). Objects are closed solids, so
+(bus, truck, bicycle, sign, building, road, box, cylinder, cone, tree). Objects are closed solids, so
 back faces can be culled.
 """
 
@@ -214,6 +214,16 @@ def build_cone(spec: MeshSpec) -> list[Part]:
     ]
 
 
+def build_tree(spec: MeshSpec) -> list[Part]:
+    """Street tree in the unit box: a brown trunk over the lower 45 %, a crown (a flattened
+    icosphere in the object's colour) filling the upper part and the full width."""
+    crown = trimesh.creation.icosphere(subdivisions=1, radius=1.0)
+    crown.apply_scale((0.5, 0.5, 0.3))
+    crown.apply_translation((0.0, 0.0, 0.2))
+    trunk = cylinder(0.06, 0.5, (0.0, 0.0, -0.25), "z", (0.35, 0.24, 0.14), sections=10)
+    return [trunk, Part(crown, spec.color)]
+
+
 # shape -> (builder, size_dependent)
 BUILTIN_BUILDERS: dict[str, tuple[MeshBuilder, bool]] = {
     "car": (_sumo_vehicle("car-normal-citrus.obj"), False),
@@ -230,4 +240,5 @@ BUILTIN_BUILDERS: dict[str, tuple[MeshBuilder, bool]] = {
     "box": (build_box, False),
     "cylinder": (build_cylinder, False),
     "cone": (build_cone, False),
+    "tree": (build_tree, False),
 }

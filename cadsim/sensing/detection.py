@@ -330,7 +330,7 @@ def _with_detector_errors(
     )
     centres = [tuple(c) for c in moved]
     h, w = clean_depth.shape
-    for clutter in clutter_boxes(rng.poisson(config.false_positives), clean_depth, camera, rng, config.min_pixels):  # fmt: skip
+    for clutter in clutter_boxes(rng.poisson(config.false_positives), clean_depth, camera, rng, config.min_pixels, config.size_noise):  # fmt: skip
         x0, y0, x1, y1 = clutter.box
         if known_features is not None and clutter.id in known_features:
             features.append(known_features[clutter.id])

@@ -10,14 +10,16 @@ Three errors, per view, seeded, all off by default (the ``[detection]`` keys of
 - **false positives**: Poisson(``false_positives``) clutter detections per view — a box the
   size a car, person or sign would have at that depth, placed on a random pixel with a depth
   (a wall, the road, a parked car's flank), whose features are computed from the image there
-  like any detection's, so they look plausible; each has an id of its own (``clutter:…``) that
-  no other view can share, so it is never a true pair;
+  like any detection's, so they look plausible; its size is drawn from its class's spread
+  (``cadsim.object_sizes``) and reported with the detector's size noise, like a real object's;
+  each has an id of its own (``clutter:…``) that no other view can share, so it is never a true
+  pair;
 - **centre jitter**: every detection's centroid moves by N(0, ``centre_jitter``²) times its
   box's width and height (pixels), so its position moves along the image plane.
 
 Draw order (fixed, so one seed gives one outcome): one uniform per candidate detection (misses),
-two normals per kept detection (jitter), then the clutter count and, per clutter box, its pixel,
-class and id. The stream is a child of the view's attribute stream (:func:`error_stream`): the
+two normals per kept detection (jitter), then the clutter count, the id tag and, per clutter
+box, its pixel, class, three normals (its size) and three normals (its size noise). The stream is a child of the view's attribute stream (:func:`error_stream`): the
 dataset's records keep their seeds, and the reader's re-detection draws the same errors.
 """
 
@@ -28,16 +30,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cadsim import portable_math as pm
 from cadsim.camera import Camera
+from cadsim.object_sizes import CLIP_SD, SIZE_SPREADS
 
 _ERROR_CHILD = 9  # spawn-key suffix of the detector-error stream under the attribute stream
 
-CLUTTER_KINDS: tuple[tuple[str, tuple[float, float, float]], ...] = (
-    ("car", (4.5, 1.8, 1.5)),
-    ("person", (0.5, 0.5, 1.75)),
-    ("sign", (0.1, 0.8, 2.5)),
-)
-"""(class, size (length, width, height) metres) a clutter detection is reported as."""
+CLUTTER_KINDS: tuple[str, ...] = ("car", "person", "sign")
+"""Classes a clutter detection is reported as (its size: the class's spread, module docstring)."""
 
 
 def error_stream(attribute_rng: np.random.Generator) -> np.random.Generator:
@@ -72,10 +72,12 @@ class ClutterBox:
 
 def clutter_boxes(
     count: int, clean_depth: np.ndarray, camera: Camera, rng: np.random.Generator,
-    min_pixels: int,
+    min_pixels: int, size_noise: float = 0.0,
 ) -> list[ClutterBox]:  # fmt: skip
     """``count`` clutter detections on pixels that have a depth (fewer if a box would hold under
-    ``min_pixels`` such pixels: it is dropped, its draws still made)."""
+    ``min_pixels`` such pixels: it is dropped, its draws still made). A box's ``size`` is the one
+    the detector reports: drawn from its class's spread, times exp(``size_noise`` · ε) per
+    dimension (``cadsim.sensing.attribute_noise``'s size noise)."""
     depth = np.asarray(clean_depth, dtype=float)
     h, w = depth.shape
     hit = np.flatnonzero(depth.ravel() > 0)
@@ -83,11 +85,16 @@ def clutter_boxes(
     out: list[ClutterBox] = []
     for k in range(int(count)):
         pick, kind = rng.random(), int(rng.integers(len(CLUTTER_KINDS)))
+        cls = CLUTTER_KINDS[kind]
+        spread = SIZE_SPREADS[cls]
+        eps = np.clip(rng.standard_normal(3), -CLIP_SD, CLIP_SD)
+        noise = pm.exp(size_noise * rng.standard_normal(3))
+        drawn = (np.asarray(spread.mean) + np.asarray(spread.sd) * eps) * noise
+        size = tuple(float(v) for v in drawn)
         if not hit.size:
             continue
         centre = int(hit[min(int(pick * hit.size), hit.size - 1)])
         v, u = divmod(centre, w)
-        cls, size = CLUTTER_KINDS[kind]
         scale = camera.fx / max(depth[v, u], 1e-3)  # pixels per metre at that depth
         half_w = max(2, int(round(0.5 * max(size[0], size[1]) * scale)))
         half_h = max(2, int(round(0.5 * size[2] * scale)))

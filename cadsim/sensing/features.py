@@ -133,3 +133,18 @@ def object_features(
     return np.concatenate(
         [hog_block(gray), color_block(crop, mask_crop), attribute_block(cls, size)]
     ).astype(np.float32)
+
+
+def reported_sizes(features: np.ndarray) -> np.ndarray | None:
+    """(k, 3) sizes (length, width, height, metres) the detector reported for k detections, read
+    back from their attribute blocks (the inverse of :func:`attribute_block`: the size part over
+    the one-hot entry, times ``SIZE_SCALE_M``); None when ``features`` (k, d) is not this
+    module's layout (d ≠ ``FEATURE_DIM``) or a row has no class entry."""
+    f = np.asarray(features, dtype=np.float64)
+    if f.ndim != 2 or f.shape[1] != FEATURE_DIM:
+        return None
+    attributes = f[:, FEATURE_LAYOUT["attributes"]]
+    one_hot = attributes[:, : len(FEATURE_CLASSES)].max(axis=1, initial=0.0)
+    if (one_hot <= 0).any():
+        return None
+    return attributes[:, len(FEATURE_CLASSES) :] / one_hot[:, None] * SIZE_SCALE_M

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from cadsim.config_tables import check_number, config_from_table
+from cadsim.limits import MAX_PRIOR_SIGMA_M
 from cadsim.sensing.gnss_error import model_of, parse_spec
 from cadsim.sensing.pose_error import PoseError
 
@@ -53,7 +54,10 @@ class LocalisationConfig:
     preset: str | None = None
 
     def __post_init__(self) -> None:
-        check_number("[localisation]", "position_sigma_m", self.position_sigma_m, minimum=0.0)
+        check_number(
+            "[localisation]", "position_sigma_m", self.position_sigma_m,
+            minimum=0.0, maximum=MAX_PRIOR_SIGMA_M,
+        )  # fmt: skip
         check_number("[localisation]", "yaw_sigma_deg", self.yaw_sigma_deg, minimum=0.0)
         if self.preset is not None:
             try:

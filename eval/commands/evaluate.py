@@ -87,7 +87,12 @@ def _seconds(text: str) -> float:
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("datasets", nargs="+", metavar="DATASET_DIR", help="test datasets")
-    parser.add_argument("--val", nargs="+", metavar="DIR", help="validation datasets, same order")
+    parser.add_argument(
+        "--val",
+        nargs="+",
+        metavar="DIR",
+        help="validation datasets, same order (default: each DATASET_DIR-val, when it exists)",
+    )
     parser.add_argument(
         "--no-calibration", action="store_true", help="report full assignments (no τ)"
     )

@@ -110,6 +110,29 @@ def sweep(
     return per_run
 
 
+def f1_summary(per_run: pd.DataFrame) -> str:
+    """The sweep's numbers as a markdown table: per matcher (rows) and noise rate (columns),
+    F1 in percent, mean ± standard deviation over runs (as fig4's lines and bands)."""
+    from eval.report.tables import matcher_order, method_name
+
+    stats = per_run.groupby(["matcher", "noise_rate"], sort=False)["f1"]
+    mean, std = stats.mean() * 100, stats.std(ddof=1).fillna(0.0) * 100
+    rates = sorted(per_run["noise_rate"].unique())
+    matchers = sorted(per_run["matcher"].unique(), key=matcher_order)
+    lines = [
+        f"F1 (%) by noise rate (σ = rate · d²), mean ± std over {per_run['seed'].nunique()} runs",
+        "| Method | " + " | ".join(f"{r:g}" for r in rates) + " |",
+        "|:---|" + "---:|" * len(rates),
+    ]
+    for m in matchers:
+        cells = [
+            f"{mean[(m, r)]:.1f} ± {std[(m, r)]:.1f}" if (m, r) in mean.index else "–"
+            for r in rates
+        ]
+        lines.append(f"| {method_name(m)} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("dataset", metavar="DATASET_DIR", help="test dataset (CAD in the paper)")
     parser.add_argument(
@@ -145,7 +168,8 @@ def run(args: argparse.Namespace) -> int:
             progress=not args.no_progress,
             plugin_time_limit_s=args.plugin_time_limit,
         )
-        sweep(entry, matchers, range(args.runs), rates, runner, args.out, args.pairs)
+        per_run = sweep(entry, matchers, range(args.runs), rates, runner, args.out, args.pairs)
+    print(f1_summary(per_run))
     from eval.report.figures import write_fig4
 
     for path in write_fig4(args.out):

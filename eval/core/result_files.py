@@ -27,6 +27,18 @@ def check_outputs(out: str | Path, cache: str | Path | None = None) -> Path:
     return check_result_folder(out)
 
 
+def recorded_path(path: str | Path | None) -> str | None:
+    """``path`` as a result file records it: relative to the working directory when it lies
+    inside it (``make reproduce`` runs from the repository, so committed results hold no
+    machine's absolute paths and the figures still find the datasets), else as given."""
+    if path is None:
+        return None
+    try:
+        return Path(path).resolve().relative_to(Path.cwd().resolve()).as_posix()
+    except (ValueError, OSError):
+        return str(path)
+
+
 def check_table_files(paths, csv_start: bytes) -> list[Path]:
     """The ``--out`` files of a validation command (``.csv`` tables, ``.md`` reports), checked by
     the output-path rule before anything runs: new files, or files of the same kind written

@@ -351,9 +351,8 @@ class Runner:
                         detail = "".join(traceback.format_exception(done.error)).rstrip()
                         failures.append(f"{task}: {done.error!r}")
                         errors.append(done.error)
-                        if is_user_error(done.error):  # bad input: its message says it all
-                            log.error("task failed: %s: %s", task, one_line(done.error))
-                            log.debug("%s", detail)
+                        if is_user_error(done.error):  # bad input: RunFailed's one line says it
+                            log.debug("task failed: %s: %s\n%s", task, one_line(done.error), detail)
                         else:
                             log.error("task failed: %s\n%s", task, detail)
                     else:

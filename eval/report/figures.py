@@ -30,7 +30,13 @@ from eval.report.tables import PAPER_DATASETS, dataset_order, matcher_order, met
 
 log = logging.getLogger(__name__)
 
-PANELS = (("accuracy", "Accuracy"), ("precision", "Precision"), ("recall", "Recall"))
+PANELS = (
+    ("accuracy", "Accuracy"), ("precision", "Precision"), ("recall", "Recall"), ("f1", "F1"),
+)  # fmt: skip
+FIG4_NOTE = (
+    "Lines: mean over runs (seeds) of each run's mean over frame pairs; bands: ± one standard "
+    "deviation over runs. F1: the README's summary metric."
+)
 
 
 def _figure(width: float, height: float, ncols: int = 1, nrows: int = 1):
@@ -71,7 +77,7 @@ def write_fig4(out_dir: str | Path) -> list[Path]:
     matchers = sorted(per_run["matcher"].unique(), key=matcher_order)
     colors = _colors(matchers)
     datasets = list(dict.fromkeys(per_run["dataset"]))
-    fig, axes = _figure(12, 3.6 * len(datasets) + 0.5, ncols=3, nrows=len(datasets))
+    fig, axes = _figure(16, 3.6 * len(datasets) + 0.8, ncols=len(PANELS), nrows=len(datasets))
     rates = np.sort(per_run["noise_rate"].unique())
     positive = rates[rates > 0]
     for row, dataset in enumerate(datasets):
@@ -100,11 +106,12 @@ def write_fig4(out_dir: str | Path) -> list[Path]:
                 ax.minorticks_off()
             ax.set_xlabel("noise rate (σ = rate · d², d in m)")
             ax.set_ylabel(f"{title} (%)")
-            ax.set_title(f"{dataset}: {title.lower()}")
+            ax.set_title(f"{dataset}: {title if title.isupper() else title.lower()}")
             ax.set_ylim(-2, 102)
             ax.grid(alpha=0.3)
     handles, labels = axes[0, 0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncols=min(len(labels), 9), fontsize=8)
+    fig.suptitle(FIG4_NOTE, fontsize=8)
     return _save(fig, out_dir / "fig4")
 
 

@@ -18,7 +18,7 @@ import pandas as pd
 
 from eval.core import tasks
 from eval.core.pose_metrics import outcome_pose
-from eval.core.result_files import write_csv, write_text
+from eval.core.result_files import recorded_path, write_csv, write_text
 from eval.core.runner import Runner, requests_for
 from eval.core.tasks import MatcherSpec, RunResult
 from eval.protocol import calibration, tuning
@@ -314,7 +314,7 @@ def qualitative_entry(
     if not methods:
         return {}
     return {
-        "dataset_dir": entry.test_dir,
+        "dataset_dir": recorded_path(entry.test_dir),
         "pair": index,
         "seed": first_seed,
         "gt_pairs": gt,
@@ -423,7 +423,7 @@ def _write_variant(
             "val_f1": fit.val_f1,
             "val_frames": fit.frames,
             "val_runs": fit.runs,
-            "val_dir": r.entry.val_dir,
+            "val_dir": recorded_path(r.entry.val_dir),
         }
         for r in results
         for label, fit in r.fits.items()
@@ -449,7 +449,14 @@ def _write_variant(
         qualitative = {r.entry.label: r.qualitative for r in results if r.qualitative}
         write_text(out_dir / "qualitative.json", json.dumps(qualitative, indent=1))
     record = {
-        "datasets": [asdict(r.entry) for r in results],
+        "datasets": [
+            asdict(r.entry)
+            | {
+                "test_dir": recorded_path(r.entry.test_dir),
+                "val_dir": recorded_path(r.entry.val_dir),
+            }
+            for r in results
+        ],
         "matchers": list(results[0].named) if results else [],
         "seeds": list(seeds),
         **settings,

@@ -26,6 +26,7 @@ COLUMNS = (
     "image_auc",
     "same_class_auc",
     "position_error_median_m",
+    "lidar_false_positive_sources",
 )
 TITLES = {
     "objects_per_view": "objects / view",
@@ -36,14 +37,20 @@ TITLES = {
     "image_auc": "image-only AUC",
     "same_class_auc": "AUC vs same-class false pairs",
     "position_error_median_m": "position error (m, median)",
+    "lidar_false_positive_sources": "LiDAR false positives by source (% of boxes)",
 }
 
 
 def regime_of(path: str | Path) -> dict:
-    """The regime fields of the dataset at `path` (``dataset_regime``), verified first."""
-    from cadsim.dataset import Dataset, regime
+    """The regime fields of the dataset at `path` (``dataset_regime``), verified first, with
+    ``lidar_false_positive_sources`` (``lidar_regime.sources_text`` of the LiDAR detector card;
+    None for a dataset without LiDAR points)."""
+    from cadsim.dataset import Dataset, lidar_regime, regime
 
-    return regime.dataset_regime(Dataset(path, verify=True))
+    dataset = Dataset(path, verify=True)
+    card = lidar_regime.lidar_detector_card(dataset)
+    sources = None if card is None else lidar_regime.sources_text(card["false_positive_sources"])
+    return regime.dataset_regime(dataset) | {"lidar_false_positive_sources": sources}
 
 
 def write_regime(out_dir: str | Path, datasets: Mapping[str, str | Path]) -> Path:
@@ -72,6 +79,8 @@ def regime_markdown(path: str | Path) -> str:
             v = r.get(c)
             if pd.isna(v):
                 cells.append("–")
+            elif isinstance(v, str):
+                cells.append(v)
             elif c in ("noncovisible_share", "covisible_share_of_smaller"):
                 cells.append(f"{100 * v:.0f} %")
             elif c in ("appearance_auc", "image_auc", "same_class_auc", "position_error_median_m"):

@@ -4,9 +4,9 @@
 Data. The cad-v2x test and validation splits are exported in the OPV2V layout (``cadsim export
 opv2v``) and imported back as box-only records (``cadsim import opv2v --no-prior``) into
 ``DATA/cad-v2x-boxes`` and ``DATA/cad-v2x-boxes-val``: the same detections (each view's noisy
-positions, reported classes, ground truth), the objects' sizes and headings instead of image
-appearance (the box feature vector of the objects' true sizes: label-quality boxes, so size is
-a cleaner cue here than a LiDAR detector's would be), no pixels. The record identity and the observers' bodies
+positions, reported classes, ground truth), the sizes each view's detector reported (with its
+size noise; never the objects' true sizes, which would name the pair: docs/dataset.md, "Sizes in
+exported boxes") and headings instead of image appearance, no pixels. The record identity and the observers' bodies
 survive the round trip, so every localisation preset draws the same prior as for the full
 table. The folders are rebuilt on every run (a few seconds; the records' bytes, hence the
 result cache's keys, do not change while cad-v2x does not).

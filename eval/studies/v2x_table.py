@@ -1,7 +1,7 @@
 """The V2X association table (``results/table_v2x.{md,csv}``): every matcher under every
 localisation preset on ``cad-v2x``, scored on association *and* on the relative pose its
-matches recover (:mod:`eval.core.pose_metrics`: the planar fit, the 6-DoF fit as a secondary
-column).
+matches recover (:mod:`eval.core.pose_metrics`: the robust planar fit, the 6-DoF fit as a
+secondary column).
 
 Protocol. Every matcher is tuned with the equal budget of every table (8 configurations,
 :mod:`eval.protocol.tuning`) on the validation split under the scenario's own preset
@@ -15,7 +15,7 @@ prior matchers cannot run (:mod:`eval.protocol.abstention`): their rows are kept
 (empty CSV cells, :data:`~eval.protocol.abstention.NO_NUMBER` in Markdown) and they are left out
 of every ranking, "chosen on validation" and comparison.
 
-Reference rows per preset: ``oracle`` — the planar fit of the *true* association (the ceiling
+Reference rows per preset: ``oracle`` — the same robust fit of the *true* association (the ceiling
 detection error leaves to every matcher; ``share_of_oracle`` states each matcher's success as a
 share of it) — and ``prior`` — the transform the two observers' noisy broadcast poses imply
 (poses only). Both have no F1.
@@ -357,9 +357,9 @@ def to_markdown(table: pd.DataFrame, intervals: pd.DataFrame, label: str) -> str
     lines = [
         f"**{label}** — matchers × localisation presets; F1 and success rates in percent with "
         "95 % episode-level intervals, RTE in metres, RRE in degrees, time in ms per pair; pose "
-        "from the planar fit (6-DoF fit's success beside it); `oracle`: the planar fit of the "
-        'true matches; `prior`: the broadcast poses alone; "of oracle": success as a share of '
-        "the oracle's",
+        "from the robust planar fit (6-DoF fit's success beside it); `oracle`: the same fit of "
+        'all true matches; `prior`: the broadcast poses alone; "of oracle": success as a share '
+        "of the oracle's",
         "",
         "| Preset | Matcher | F1 [95 % CI] | F1 pooled | success@(1 m, 2°) [95 % CI] | of oracle "
         "| success@(2 m, 5°) | RTE median | RRE median | pose failures | 6-DoF success@(1 m, 2°) "
@@ -633,7 +633,7 @@ def readme_part(results: Path, rel: str) -> list[str]:
         "(docs/localisation.md, docs/detection.md). Every matcher under every localisation "
         "preset, tuned (equal budget) under `gnss-urban` and, if it reads the prior, again under "
         "each preset on that preset's validation draw; τ per preset; pose metrics from the "
-        "planar least-squares fit of the declared matches against the true relative pose "
+        "robust planar fit of the declared matches against the true relative pose "
         "(latency included); `oracle` is the same fit of the true matches (the ceiling), "
         f"`prior` the vehicles' broadcast poses alone; {episodes} test episodes. Per preset "
         f"the {TOP} best by validation F1, the best without a prior and the reference rows; "

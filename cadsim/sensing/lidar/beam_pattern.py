@@ -194,6 +194,8 @@ class LidarConfig:
                 raise ValueError(
                     "[lidar] vertical_fov_deg must be [lowest, highest] with lowest < highest"
                 )
+        if self.dropout == 1.0:  # no ray would return: generation would search for ever
+            raise ValueError("[lidar] dropout must be below 1 (at 1 no ray returns), got 1.0")
         if self.elevations_deg is not None and not isinstance(self.elevations_deg, (list, tuple)):
             raise ValueError("[lidar] elevations_deg must be a list of degrees")
         if self.horizontal_resolution_deg is not None:

@@ -4,8 +4,12 @@ points — after detection, for metrics only (the detector never sees the tags).
 A box is the object most of its points hit (ties: the lower object index). A box whose points
 mostly hit the ground or a non-target object (a wall, a parked prop) is a false positive; so is
 every box but the largest of an object split in two. A false positive gets an id of its own,
-``clutter:lidar:<view tag>:<k>``, that no other view can share, and its reported class as true
-class (as the camera detector's clutter does).
+``clutter:lidar:<view tag>:<k>#<source>``, that no other view can share, and its reported class
+as true class (as the camera detector's clutter does). Its *source* says what it is: ``split``
+(a piece of a target object whose larger piece is the true box), ``ground`` (mostly road
+points), or the class of the non-target object most of its points hit (``building`` — a wall
+sliver —, ``tree``, ``pole``, ``bin``, ``trailer``, ...); :func:`false_positive_source` reads
+it back.
 """
 
 from __future__ import annotations
@@ -15,6 +19,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from cadsim.sensing.lidar.box_detector import LidarBoxes
+
+LIDAR_CLUTTER_PREFIX = "clutter:lidar:"
 
 
 def box_ground_truth(
@@ -44,10 +50,21 @@ def box_ground_truth(
             best[w] = b
     keeper = {b: w for w, b in best.items()}
     for b in range(k):
+        w = int(winner[b])
         if b in keeper:
             ids.append(str(object_ids[keeper[b]]))
             classes.append(str(object_classes[keeper[b]]))
-        else:
-            ids.append(f"clutter:lidar:{view_tag}:{b}")
-            classes.append(boxes.classes[b])
+            continue
+        source = "ground" if w < 0 else "split" if target[b] else str(object_classes[w])
+        ids.append(f"{LIDAR_CLUTTER_PREFIX}{view_tag}:{b}#{source}")
+        classes.append(boxes.classes[b])
     return ids, classes
+
+
+def false_positive_source(object_id: str) -> str | None:
+    """What a LiDAR false positive's box mostly hit (module docstring), from its id; None for an
+    id that is no LiDAR false positive or names no source (data made before sources were
+    recorded)."""
+    if not object_id.startswith(LIDAR_CLUTTER_PREFIX) or "#" not in object_id:
+        return None
+    return object_id.rsplit("#", 1)[1]

@@ -131,6 +131,14 @@ SCENE = Table(
         "signs": Field(bool, True, "road signs on the approaches and exits of observed junctions"),
         "sign_distance": Field(float, 20.0, "distance of a sign from the junction, metres", gt=0),
         "traffic_lights": Field(bool, True, "a pole with a signal head per signalised approach"),
+        "clutter_spacing": Field(
+            float,
+            0.0,
+            "mean distance between roadside clutter objects (trees, poles, bins, parked "
+            "trailers) along each road side, metres (0: none)",
+            ge=0,
+            le=MAX_LENGTH_M,
+        ),
     }
 )
 

@@ -25,6 +25,7 @@ from pathlib import Path
 import libsumo
 import numpy as np
 
+from cadsim.object_sizes import draw_size
 from cadsim.scenario import Scenario, ScenarioError
 from cadsim.sources.base import ObserverPair, ObserverSet, TrafficSource
 from cadsim.sources.observer_pairs import mount_camera, observer_pairs
@@ -105,6 +106,7 @@ class SumoSource(TrafficSource):
         self._vehicle_colors = [hex_to_rgb(c) for c in traffic["vehicle_colors"]]
         self._person_colors = [hex_to_rgb(c) for c in traffic["person_colors"]]
         self._types: dict[str, tuple[str, str, tuple]] = {}
+        self._sizes: dict[str, tuple[float, float, float]] = {}  # object id -> its drawn size
         self._running = False
         log.debug("sumo %s", " ".join(self.run.args))
 
@@ -171,6 +173,7 @@ class SumoSource(TrafficSource):
             ) from None
         _active.append(self)
         self._running = True
+        self._sizes = {}
 
     def close(self) -> None:
         if self._running:
@@ -195,6 +198,7 @@ class SumoSource(TrafficSource):
                 if sim.getTime() > begin and sim.getMinExpectedNumber() <= 0:
                     return
                 libsumo.simulationStep()
+                self._resize_departed()
             yield self.snapshot()
             k += 1
 
@@ -255,6 +259,47 @@ class SumoSource(TrafficSource):
             )
         return self._types[type_id]
 
+    def _resize_departed(self) -> None:
+        """Give every vehicle and person that departed in the last step its own drawn size, in
+        SUMO too, so that car following and the world objects agree on it."""
+        for sumo_id in libsumo.simulation.getDepartedIDList():
+            with contextlib.suppress(libsumo.TraCIException):  # already arrived
+                self._vehicle_size(sumo_id)
+        for sumo_id in libsumo.simulation.getDepartedPersonIDList():
+            with contextlib.suppress(libsumo.TraCIException):
+                self._person_size(sumo_id)
+
+    def _vehicle_size(self, sumo_id: str) -> tuple[float, float, float]:
+        """The vehicle's (length, width, height) metres: its vType's size as the mean, its class's
+        spread (``cadsim.object_sizes``), drawn once from the simulation seed and its id."""
+        oid = f"veh:{sumo_id}"
+        if oid not in self._sizes:
+            v, vt = libsumo.vehicle, libsumo.vehicletype
+            type_id = v.getTypeID(sumo_id)
+            vclass, gui_shape, _ = self._type_info(type_id)
+            cls, _ = vehicle_class(vclass, gui_shape)
+            mean = (vt.getLength(type_id), vt.getWidth(type_id), vt.getHeight(type_id))
+            size = draw_size(self.seed, oid, cls, mean)
+            v.setLength(sumo_id, size[0])
+            v.setWidth(sumo_id, size[1])
+            v.setHeight(sumo_id, size[2])
+            self._sizes[oid] = size
+        return self._sizes[oid]
+
+    def _person_size(self, sumo_id: str) -> tuple[float, float, float]:
+        """A person's drawn (depth, shoulder breadth, stature) metres, as :meth:`_vehicle_size`."""
+        oid = f"person:{sumo_id}"
+        if oid not in self._sizes:
+            p, vt = libsumo.person, libsumo.vehicletype
+            type_id = p.getTypeID(sumo_id)
+            mean = (vt.getLength(type_id), vt.getWidth(type_id), vt.getHeight(type_id))
+            size = draw_size(self.seed, oid, "person", mean)
+            p.setLength(sumo_id, size[0])
+            p.setWidth(sumo_id, size[1])
+            p.setHeight(sumo_id, size[2])
+            self._sizes[oid] = size
+        return self._sizes[oid]
+
     def _color(self, oid: str, own: tuple, type_color: tuple, palette: list) -> tuple:
         for rgba in (own, type_color):
             if tuple(rgba) != SUMO_DEFAULT_COLOR:
@@ -268,7 +313,7 @@ class SumoSource(TrafficSource):
             return [], {}
         front = np.array([v.getPosition3D(i) for i in ids], float)
         angle = np.array([v.getAngle(i) for i in ids], float)
-        size = np.array([(v.getLength(i), v.getWidth(i), v.getHeight(i)) for i in ids], float)
+        size = np.array([self._vehicle_size(i) for i in ids], float)
         center, yaw = front_to_center(front, angle, size[:, 0], size[:, 2])
         velocity = speed_to_velocity([v.getSpeed(i) for i in ids], yaw)
         inside = self.region.contains(center[:, :2])
@@ -315,7 +360,7 @@ class SumoSource(TrafficSource):
             return []
         front = np.array([p.getPosition3D(i) for i in ids], float)
         angle = np.array([p.getAngle(i) for i in ids], float)
-        size = np.array([(p.getLength(i), p.getWidth(i), p.getHeight(i)) for i in ids], float)
+        size = np.array([self._person_size(i) for i in ids], float)
         center, yaw = front_to_center(front, angle, size[:, 0], size[:, 2])
         velocity = speed_to_velocity([p.getSpeed(i) for i in ids], yaw)
         objects = []

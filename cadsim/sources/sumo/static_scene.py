@@ -26,6 +26,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from cadsim import portable_math as pm
+from cadsim.object_sizes import draw_size
 from cadsim.sources.street_furniture import (
     ROAD_COLOR,
     SIGNAL_COLORS,
@@ -93,7 +94,8 @@ def build_static_scene(
     network: RoadNetwork, junctions: list[str], scene: dict, seed: int
 ) -> StaticScene:
     """Static objects around ``junctions`` (ids) of ``network`` from a validated
-    ``[traffic.scene]`` table; ``seed`` fixes building heights and colours."""
+    ``[traffic.scene]`` table; ``seed`` fixes building heights and colours, each sign's and
+    pole's own size (``cadsim.object_sizes``) and the roadside clutter."""
     centres = np.array([network.junction_xy(j) for j in junctions]).reshape(-1, 2)
     region = Region(centres, scene["radius"])
     objects: list[WorldObject] = []
@@ -102,9 +104,26 @@ def build_static_scene(
     if scene["buildings"]:
         objects += buildings(network, region, scene, np.random.default_rng(seed))
     if scene["signs"]:
-        objects += signs(network, junctions, scene["sign_distance"])
+        objects += [own_size(o, seed) for o in signs(network, junctions, scene["sign_distance"])]
     lights = traffic_lights(network, region) if scene["traffic_lights"] else []
+    lights = [replace(head, object=own_size(head.object, seed)) for head in lights]
+    if scene.get("clutter_spacing", 0.0) > 0:
+        from cadsim.sources.sumo.roadside_clutter import roadside_clutter  # it uses this module
+
+        furniture = np.array(
+            [o.center[:2] for o in objects if o.cls == "sign"]
+            + [h.object.center[:2] for h in lights],
+            dtype=float,
+        ).reshape(-1, 2)
+        objects += roadside_clutter(network, region, scene["clutter_spacing"], seed, furniture)
     return StaticScene(objects=objects, lights=lights)
+
+
+def own_size(obj: WorldObject, seed: int) -> WorldObject:
+    """``obj`` standing on the ground with its own size, drawn around its class's default
+    (``cadsim.object_sizes``) from ``seed`` and its id."""
+    size = draw_size(seed, obj.id, obj.cls, obj.size)
+    return replace(obj, size=size, center=(obj.center[0], obj.center[1], size[2] / 2.0))
 
 
 class Region:
