@@ -10,8 +10,8 @@ heading radians CCW):
 
     error(t) = bias + walk(t) + noise + outlier
     bias     ~ N(0, bias_m²) per axis            constant within the episode
-    walk(t)  = Σ increments ~ N(0, walk²·1 s)    on a 1 s grid from the episode's start,
-                                                 linear between grid points (slow drift)
+    walk(t)  = Σ increments ~ N(0, walk²·1 s)    on a 1 s grid from t = 0, linear between
+                                                 grid points (slow drift)
     noise    ~ N(0, noise_m²) per axis           per view (snapshot)
     outlier  = outlier_m in a uniform direction  with probability outlier_rate, per view
     heading  = heading_bias (episode) + N(0, heading_noise²) (view), drawn from their own streams
@@ -19,6 +19,16 @@ heading radians CCW):
 Episode-level draws (bias, walk, heading bias) come from ``SeedSequence(episode seed, spawn_key=
 (5, crc32(vehicle id)))`` — the same for every record of that episode in which the vehicle
 observes, whatever order records are read in; per-view draws from the view's localisation seed.
+
+The walk is drawn by random access, in memory and time that do not grow with t (real
+timestamps are absolute: V2X-Seq's are seconds since 1970, ~1.6e9): the grid's first
+2^:data:`WALK_LEVELS` steps are halved level by level, each interval's increment splitting into
+its halves' as a Brownian bridge does (the left half's is half the parent's plus
+N(0, walk²·length/4), the right half's the rest; each split's normal from its own
+``SeedSequence(episode seed, spawn_key=(5, crc32(vehicle id), 1, level, index))``), and the walk
+at grid point k is the sum of the left halves passed on the way down to step k — exactly a
+Gaussian random walk on the grid, with :data:`WALK_LEVELS` normals per time. Times beyond
+:data:`MAX_TIME_S` (about 35 million years) are refused.
 
 Presets (:data:`PRESETS`; values and their sources: docs/localisation.md): ``exact`` (no error,
 the prior given), ``rtk`` (centimetre-level), ``gnss-open-sky``, ``gnss-urban``, ``denied``
@@ -39,13 +49,18 @@ from __future__ import annotations
 import re
 import zlib
 from dataclasses import dataclass, replace
+from functools import lru_cache
 
 import numpy as np
 
 from cadsim.sensing.pose_error import PoseError
 
 _EPISODE_STREAM = 5
+_WALK_STREAM = 1
 WALK_STEP_S = 1.0
+WALK_LEVELS = 50
+MAX_TIME_S = float(2**WALK_LEVELS) * WALK_STEP_S
+"""Largest time (seconds) the walk is drawn at: 2^50 s, far beyond any epoch timestamp."""
 
 
 MAGNITUDES = (
@@ -166,16 +181,43 @@ def episode_draws(
     bias = rng.standard_normal(2) * model.bias_m
     heading = float(rng.standard_normal()) * np.radians(model.heading_bias_deg)
     t = max(0.0, float(time_s))
-    steps = int(np.floor(t / WALK_STEP_S))
+    if not t <= MAX_TIME_S:  # also NaN
+        raise ValueError(f"time: expected seconds within [0, {MAX_TIME_S:.4g}], got {time_s!r}")
     walk = np.zeros(2)
     if model.walk_m_per_sqrt_s > 0:
-        increments = rng.standard_normal((steps + 1, 2)) * (
+        walk = _walk(episode_seed, vehicle, t / WALK_STEP_S) * (
             model.walk_m_per_sqrt_s * np.sqrt(WALK_STEP_S)
         )
-        path = np.cumsum(increments, axis=0)  # path[k]: the walk at (k + 1) steps
-        before = path[steps - 1] if steps else np.zeros(2)
-        walk = before + (t / WALK_STEP_S - steps) * increments[steps]
     return bias + walk, heading
+
+
+def _walk(episode_seed: int, vehicle: str, steps: float) -> np.ndarray:
+    """A unit Gaussian random walk (increments N(0, 1) per axis) at ``steps`` grid steps, linear
+    between grid points, drawn by halving (module docstring): (2,)."""
+    k = int(np.floor(steps))
+    key = (_EPISODE_STREAM, vehicle_key(vehicle), _WALK_STREAM)
+    # the whole grid's increment, then the halves that hold step k, level by level
+    increment = _normal(int(episode_seed), (*key, 0, 0)) * 2.0 ** (WALK_LEVELS / 2)
+    walk, start = np.zeros(2), 0
+    for level in range(1, WALK_LEVELS + 1):
+        half = 1 << (WALK_LEVELS - level)
+        left = 0.5 * increment + _normal(int(episode_seed), (*key, level, start)) * np.sqrt(
+            half / 2
+        )
+        if k < start + half:
+            increment = left
+        else:
+            walk, increment, start = walk + left, increment - left, start + half
+    return walk + (steps - k) * increment
+
+
+@lru_cache(maxsize=2**16)  # the upper levels are shared by every time of a vehicle
+def _normal(seed: int, spawn_key: tuple[int, ...]) -> np.ndarray:
+    """Two standard normals of the stream ``SeedSequence(seed, spawn_key)`` (read-only)."""
+    ss = np.random.SeedSequence(int(seed), spawn_key=spawn_key)
+    out = np.random.default_rng(ss).standard_normal(2)
+    out.flags.writeable = False
+    return out
 
 
 def draw_error(
