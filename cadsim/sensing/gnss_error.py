@@ -24,8 +24,8 @@ The walk is drawn by random access, in memory and time that do not grow with t (
 timestamps are absolute: V2X-Seq's are seconds since 1970, ~1.6e9): the grid's first
 2^:data:`WALK_LEVELS` steps are halved level by level, each interval's increment splitting into
 its halves' as a Brownian bridge does (the left half's is half the parent's plus
-N(0, walk²·length/4), the right half's the rest; each split's normal from its own
-``SeedSequence(episode seed, spawn_key=(5, crc32(vehicle id), 1, level, index))``), and the walk
+N(0, walk²·length/4), the right half's the rest; each split's normals by Box–Muller from a
+BLAKE2b hash of (episode seed, crc32(vehicle id), level, index) — counter-based), and the walk
 at grid point k is the sum of the left halves passed on the way down to step k — exactly a
 Gaussian random walk on the grid, with :data:`WALK_LEVELS` normals per time. Times beyond
 :data:`MAX_TIME_S` (about 35 million years) are refused.
@@ -46,17 +46,17 @@ Imports numpy only.
 
 from __future__ import annotations
 
+import hashlib
+import math
 import re
 import zlib
 from dataclasses import dataclass, replace
-from functools import lru_cache
 
 import numpy as np
 
 from cadsim.sensing.pose_error import PoseError
 
 _EPISODE_STREAM = 5
-_WALK_STREAM = 1
 WALK_STEP_S = 1.0
 WALK_LEVELS = 50
 MAX_TIME_S = float(2**WALK_LEVELS) * WALK_STEP_S
@@ -180,9 +180,9 @@ def episode_draws(
     rng = np.random.default_rng(ss)
     bias = rng.standard_normal(2) * model.bias_m
     heading = float(rng.standard_normal()) * np.radians(model.heading_bias_deg)
+    if not (np.isfinite(time_s) and float(time_s) <= MAX_TIME_S):
+        raise ValueError(f"time: expected finite seconds up to {MAX_TIME_S:.4g}, got {time_s!r}")
     t = max(0.0, float(time_s))
-    if not t <= MAX_TIME_S:  # also NaN
-        raise ValueError(f"time: expected seconds within [0, {MAX_TIME_S:.4g}], got {time_s!r}")
     walk = np.zeros(2)
     if model.walk_m_per_sqrt_s > 0:
         walk = _walk(episode_seed, vehicle, t / WALK_STEP_S) * (
@@ -195,29 +195,38 @@ def _walk(episode_seed: int, vehicle: str, steps: float) -> np.ndarray:
     """A unit Gaussian random walk (increments N(0, 1) per axis) at ``steps`` grid steps, linear
     between grid points, drawn by halving (module docstring): (2,)."""
     k = int(np.floor(steps))
-    key = (_EPISODE_STREAM, vehicle_key(vehicle), _WALK_STREAM)
+    prefix = f"{int(episode_seed)}/{vehicle_key(vehicle)}"
     # the whole grid's increment, then the halves that hold step k, level by level
-    increment = _normal(int(episode_seed), (*key, 0, 0)) * 2.0 ** (WALK_LEVELS / 2)
-    walk, start = np.zeros(2), 0
+    zx, zy = _normals(prefix, 0, 0)
+    scale = 2.0 ** (WALK_LEVELS / 2)
+    ix, iy = zx * scale, zy * scale  # the current interval's increment
+    wx = wy = 0.0  # the walk at the current interval's start
+    start = 0
     for level in range(1, WALK_LEVELS + 1):
         half = 1 << (WALK_LEVELS - level)
-        left = 0.5 * increment + _normal(int(episode_seed), (*key, level, start)) * np.sqrt(
-            half / 2
-        )
+        zx, zy = _normals(prefix, level, start)
+        spread = math.sqrt(half / 2)
+        lx, ly = 0.5 * ix + zx * spread, 0.5 * iy + zy * spread  # the left half's increment
         if k < start + half:
-            increment = left
+            ix, iy = lx, ly
         else:
-            walk, increment, start = walk + left, increment - left, start + half
-    return walk + (steps - k) * increment
+            wx, wy, ix, iy, start = wx + lx, wy + ly, ix - lx, iy - ly, start + half
+    frac = steps - k
+    return np.array([wx + frac * ix, wy + frac * iy])
 
 
-@lru_cache(maxsize=2**16)  # the upper levels are shared by every time of a vehicle
-def _normal(seed: int, spawn_key: tuple[int, ...]) -> np.ndarray:
-    """Two standard normals of the stream ``SeedSequence(seed, spawn_key)`` (read-only)."""
-    ss = np.random.SeedSequence(int(seed), spawn_key=spawn_key)
-    out = np.random.default_rng(ss).standard_normal(2)
-    out.flags.writeable = False
-    return out
+def _normals(prefix: str, level: int, start: int) -> tuple[float, float]:
+    """Two independent standard normals for the split of the interval at (``level``, ``start``):
+    Box–Muller on a BLAKE2b hash of (episode seed, vehicle, level, start) — counter-based, so
+    any interval's normals are drawn without the others, and through the C library's ``math``
+    (the same bits on every numpy dispatch level, :mod:`cadsim.portable_math`)."""
+    digest = hashlib.blake2b(
+        f"{prefix}/{level}/{start}".encode(), digest_size=16, person=b"cadsim-gnss-walk"
+    ).digest()
+    u1 = ((int.from_bytes(digest[:8], "little") >> 11) + 1) * 2.0**-53  # (0, 1]
+    u2 = (int.from_bytes(digest[8:], "little") >> 11) * 2.0**-53  # [0, 1)
+    radius = math.sqrt(-2.0 * math.log(u1))
+    return radius * math.cos(2 * math.pi * u2), radius * math.sin(2 * math.pi * u2)
 
 
 def draw_error(
