@@ -27,7 +27,7 @@ its halves' as a Brownian bridge does (the left half's is half the parent's plus
 N(0, walk²·length/4), the right half's the rest; each split's normals by Box–Muller from a
 BLAKE2b hash of (episode seed, crc32(vehicle id), level, index) — counter-based), and the walk
 at grid point k is the sum of the left halves passed on the way down to step k — exactly a
-Gaussian random walk on the grid, with :data:`WALK_LEVELS` normals per time. Times beyond
+Gaussian random walk on the grid, with :data:`WALK_LEVELS` + 1 pairs of normals per time. Times beyond
 :data:`MAX_TIME_S` (about 35 million years) are refused.
 
 Presets (:data:`PRESETS`; values and their sources: docs/localisation.md): ``exact`` (no error,
@@ -211,7 +211,7 @@ def _walk(episode_seed: int, vehicle: str, steps: float) -> np.ndarray:
             ix, iy = lx, ly
         else:
             wx, wy, ix, iy, start = wx + lx, wy + ly, ix - lx, iy - ly, start + half
-    frac = steps - k
+    frac = steps - start  # start == k, except at the grid's very end (k = 2^WALK_LEVELS)
     return np.array([wx + frac * ix, wy + frac * iy])
 
 
