@@ -76,12 +76,17 @@ def load_npz(data: bytes | str, what: str) -> dict[str, np.ndarray]:
                             f"({nbytes:,} bytes), the member holds "
                             f"{info.file_size - member.tell():,}"
                         )
-                    buffer = bytearray(nbytes)
-                    if member.readinto(buffer) != nbytes:
+                    # allocated and shaped as np.load does (a numpy-owned array, so SIMD
+                    # kernels see the same memory layout as before)
+                    array = np.ndarray(math.prod(shape), dtype=dtype)
+                    if member.readinto(array.view(np.uint8)) != nbytes:
                         raise _Refused(f"{what}: {key[:60]}: truncated")
-                out[key] = np.frombuffer(buffer, dtype=dtype).reshape(
-                    shape, order="F" if fortran else "C"
-                )
+                if fortran:
+                    array.shape = shape[::-1]
+                    array = array.transpose()
+                else:
+                    array.shape = shape
+                out[key] = array
         return out
     except _Refused:
         raise
