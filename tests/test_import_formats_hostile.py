@@ -129,6 +129,15 @@ OPV2V_CASES = {
         "a: &a [x, x, x, x, x, x, x, x, x, x]\n" + "".join(f"b{k}: *a\n" for k in range(1100)),
         "more than 1000 aliases",
     ),
+    # 527 bytes expanding to 10⁹ numbers in a numeric field: the error path once formatted the
+    # expanded value (16 s and 640 MB at 7 levels, still running at 120 s at 9)
+    "alias bomb in a number": (
+        "a0: &a0 [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]\n"
+        + "".join(f"a{k}: &a{k} [" + ", ".join([f"*a{k - 1}"] * 10) + "]\n" for k in range(1, 9))
+        + "lidar_pose: *a8\n",
+        "more than 1,000,000 values with its aliases expanded",
+    ),
+    "larger than the YAML cap": ("x: " + "1" * (4 * 2**20) + "\n", "larger than 4 MiB"),
 }
 
 
@@ -186,3 +195,88 @@ def test_refusal_of_a_used_output_folder_writes_nothing(tmp_path, capsys):
     src = write_v2x_seq(tmp_path / "spd")
     assert main(["import", "v2x-seq", str(src), "--out", str(src)]) == 2
     assert "not an empty folder" in capsys.readouterr().err
+
+
+def test_anchors_and_aliases_stay_legal(tmp_path):
+    """Real V2V4Real files use anchors: a file whose boxes share an aliased extent and whose
+    pose is an alias imports as the same file written out in full."""
+    plain = write_opv2v(tmp_path / "plain", agents=(7, 3))
+    aliased = write_opv2v(tmp_path / "aliased", agents=(7, 3))
+    path = aliased / "2021_08_22_21_41_24" / "7" / "000070.yaml"
+    data = yaml.safe_load(path.read_text())
+    data["true_ego_pos"] = data["lidar_pose"]  # dumped as an anchor and an alias
+    (plain / path.relative_to(aliased)).write_text(
+        yaml.safe_dump(data).replace("&id001 ", "").replace("*id001", str(data["lidar_pose"]))
+    )
+    path.write_text(yaml.safe_dump(data))
+    assert "*id001" in path.read_text()
+    one = main(["import", "opv2v", str(plain), "--out", str(tmp_path / "one")])
+    two = main(["import", "opv2v", str(aliased), "--out", str(tmp_path / "two")])
+    assert one == two == 0
+    records = [sorted((tmp_path / o / "pairs").rglob("record.json")) for o in ("one", "two")]
+    assert [p.read_bytes() for p in records[0]] == [p.read_bytes() for p in records[1]]
+
+
+@pytest.mark.parametrize("target", ["outside yaml", "/etc/passwd"])
+def test_data_protocol_yaml_is_confined_like_every_file(tmp_path, capsys, target):
+    """The one file once opened without the confinement check: a link out of SRC was followed
+    (another folder's protocol renumbered the episodes; /etc/passwd was parsed silently)."""
+    src = write_opv2v(tmp_path / "split")
+    outside = tmp_path / "evil.yaml"
+    outside.write_text(yaml.safe_dump({"cadsim": {"episode": 77, "slot": 5, "sim_seed": 9}}))
+    link = src / "2021_08_22_21_41_24" / "data_protocol.yaml"
+    os.symlink(outside if target == "outside yaml" else target, link)
+    _refused(tmp_path, capsys, ["opv2v", str(src)], "data_protocol.yaml", "leads outside")
+
+
+def test_protocol_ids_cannot_forge_ground_truth(tmp_path, capsys):
+    """``cadsim.ids`` renaming actor 103 to ``105`` made two different objects (agent 7's 103,
+    agent 3's 105) one true pair, silently."""
+    src = write_opv2v(tmp_path / "split", agents=(7, 3))
+    protocol = {"cadsim": {"episode": 0, "slot": 0, "sim_seed": 0, "ids": {103: "105"}}}
+    (src / "2021_08_22_21_41_24" / "data_protocol.yaml").write_text(yaml.safe_dump(protocol))
+    _refused(
+        tmp_path, capsys, ["opv2v", str(src)], "data_protocol.yaml", "cadsim.ids: actors", "105"
+    )
+
+
+@pytest.mark.parametrize("fmt", ["v2x-seq", "opv2v", "dmgm"])
+def test_an_empty_out_never_means_the_current_folder(tmp_path, capsys, monkeypatch, fmt):
+    """``Path("")`` is ``.``: the importers checked the output folder after that conversion, so
+    ``--out ""`` in an empty folder wrote a dataset into it."""
+    src = write_v2x_seq(tmp_path / "spd") if fmt == "v2x-seq" else write_opv2v(tmp_path / "s")
+    cwd = tmp_path / "cwd"
+    cwd.mkdir()
+    monkeypatch.chdir(cwd)
+    assert main(["import", fmt, str(src), "--out", ""]) == 2
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert len(lines) == 1 and "--out: expected a folder path, got an empty one" in lines[0]
+    assert list(cwd.iterdir()) == []
+
+
+def test_the_v2x_seq_digest_reads_only_the_files_imported(tmp_path):
+    """The source digest once read every ``*.json`` under SRC, whole (a 64 GiB sparse file:
+    MemoryError; a 1,200-deep tree: RecursionError). Stray files — one above the size limit,
+    one at the bottom of a 1,200-deep tree — leave the import and its digest unchanged."""
+    src = write_v2x_seq(tmp_path / "spd")
+    assert main(["import", "v2x-seq", str(src), "--out", str(tmp_path / "clean")]) == 0
+    with open(src / "stray.json", "wb") as big:
+        big.truncate(65 * 2**20)  # sparse: no disk used, and never read
+    deep = src / "deep"
+    os.mkdir(deep)
+    for _ in range(1200):
+        deep = deep / "d"
+        os.mkdir(deep)
+    (deep / "x.json").write_text("[]")
+    try:
+        assert main(["import", "v2x-seq", str(src), "--out", str(tmp_path / "strays")]) == 0
+        digests = [
+            json.loads((tmp_path / o / "manifest.json").read_text())["source"]["sha256"]
+            for o in ("clean", "strays")
+        ]
+        assert digests[0] == digests[1]
+    finally:  # pytest's own clean-up recurses once per level
+        (deep / "x.json").unlink()
+        while deep != src:
+            deep.rmdir()
+            deep = deep.parent

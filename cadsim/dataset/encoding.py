@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import io
 import json
+import math
 import zipfile
 import zlib
 from collections.abc import Mapping
@@ -16,6 +17,13 @@ from collections.abc import Mapping
 import numpy as np
 
 _ZIP_EPOCH = (1980, 1, 1, 0, 0, 0)
+MAX_NPZ_BYTES = 2**30
+"""Most array data one ``.npz`` may declare (all members): twelve 4096² float32 depth maps are
+0.75 GiB; a record's detections and LiDAR sweeps are far less."""
+
+
+class _Refused(ValueError):
+    """A member the reader refuses by its header (the message is the whole line)."""
 
 
 def npz_bytes(arrays: Mapping[str, np.ndarray]) -> bytes:
@@ -39,16 +47,71 @@ def npz_bytes(arrays: Mapping[str, np.ndarray]) -> bytes:
 
 def load_npz(data: bytes | str, what: str, keys=None) -> dict[str, np.ndarray]:
     """All members of an ``.npz`` (bytes or path) as arrays, or only those named in ``keys``
-    (the others are not decompressed); ``what`` names it in errors."""
+    (the others are not decompressed); ``what`` names it in errors.
+
+    Each member's ``.npy`` header is read and checked before its data is inflated: a plain
+    dtype (no objects), data that the zip entry's size holds exactly, and at most
+    :data:`MAX_NPZ_BYTES` declared over all members — so a header claiming 10¹² elements, or a
+    stray member of gigabytes, is refused without allocating it."""
     try:
         src = io.BytesIO(data) if isinstance(data, bytes) else data
-        with np.load(src, allow_pickle=False) as z:
-            missing = [] if keys is None else [k for k in keys if k not in z.files]
-            if missing:
-                raise ValueError(f"missing arrays {missing}")
-            return {k: z[k] for k in (z.files if keys is None else keys)}
+        out, declared = {}, 0
+        with zipfile.ZipFile(src) as zf:
+            for info in zf.infolist():
+                if not info.filename.endswith(".npy"):
+                    raise _Refused(f"{what}: {info.filename[:60]!r}: not an array member")
+                key = info.filename[: -len(".npy")]
+                if keys is not None and key not in keys:
+                    continue
+                with zf.open(info) as member:
+                    shape, fortran, dtype = _member_header(member, what, key)
+                    nbytes = math.prod(shape) * dtype.itemsize
+                    declared += nbytes
+                    if declared > MAX_NPZ_BYTES:
+                        raise _Refused(
+                            f"{what}: {key[:60]}: its header declares {shape} {dtype} "
+                            f"({nbytes:,} bytes); the file may hold at most "
+                            f"{MAX_NPZ_BYTES:,} bytes of arrays"
+                        )
+                    if info.file_size != member.tell() + nbytes:
+                        raise _Refused(
+                            f"{what}: {key[:60]}: its header declares {shape} {dtype} "
+                            f"({nbytes:,} bytes), the member holds "
+                            f"{info.file_size - member.tell():,}"
+                        )
+                    # allocated and shaped as np.load does (a numpy-owned array, so SIMD
+                    # kernels see the same memory layout as before)
+                    array = np.ndarray(math.prod(shape), dtype=dtype)
+                    if member.readinto(array.view(np.uint8)) != nbytes:
+                        raise _Refused(f"{what}: {key[:60]}: truncated")
+                if fortran:
+                    array.shape = shape[::-1]
+                    array = array.transpose()
+                else:
+                    array.shape = shape
+                out[key] = array
+        missing = [] if keys is None else [k for k in keys if k not in out]
+        if missing:
+            raise ValueError(f"missing arrays {missing}")
+        return out if keys is None else {k: out[k] for k in keys}
+    except _Refused:
+        raise
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
         raise ValueError(f"{what}: not a readable .npz file ({exc})") from exc
+
+
+def _member_header(member, what: str, key: str) -> tuple[tuple[int, ...], bool, np.dtype]:
+    """(shape, Fortran order, dtype) of an ``.npy`` member, read from its header only."""
+    version = np.lib.format.read_magic(member)
+    if version == (1, 0):
+        shape, fortran, dtype = np.lib.format.read_array_header_1_0(member)
+    elif version == (2, 0):
+        shape, fortran, dtype = np.lib.format.read_array_header_2_0(member)
+    else:
+        raise _Refused(f"{what}: {key[:60]}: npy format version {version}")
+    if dtype.hasobject:
+        raise _Refused(f"{what}: {key[:60]}: object arrays are not read (they need pickle)")
+    return tuple(int(n) for n in shape), bool(fortran), np.dtype(dtype)
 
 
 def json_bytes(obj) -> bytes:

@@ -54,6 +54,7 @@ from cadsim.dataset.record_format import (
     TRUE_CLASS_VERSION,
 )
 from cadsim.limits import MAX_POSITION_M, MAX_PRIOR_SIGMA_M, MAX_SIZE_M
+from cadsim.sensing.gnss_error import MAX_TIME_S
 from cadsim.sensing.localisation import LocalisationConfig
 from cadsim.world import WorldObject
 
@@ -262,8 +263,10 @@ def check_record_json(
             "frame (sequences are format 7)"
         )
     time = record.get("time")
-    if time is not None and not _is_number(time):
-        raise DatasetError(f"{where}: time: expected a finite number or null, got {_shown(time)}")
+    if time is not None and not (_is_number(time) and abs(time) <= MAX_TIME_S):
+        raise DatasetError(
+            f"{where}: time: expected seconds within ±{MAX_TIME_S:.4g} or null, got {_shown(time)}"
+        )
     objects = record.get("objects")
     if not isinstance(objects, list):
         raise DatasetError(f"{where}: objects: expected a list, got {_shown(objects)}")
@@ -298,9 +301,12 @@ def _check_sequence(record: dict, where: Path, entry: dict | None) -> None:
             f"{_shown(record.get('episode'))}, slot {_shown(record.get('slot'))})"
         )
     for key in ("interval_s", "start_time"):
-        if not _is_number(sequence.get(key)) or (key == "interval_s" and sequence[key] <= 0):
+        value = sequence.get(key)
+        if not (_is_number(value) and abs(value) <= MAX_TIME_S) or (
+            key == "interval_s" and value <= 0
+        ):
             raise DatasetError(
-                f"{where}: sequence.{key}: expected a finite number"
+                f"{where}: sequence.{key}: expected a number of seconds within ±{MAX_TIME_S:.4g}"
                 f"{' > 0' if key == 'interval_s' else ''}, got {_shown(sequence.get(key))}"
             )
     model = sequence.get("model")

@@ -143,10 +143,10 @@ def _source_digest(src: Path, pair_ids: Iterable[str]) -> str:
     return h.hexdigest()
 
 
-def _check_out(out: Path) -> None:
-    """The output-path rule for a dataset folder that must be new or empty (never a link, a
-    file, a user's folder, or a folder inside another dataset)."""
-    check_output_folder(out, resumable=False)
+def _check_out(out: str | Path) -> Path:
+    """``out`` as a Path under the output-path rule for a dataset folder that must be new or
+    empty (never empty itself, a link, a file, a user's folder, or inside another dataset)."""
+    return check_output_folder(out, resumable=False)
 
 
 def _pair_count(src: Path) -> int:
@@ -171,9 +171,8 @@ def import_dmgm(
     """
     from tqdm import tqdm
 
-    src, out = Path(src), Path(out)
+    src, out = Path(src), _check_out(out)  # checked before Path("") could become "."
     wanted = None if sequences is None else {str(s) for s in sequences}
-    _check_out(out)
     records, counts, ids = [], {}, []
     with tqdm(
         total=_pair_count(src),

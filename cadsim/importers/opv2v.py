@@ -51,7 +51,17 @@ from cadsim.importers import ImportFormatError
 from cadsim.importers.box_dataset import ImportResult, check_out, write_box_dataset
 from cadsim.importers.box_sequence import ImportedFrame, sequence_records
 from cadsim.importers.carla_frame import carla_matrix, mirrored, mirrored_points, pose_matrix
-from cadsim.importers.safe_read import field, matrix, number, numbers, read_yaml, rigid
+from cadsim.importers.safe_read import (
+    confined,
+    field,
+    matrix,
+    number,
+    numbers,
+    read_bytes,
+    read_yaml,
+    rigid,
+    shown,
+)
 from cadsim.importers.sensor_frame import (
     apply,
     boxes_in_view,
@@ -116,11 +126,7 @@ def _boxes(vehicles, path: Path) -> list[dict]:
         raise ImportFormatError(path, "vehicles: expected a mapping of actor ids")
     out, seen = [], {}
     for actor, entry in vehicles.items():
-        key = (
-            f"vehicles.{str(actor)[:20]!r}"
-            if isinstance(actor, str)
-            else f"vehicles.{str(actor)[:20]}"
-        )
+        key = f"vehicles.{shown(actor, 20)}"
         if (
             isinstance(actor, bool)
             or not isinstance(actor, int | str)
@@ -218,11 +224,13 @@ def _view(
     return view, objects
 
 
-def _protocol(folder: Path) -> dict:
-    """The ``cadsim`` block of a scenario's ``data_protocol.yaml`` (empty when absent)."""
+def _protocol(folder: Path, root: Path) -> dict:
+    """The ``cadsim`` block of a scenario's ``data_protocol.yaml`` (empty when absent); like
+    every file, it must lie inside ``root`` (a link out of it is refused)."""
     path = folder / PROTOCOL
-    if not path.is_file():
+    if not (path.exists() or path.is_symlink()):
         return {}
+    path = confined(root, path.relative_to(root).as_posix(), path, PROTOCOL)
     block = read_yaml(path)
     block = block.get("cadsim") if isinstance(block, dict) else None
     if block is None:
@@ -232,7 +240,7 @@ def _protocol(folder: Path) -> dict:
         value = field(block, key, path, "cadsim")
         if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < 2**63:
             raise ImportFormatError(
-                path, f"cadsim.{key}: expected an integer >= 0, got {str(value)[:30]}"
+                path, f"cadsim.{key}: expected an integer >= 0, got {shown(value, 30)}"
             )
         out[key] = value
     for key in ("start_time", "interval_s"):
@@ -296,6 +304,20 @@ def _prior_keys(block: dict, path: Path) -> dict:
             ) from None
         out["prior_preset"] = preset
     return out
+
+
+def _check_ids(read: list[_Agent], names: dict[str, str], owners: dict[str, str], where: Path):
+    """Every object id of a scenario names one actor (agents included): ``cadsim.ids`` may not
+    give an actor the number or the name of another. ``owners``: {object id: actor}, so far."""
+    for agent in read:
+        for actor in (str(agent.agent), *(b["id"] for b in agent.boxes)):
+            oid = names.get(actor, actor)
+            if owners.setdefault(oid, actor) != actor:
+                raise ImportFormatError(
+                    where,
+                    f"cadsim.ids: actors {owners[oid]} and {actor} would both be object "
+                    f"{shown(oid, 40)!r}",
+                )
 
 
 def _scenarios(root: Path) -> list[Path]:
@@ -397,10 +419,9 @@ def import_opv2v(
         raise ValueError(
             f"--prior-sigma: expected a finite number in (0, 1e4] metres, got {prior_sigma_m}"
         )
-    root, out = Path(src), Path(out)
-    check_out(out)
+    root, out = Path(src), check_out(out)  # checked before Path("") could become "."
     scenarios = _scenarios(root)
-    listing = [(s, _frames(s), _protocol(s)) for s in scenarios]
+    listing = [(s, _frames(s), _protocol(s, root)) for s in scenarios]
     counts = [len(a) for _, frames, _ in listing for a in frames.values()]
     if not counts or max(counts) < 2:
         raise ImportFormatError(root, "no frame with two or more agents")
@@ -414,13 +435,15 @@ def import_opv2v(
         episode = protocol.get("episode", next_episode)
         next_episode = max(next_episode, episode) + 1
         slot = protocol.get("slot", 0)
-        run, chosen_before = [], None
+        run, chosen_before, owners = [], None, {}
+        where = scenario / PROTOCOL
         for name, by_agent in frames.items():
             chosen = _ordered(list(by_agent))[:n]
             if len(chosen) < n:
                 skipped += 1
                 continue
             read = [_read_agent(by_agent[a], a) for a in chosen]
+            _check_ids(read, protocol.get("ids", {}), owners, where)
             files += [by_agent[a] for a in chosen]
             stored = stored and all(a.predicted is not None for a in read)
             if chosen != chosen_before and run:
@@ -481,7 +504,7 @@ def import_opv2v(
     h = hashlib.sha256()
     for path in files:
         h.update(path.relative_to(root).as_posix().encode() + b"\0")
-        h.update(hashlib.sha256(path.read_bytes()).digest())
+        h.update(hashlib.sha256(read_bytes(path)).digest())
     source = SOURCE | {"folder": root.name, "agents": n, "skipped_frames": skipped}
     source |= {"prior": "stored" if use_prior else "none", "sha256": h.hexdigest()}
     return write_box_dataset(out, records, SCENARIO_NAME, source)

@@ -2,24 +2,31 @@
 JSON and YAML, and of the paths those files name.
 
 - YAML through PyYAML's safe loader only (no ``!!python/...`` tag constructs anything; a key
-  given twice in one mapping refused, :mod:`~cadsim.importers.strict_yaml`), after
-  walking its events: nesting deeper than :data:`MAX_DEPTH` or more than :data:`MAX_ALIASES`
-  aliases is refused before anything is built;
+  given twice in one mapping refused, :mod:`~cadsim.importers.strict_yaml`; libyaml's parser
+  where PyYAML has it), after walking its events: nesting deeper than :data:`MAX_DEPTH`,
+  more than :data:`MAX_ALIASES` aliases, or more than :data:`MAX_YAML_NODES` nodes once every
+  alias is expanded (an "alias bomb": anchors and aliases themselves are legal) is refused
+  before anything is built; a YAML file is at most :data:`MAX_YAML_BYTES` (the parser builds
+  about 1 MiB a second);
 - JSON with the standard parser, ``NaN`` / ``Infinity`` refused, nesting deeper than
   :data:`MAX_DEPTH` refused before parsing;
-- every file at most :data:`MAX_BYTES`, and every number an importer uses finite and within
+- every file at most :data:`MAX_BYTES`, a regular file (no FIFO or device), and every number an importer uses finite and within
   :data:`MAX_MAGNITUDE` (:func:`number`);
 - every path confined to the folder given on the command line (:func:`confined`): no absolute
   path, no ``..``, no link that leads outside.
 
 Every refusal is an :class:`~cadsim.importers.ImportFormatError`: one line naming the file and
-the key. Imports only numpy and PyYAML.
+the key, showing at most a few dozen characters of the value (:func:`shown`, which never
+formats more of a value than it shows). Imports only numpy and PyYAML.
 """
 
 from __future__ import annotations
 
 import json
 import math
+import os
+import reprlib
+import stat
 from pathlib import Path, PurePosixPath
 
 import numpy as np
@@ -28,10 +35,23 @@ from cadsim.importers import ImportFormatError
 from cadsim.importers.strict_yaml import UniqueKeyLoader
 
 MAX_BYTES = 64 * 2**20
+MAX_YAML_BYTES = 4 * 2**20
+MAX_YAML_NODES = 1_000_000
 MAX_DEPTH = 32
 MAX_ALIASES = 1000
+_SHOWN = reprlib.Repr()
+_SHOWN.maxlevel = 3
+_SHOWN.maxlist = _SHOWN.maxtuple = _SHOWN.maxdict = _SHOWN.maxset = 6
+_SHOWN.maxstring = _SHOWN.maxlong = _SHOWN.maxother = 40
 MAX_MAGNITUDE = 1e7
 """Largest coordinate, size or angle an importer accepts (metres or degrees): Earth-scale."""
+
+
+def shown(value, width: int = 60) -> str:
+    """At most ``width`` characters showing ``value`` (strings unquoted); the work is bounded
+    whatever the value's size (a nested list, an expanded YAML alias)."""
+    text = value if isinstance(value, str) else _SHOWN.repr(value)
+    return text[:width]
 
 
 def confined(root: Path, relative: str, where: Path | None = None, key: str = "") -> Path:
@@ -40,9 +60,7 @@ def confined(root: Path, relative: str, where: Path | None = None, key: str = ""
     source = where if where is not None else root
     named = f"{key}: " if key else ""
     if not isinstance(relative, str) or not relative or "\\" in relative or "\0" in relative:
-        raise ImportFormatError(
-            source, f"{named}expected a relative path, got {str(relative)[:60]!r}"
-        )
+        raise ImportFormatError(source, f"{named}expected a relative path, got {shown(relative)!r}")
     pure = PurePosixPath(relative)
     if pure.is_absolute() or ".." in pure.parts:
         raise ImportFormatError(source, f"{named}path {relative[:60]!r} leaves {root}")
@@ -56,17 +74,32 @@ def confined(root: Path, relative: str, where: Path | None = None, key: str = ""
     return path
 
 
-def _text(path: Path) -> str:
+def read_bytes(path: Path, limit: int = MAX_BYTES) -> bytes:
+    """The bytes of the regular file ``path`` (a link is followed), at most ``limit``: a FIFO,
+    device or folder is refused before it is read, and no more than ``limit`` + 1 bytes are."""
     try:
-        if not path.is_file():
-            raise ImportFormatError(path, "missing file")
-        if path.stat().st_size > MAX_BYTES:
-            raise ImportFormatError(path, f"larger than {MAX_BYTES // 2**20} MiB")
-        return path.read_text(encoding="utf-8")
-    except UnicodeDecodeError:
-        raise ImportFormatError(path, "not UTF-8 text") from None
+        info = path.stat()
+        if not stat.S_ISREG(info.st_mode):
+            raise ImportFormatError(path, "missing file" if not path.exists() else "not a file")
+        if info.st_size > limit:
+            raise ImportFormatError(path, f"larger than {limit / 2**20:g} MiB")
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+        with os.fdopen(fd, "rb") as handle:
+            data = handle.read(limit + 1)
+    except FileNotFoundError:
+        raise ImportFormatError(path, "missing file") from None
     except OSError as exc:
         raise ImportFormatError(path, f"unreadable ({exc.strerror})") from None
+    if len(data) > limit:  # grew since stat
+        raise ImportFormatError(path, f"larger than {limit / 2**20:g} MiB")
+    return data
+
+
+def _text(path: Path, limit: int = MAX_BYTES) -> str:
+    try:
+        return read_bytes(path, limit).decode("utf-8")
+    except UnicodeDecodeError:
+        raise ImportFormatError(path, "not UTF-8 text") from None
 
 
 def _json_depth(text: str) -> int:
@@ -95,26 +128,52 @@ def read_yaml(path: Path):
     """The parsed YAML file at ``path`` through the safe loader (limits of the docstring)."""
     import yaml
 
-    text = _text(path)
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    text = _text(path, MAX_YAML_BYTES)
     try:
-        depth = aliases = 0
-        for event in yaml.parse(text, Loader=yaml.SafeLoader):
-            if isinstance(event, yaml.CollectionStartEvent):
-                depth += 1
-                if depth > MAX_DEPTH:
-                    raise ImportFormatError(path, f"nested deeper than {MAX_DEPTH} levels")
-            elif isinstance(event, yaml.CollectionEndEvent):
-                depth -= 1
-            elif isinstance(event, yaml.AliasEvent):
-                aliases += 1
-                if aliases > MAX_ALIASES:
-                    raise ImportFormatError(path, f"more than {MAX_ALIASES} aliases")
-        return yaml.load(text, Loader=UniqueKeyLoader)  # noqa: S506 (the safe loader)
+        _check_yaml_events(yaml.parse(text, Loader=loader), path)
+        return yaml.load(text, Loader=UniqueKeyLoader)  # noqa: S506 (a safe loader)
     except yaml.YAMLError as exc:
         problem = str(getattr(exc, "problem", None) or exc).splitlines()[0][:80]
         raise ImportFormatError(path, f"not safe YAML ({problem})") from None
     except RecursionError:
         raise ImportFormatError(path, f"nested deeper than {MAX_DEPTH} levels") from None
+
+
+def _check_yaml_events(events, path: Path) -> None:
+    """Refuse a YAML event stream nested deeper than MAX_DEPTH, with more than MAX_ALIASES
+    aliases, or of more than MAX_YAML_NODES nodes with every alias expanded (each alias counts
+    the nodes of what its anchor names)."""
+    import yaml
+
+    depth = aliases = nodes = 0
+    sizes: dict[str, int] = {}  # anchor -> nodes of its value, expanded
+    open_at: list[tuple[str | None, int]] = []  # per open collection: (anchor, nodes before it)
+    for event in events:
+        if isinstance(event, yaml.CollectionStartEvent):
+            depth += 1
+            if depth > MAX_DEPTH:
+                raise ImportFormatError(path, f"nested deeper than {MAX_DEPTH} levels")
+            open_at.append((event.anchor, nodes))
+            nodes += 1
+        elif isinstance(event, yaml.CollectionEndEvent):
+            depth -= 1
+            anchor, before = open_at.pop()
+            if anchor is not None:
+                sizes[anchor] = nodes - before
+        elif isinstance(event, yaml.ScalarEvent):
+            nodes += 1
+            if event.anchor is not None:
+                sizes[event.anchor] = 1
+        elif isinstance(event, yaml.AliasEvent):
+            aliases += 1
+            if aliases > MAX_ALIASES:
+                raise ImportFormatError(path, f"more than {MAX_ALIASES} aliases")
+            nodes += sizes.get(event.anchor, 1)  # an unknown anchor: the composer refuses it
+        if nodes > MAX_YAML_NODES:
+            raise ImportFormatError(
+                path, f"more than {MAX_YAML_NODES:,} values with its aliases expanded"
+            )
 
 
 def field(mapping, key: str, path: Path, where: str = ""):
@@ -138,7 +197,7 @@ def number(value, path: Path, key: str, limit: float = MAX_MAGNITUDE) -> float:
             ok = False
     if not ok or not math.isfinite(value) or abs(value) > limit:
         raise ImportFormatError(
-            path, f"{key}: expected a finite number within ±{limit:g}, got {str(value)[:40]}"
+            path, f"{key}: expected a finite number within ±{limit:g}, got {shown(value, 40)}"
         )
     return value
 
@@ -147,7 +206,7 @@ def numbers(values, path: Path, key: str, count: int, limit: float = MAX_MAGNITU
     """A list of exactly ``count`` numbers (:func:`number` each)."""
     if not isinstance(values, list | tuple) or len(values) != count:
         raise ImportFormatError(
-            path, f"{key}: expected a list of {count} numbers, got {str(values)[:60]}"
+            path, f"{key}: expected a list of {count} numbers, got {shown(values)}"
         )
     return [number(v, path, f"{key}[{k}]", limit) for k, v in enumerate(values)]
 
@@ -161,8 +220,8 @@ def matrix(values, path: Path, key: str, rows: int, columns: int) -> np.ndarray:
 
 
 __all__ = [
-    "MAX_BYTES", "MAX_DEPTH", "MAX_MAGNITUDE", "confined", "field", "matrix", "number",
-    "numbers", "read_json", "read_yaml",
+    "MAX_BYTES", "MAX_DEPTH", "MAX_MAGNITUDE", "MAX_YAML_BYTES", "MAX_YAML_NODES", "confined",
+    "field", "matrix", "number", "numbers", "read_bytes", "read_json", "read_yaml", "shown",
 ]  # fmt: skip
 
 

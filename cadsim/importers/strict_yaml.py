@@ -12,8 +12,9 @@ from __future__ import annotations
 import yaml
 
 
-class UniqueKeyLoader(yaml.SafeLoader):
-    """The safe loader; a mapping with a repeated key (after YAML's own typing) is refused."""
+class UniqueKeyLoader(getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
+    """The safe loader (libyaml's parser where PyYAML has it); a mapping with a repeated key
+    (after YAML's own typing) is refused."""
 
     def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
         if isinstance(node, yaml.MappingNode):

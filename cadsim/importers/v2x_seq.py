@@ -42,7 +42,7 @@ from cadsim.dataset.box_record import BoxView, box_detections
 from cadsim.importers import ImportFormatError
 from cadsim.importers.box_dataset import ImportResult, check_out, write_box_dataset
 from cadsim.importers.box_sequence import ImportedFrame, sequence_records
-from cadsim.importers.safe_read import confined, field, number, read_json, rigid
+from cadsim.importers.safe_read import confined, field, number, read_bytes, read_json, rigid
 from cadsim.importers.sensor_frame import (
     apply,
     boxes_in_view,
@@ -74,14 +74,18 @@ class _Reader:
 
     def __init__(self, root: Path) -> None:
         self.root = root
+        self.used: set[Path] = set()  # every file named to be read: the source digest's files
         self.info = {side: self._side_info(side) for side in _SIDES}
 
-    def json(self, relative: str, where: Path | None = None, key: str = ""):
-        return read_json(confined(self.root, relative, where, key))
+    def path(self, relative: str, where: Path | None = None, key: str = "") -> Path:
+        """``root / relative``, confined to the root, and noted for the digest."""
+        path = confined(self.root, relative, where, key)
+        self.used.add(path)
+        return path
 
     def _side_info(self, side: str) -> dict[str, dict]:
         folder = _SIDES[side][0]
-        path = confined(self.root, f"{folder}/data_info.json")
+        path = self.path(f"{folder}/data_info.json")
         entries = read_json(path)
         if not isinstance(entries, list):
             raise ImportFormatError(path, "top level: expected a list of frames")
@@ -107,7 +111,9 @@ class _Reader:
         folder = _SIDES[side][0]
         where = self.root / folder / "data_info.json"
         relative = entry.get(key, default)
-        return confined(self.root / folder, relative, where, f"{entry['_where']}.{key}")
+        path = confined(self.root / folder, relative, where, f"{entry['_where']}.{key}")
+        self.used.add(path)
+        return path
 
 
 def _timestamp(entry: dict, path: Path) -> float:
@@ -234,7 +240,7 @@ def _frame(reader: _Reader, coop: dict, where: Path, key: str) -> tuple[str, Imp
     )
     veh = reader.frame("vehicle", veh_id, where, f"{key}.vehicle_frame")
     inf = reader.frame("infrastructure", inf_id, where, f"{key}.infrastructure_frame")
-    veh_links, inf_links = _links(confined(reader.root, f"cooperative/label/{veh_id}.json", where, f"{key}.vehicle_frame"))  # fmt: skip
+    veh_links, inf_links = _links(reader.path(f"cooperative/label/{veh_id}.json", where, f"{key}.vehicle_frame"))  # fmt: skip
     views, objects = [], {}
     for side, entry, links, kind in (("vehicle", veh, veh_links, "vehicle"), ("infrastructure", inf, inf_links, "roadside")):  # fmt: skip
         folder, label_folder, prefix = _SIDES[side]
@@ -272,10 +278,12 @@ def _episode(sequence: str, index: int) -> int:
 
 
 def _digest(root: Path, files: Iterable[Path]) -> str:
+    """SHA-256 over the files the import read (relative name and SHA-256 of each), each read
+    again within the reader's size limit — never the rest of the folder."""
     h = hashlib.sha256()
     for path in sorted(set(files)):
         h.update(path.relative_to(root).as_posix().encode() + b"\0")
-        h.update(hashlib.sha256(path.read_bytes()).digest())
+        h.update(hashlib.sha256(read_bytes(path)).digest())
     return h.hexdigest()
 
 
@@ -289,12 +297,11 @@ def import_v2x_seq(
     >>> import_v2x_seq("V2X-Seq-SPD", "data/v2x-seq")  # doctest: +SKIP
     ImportResult(out=PosixPath('data/v2x-seq'), episodes={10: 80, ...}, views=2, ...)
     """
-    root, out = Path(src), Path(out)
-    check_out(out)
+    root, out = Path(src), check_out(out)  # checked before Path("") could become "."
     if not root.is_dir():
         raise ImportFormatError(root, "not a folder")
     reader = _Reader(root)
-    coop_path = confined(root, "cooperative/data_info.json")
+    coop_path = reader.path("cooperative/data_info.json")
     coops = read_json(coop_path)
     if not isinstance(coops, list) or not coops:
         raise ImportFormatError(
@@ -336,12 +343,13 @@ def import_v2x_seq(
                     f"of sequence {sequence[:20]!r}: same pointcloud_timestamp",
                 )
         records += sequence_records(episode, 0, episode, frames, sequential)
-    files = [p for p in root.rglob("*.json") if p.is_file() and not p.is_symlink()]
     source = SOURCE | {
         "folder": root.name,
         "sequences": {s: len(f) for s, f in sorted(grouped.items())},
     }
-    return write_box_dataset(out, records, SCENARIO_NAME, source | {"sha256": _digest(root, files)})
+    return write_box_dataset(
+        out, records, SCENARIO_NAME, source | {"sha256": _digest(root, reader.used)}
+    )
 
 
 __all__ = ["import_v2x_seq"]

@@ -10,8 +10,8 @@ heading radians CCW):
 
     error(t) = bias + walk(t) + noise + outlier
     bias     ~ N(0, bias_m²) per axis            constant within the episode
-    walk(t)  = Σ increments ~ N(0, walk²·1 s)    on a 1 s grid from the episode's start,
-                                                 linear between grid points (slow drift)
+    walk(t)  = Σ increments ~ N(0, walk²·1 s)    on a 1 s grid from t = 0, linear between
+                                                 grid points (slow drift)
     noise    ~ N(0, noise_m²) per axis           per view (snapshot)
     outlier  = outlier_m in a uniform direction  with probability outlier_rate, per view
     heading  = heading_bias (episode) + N(0, heading_noise²) (view), drawn from their own streams
@@ -19,6 +19,16 @@ heading radians CCW):
 Episode-level draws (bias, walk, heading bias) come from ``SeedSequence(episode seed, spawn_key=
 (5, crc32(vehicle id)))`` — the same for every record of that episode in which the vehicle
 observes, whatever order records are read in; per-view draws from the view's localisation seed.
+
+The walk is drawn by random access, in memory and time that do not grow with t (real
+timestamps are absolute: V2X-Seq's are seconds since 1970, ~1.6e9): the grid's first
+2^:data:`WALK_LEVELS` steps are halved level by level, each interval's increment splitting into
+its halves' as a Brownian bridge does (the left half's is half the parent's plus
+N(0, walk²·length/4), the right half's the rest; each split's normals by Box–Muller from a
+BLAKE2b hash of (episode seed, crc32(vehicle id), level, index) — counter-based), and the walk
+at grid point k is the sum of the left halves passed on the way down to step k — exactly a
+Gaussian random walk on the grid, with :data:`WALK_LEVELS` + 1 pairs of normals per time. Times beyond
+:data:`MAX_TIME_S` (about 35 million years) are refused.
 
 Presets (:data:`PRESETS`; values and their sources: docs/localisation.md): ``exact`` (no error,
 the prior given), ``rtk`` (centimetre-level), ``gnss-open-sky``, ``gnss-urban``, ``denied``
@@ -36,6 +46,8 @@ Imports numpy only.
 
 from __future__ import annotations
 
+import hashlib
+import math
 import re
 import zlib
 from dataclasses import dataclass, replace
@@ -46,6 +58,9 @@ from cadsim.sensing.pose_error import PoseError
 
 _EPISODE_STREAM = 5
 WALK_STEP_S = 1.0
+WALK_LEVELS = 50
+MAX_TIME_S = float(2**WALK_LEVELS) * WALK_STEP_S
+"""Largest time (seconds) the walk is drawn at: 2^50 s, far beyond any epoch timestamp."""
 
 
 MAGNITUDES = (
@@ -165,17 +180,53 @@ def episode_draws(
     rng = np.random.default_rng(ss)
     bias = rng.standard_normal(2) * model.bias_m
     heading = float(rng.standard_normal()) * np.radians(model.heading_bias_deg)
+    if not (np.isfinite(time_s) and float(time_s) <= MAX_TIME_S):
+        raise ValueError(f"time: expected finite seconds up to {MAX_TIME_S:.4g}, got {time_s!r}")
     t = max(0.0, float(time_s))
-    steps = int(np.floor(t / WALK_STEP_S))
     walk = np.zeros(2)
     if model.walk_m_per_sqrt_s > 0:
-        increments = rng.standard_normal((steps + 1, 2)) * (
+        walk = _walk(episode_seed, vehicle, t / WALK_STEP_S) * (
             model.walk_m_per_sqrt_s * np.sqrt(WALK_STEP_S)
         )
-        path = np.cumsum(increments, axis=0)  # path[k]: the walk at (k + 1) steps
-        before = path[steps - 1] if steps else np.zeros(2)
-        walk = before + (t / WALK_STEP_S - steps) * increments[steps]
     return bias + walk, heading
+
+
+def _walk(episode_seed: int, vehicle: str, steps: float) -> np.ndarray:
+    """A unit Gaussian random walk (increments N(0, 1) per axis) at ``steps`` grid steps, linear
+    between grid points, drawn by halving (module docstring): (2,)."""
+    k = int(np.floor(steps))
+    prefix = f"{int(episode_seed)}/{vehicle_key(vehicle)}"
+    # the whole grid's increment, then the halves that hold step k, level by level
+    zx, zy = _normals(prefix, 0, 0)
+    scale = 2.0 ** (WALK_LEVELS / 2)
+    ix, iy = zx * scale, zy * scale  # the current interval's increment
+    wx = wy = 0.0  # the walk at the current interval's start
+    start = 0
+    for level in range(1, WALK_LEVELS + 1):
+        half = 1 << (WALK_LEVELS - level)
+        zx, zy = _normals(prefix, level, start)
+        spread = math.sqrt(half / 2)
+        lx, ly = 0.5 * ix + zx * spread, 0.5 * iy + zy * spread  # the left half's increment
+        if k < start + half:
+            ix, iy = lx, ly
+        else:
+            wx, wy, ix, iy, start = wx + lx, wy + ly, ix - lx, iy - ly, start + half
+    frac = steps - start  # start == k, except at the grid's very end (k = 2^WALK_LEVELS)
+    return np.array([wx + frac * ix, wy + frac * iy])
+
+
+def _normals(prefix: str, level: int, start: int) -> tuple[float, float]:
+    """Two independent standard normals for the split of the interval at (``level``, ``start``):
+    Box–Muller on a BLAKE2b hash of (episode seed, vehicle, level, start) — counter-based, so
+    any interval's normals are drawn without the others, and through the C library's ``math``
+    (the same bits on every numpy dispatch level, :mod:`cadsim.portable_math`)."""
+    digest = hashlib.blake2b(
+        f"{prefix}/{level}/{start}".encode(), digest_size=16, person=b"cadsim-gnss-walk"
+    ).digest()
+    u1 = ((int.from_bytes(digest[:8], "little") >> 11) + 1) * 2.0**-53  # (0, 1]
+    u2 = (int.from_bytes(digest[8:], "little") >> 11) * 2.0**-53  # [0, 1)
+    radius = math.sqrt(-2.0 * math.log(u1))
+    return radius * math.cos(2 * math.pi * u2), radius * math.sin(2 * math.pi * u2)
 
 
 def draw_error(

@@ -7,6 +7,12 @@ Only the Markdown subset the report uses is understood: ATX headings, pipe table
 alignment row), a figure on a line of its own, ``- `` bullets, fenced code, paragraphs, and inline
 code, links, images, ``**bold**`` and ``*emphasis*``. Heading ids follow GitHub's anchors
 (:func:`slug`), so ``#table-i`` points at the same section in README.md and in index.html.
+
+Link and image targets are data (a plug-in's name, a ``--label``, a run record's command can put
+Markdown into the report): only a relative target, an anchor, or an ``http``/``https``/``mailto``
+address becomes an ``href``/``src`` (:func:`safe_target`); any other scheme (``javascript:``,
+``data:``, ``vbscript:``, ``file:``) is shown as its text, never made live. A table cell's
+``\\|`` is a literal bar (:mod:`eval.report.markdown_cell` writes it).
 """
 
 from __future__ import annotations
@@ -25,6 +31,17 @@ _EMPHASIS = re.compile(r"(?<![*\w])\*(?=\S)([^*]+?)(?<=\S)\*(?![*\w])")
 _HEADING = re.compile(r"^(#{1,6})\s+(.*?)\s*#*\s*$")
 _FIGURE = re.compile(r"^!\[([^\]]*)\]\(([^)\s]+)\)\s*$")
 _ALIGN = re.compile(r"^\s*\|?\s*:?-{3,}:?\s*(\|\s*:?-{3,}:?\s*)*\|?\s*$")
+_SCHEME = re.compile(r"^([A-Za-z][A-Za-z0-9+.\-]*):")
+_SAFE_SCHEMES = ("http", "https", "mailto")
+
+
+def safe_target(url: str) -> bool:
+    """Whether ``url`` (unescaped) may become a live link or image source: no scheme (a relative
+    path, ``#anchor``, ``?query``) or http/https/mailto — read as a browser reads it (tabs and
+    line breaks removed, leading controls and spaces stripped)."""
+    cleaned = re.sub(r"[\t\n\r]", "", url).lstrip("".join(map(chr, range(33))))
+    match = _SCHEME.match(cleaned)
+    return match is None or match[1].lower() in _SAFE_SCHEMES
 
 
 def slug(text: str) -> str:
@@ -79,14 +96,31 @@ def inline(text: str, links: dict[str, str] | None = None) -> str:
             out.append(f"<code>{html.escape(part)}</code>")
             continue
         escaped = html.escape(part, quote=False)
-        escaped = _IMAGE.sub(lambda m: f'<img src="{_attr(m[2])}" alt="{_attr(m[1])}">', escaped)
-        escaped = _LINK.sub(
-            lambda m: f'<a href="{_attr(links.get(_plain(m[2]), _plain(m[2])))}">{m[1]}</a>',
-            escaped,
-        )
+        escaped = _IMAGE.sub(_image, escaped)
+        escaped = _LINK.sub(lambda m: _link(m, links), escaped)
         escaped = _BOLD.sub(r"<strong>\1</strong>", escaped)
         out.append(_EMPHASIS.sub(r"<em>\1</em>", escaped))
     return "".join(out)
+
+
+def _live(escaped: str) -> bool:
+    """Whether a target (escaped text) is safe however often it is unescaped: the attribute
+    written is ``_attr(target)``, whose value the browser unescapes once more."""
+    plain = _plain(escaped)
+    return safe_target(plain) and safe_target(_plain(plain))
+
+
+def _image(m: re.Match) -> str:
+    if not _live(m[2]):
+        return m[1]  # the alt text only
+    return f'<img src="{_attr(m[2])}" alt="{_attr(m[1])}">'
+
+
+def _link(m: re.Match, links: dict[str, str]) -> str:
+    target = links.get(_plain(m[2]), _plain(m[2]))
+    if not (_live(m[2]) and safe_target(target) and safe_target(_plain(target))):
+        return m[1]  # the link's text only
+    return f'<a href="{_attr(target)}">{m[1]}</a>'
 
 
 def _cells(line: str) -> list[str]:
@@ -95,7 +129,7 @@ def _cells(line: str) -> list[str]:
         line = line[1:]
     if line.endswith("|") and not line.endswith("\\|"):
         line = line[:-1]
-    return [c.strip() for c in re.split(r"(?<!\\)\|", line)]
+    return [c.strip().replace("\\|", "|") for c in re.split(r"(?<!\\)\|", line)]
 
 
 def _table(lines: list[str], links: dict[str, str]) -> str:
@@ -174,7 +208,7 @@ def to_html(markdown: str, links: dict[str, str] | None = None) -> str:
             k += 1
             continue
         figure = _FIGURE.match(stripped)
-        if figure:
+        if figure and _live(figure.group(2)):
             flush()
             alt, src = figure.group(1), html.escape(figure.group(2))
             out.append(

@@ -16,6 +16,7 @@ from pathlib import Path
 import pandas as pd
 
 from eval.protocol.abstention import NO_NUMBER, cannot_run
+from eval.report.markdown_cell import row
 from eval.report.tables import PAPER_NAMES, dataset_order, method_name
 
 # The V2X matchers shown (those present in the table): the paper's method and the strongest
@@ -52,7 +53,7 @@ def _ordinal(rank: int) -> str:
 
 
 def _row(cells: list[str]) -> str:
-    return "| " + " | ".join(cells) + " |"
+    return row(cells)
 
 
 def table1(results: Path) -> list[str]:

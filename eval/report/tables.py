@@ -21,6 +21,7 @@ from eval.core.pose_metrics import summarise_pose
 from eval.core.result_files import write_csv, write_text
 from eval.protocol.metrics import METRICS, POOLED, summarise_pooled, summarise_runs
 from eval.protocol.variants import EQUAL, MAIN, VARIANTS, variant_path
+from eval.report.markdown_cell import cell, row
 from eval.report.threshold_format import rounded, tau_text
 
 PAPER_CSV = Path(__file__).resolve().parents[1] / "data" / "paper-table1.csv"
@@ -233,16 +234,16 @@ def to_markdown(table: pd.DataFrame) -> str:
         header = [h for h in cells[0] if has_paper or "(paper)" not in h]
         runs, frames = int(rows["runs"].max()), int(rows["frames"].max())
         caption = (
-            f"**{dataset}** — {frames} test frame pairs × {runs} run{'s' * (runs != 1)}; "
+            f"**{cell(dataset)}** — {frames} test frame pairs × {runs} run{'s' * (runs != 1)}; "
             "percent, mean ± std over runs"
         )
         lines = [
             caption + (f"; paper ({paper}): mean ± its printed spread" if has_paper else ""),
             "",
-            "| " + " | ".join(header) + " |",
+            row(header),
             "|" + "|".join(":---" if h == "Method" else "---:" for h in header) + "|",
         ]
-        lines += ["| " + " | ".join(c[h] for h in header) + " |" for c in cells]
+        lines += [row([c[h] for h in header]) for c in cells]
         blocks.append("\n".join(lines))
     return "\n\n".join(blocks) + "\n"
 
