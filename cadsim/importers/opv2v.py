@@ -126,7 +126,11 @@ def _boxes(vehicles, path: Path) -> list[dict]:
         raise ImportFormatError(path, "vehicles: expected a mapping of actor ids")
     out, seen = [], {}
     for actor, entry in vehicles.items():
-        key = f"vehicles.{shown(actor, 20)}"
+        key = (  # a string id quoted, so that '101' and 101 read apart
+            f"vehicles.{shown(actor, 20)!r}"
+            if isinstance(actor, str)
+            else f"vehicles.{shown(actor, 20)}"
+        )
         if (
             isinstance(actor, bool)
             or not isinstance(actor, int | str)
