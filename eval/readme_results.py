@@ -31,8 +31,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from eval.core.abstention import NO_NUMBER
 from eval.core.result_files import write_text
-from eval.protocol.abstention import NO_NUMBER
 from eval.report import summary
 from eval.report.run_record import cold_record
 from eval.report.site import headings, write_site

@@ -1,4 +1,4 @@
-"""Abstention is not a score (DESIGN §3, ``eval/protocol/abstention.py``): a matcher that needs
+"""Abstention is not a score (DESIGN §3, ``eval/core/abstention.py``): a matcher that needs
 the localisation prior gets no number where the condition gives none (``denied``) — in the rule
 itself, in the two-view V2X table path (CSV, Markdown, README parts, "best", comparisons). The
 temporal path is tested in tests/test_temporal_study.py."""
@@ -9,8 +9,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from eval.core.abstention import NO_NUMBER, cannot_run, problem_lacks
 from eval.core.result_files import write_csv
-from eval.protocol.abstention import NO_NUMBER, cannot_run, problem_lacks
 from matchers import Problem
 from matchers.blocks.prior import PRIOR_FIELDS
 from matchers.core.registry import requires, usable

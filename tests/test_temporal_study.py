@@ -62,7 +62,7 @@ def test_the_study_writes_the_table_with_its_columns(study):
 def test_a_prior_reader_under_denied_gets_no_number(study):
     """Abstention is not a score (DESIGN §3): no F1 of the empty-frame convention, empty CSV
     cells, "n/a (needs a prior)" in the Markdown and the README part, in no "best"."""
-    from eval.protocol.abstention import NO_NUMBER
+    from eval.core.abstention import NO_NUMBER
 
     out, table = study
     csv = pd.read_csv(out / "table_temporal.csv")

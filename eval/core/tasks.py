@@ -215,8 +215,8 @@ def harness_function(name: str, limit_s: float | None):
 
 def _has_what_it_needs(fn, problem) -> bool:
     """Whether ``problem`` has every optional field matcher ``fn`` requires (``requires``; the
-    rule of :mod:`eval.protocol.abstention`)."""
-    from eval.protocol.abstention import problem_lacks
+    rule of :mod:`eval.core.abstention`)."""
+    from eval.core.abstention import problem_lacks
 
     return not problem_lacks(getattr(fn, "requires", ()), problem)
 
@@ -224,7 +224,7 @@ def _has_what_it_needs(fn, problem) -> bool:
 def _declares_nothing(name: str, problem):
     """The matching of a matcher whose input is not there (a prior under the ``denied``
     localisation preset): no pair declared, all scores 0 — its run is kept, and the tables give
-    it no number (:mod:`eval.protocol.abstention`)."""
+    it no number (:mod:`eval.core.abstention`)."""
     from matchers.core.matching import Matching
 
     return Matching(

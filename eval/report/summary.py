@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from eval.protocol.abstention import NO_NUMBER, cannot_run
+from eval.core.abstention import NO_NUMBER, cannot_run
 from eval.report.markdown_cell import row
 from eval.report.tables import PAPER_NAMES, dataset_order, method_name
 
@@ -225,7 +225,7 @@ TEMPORAL_METHODS = ("windowed:consistency", "temporal_pose")
 
 def temporal(results: Path) -> list[str]:
     """CAD-V2X sequences: pooled F1 at W = 1 and W = 10 of a fixed pair of methods, per preset
-    (:data:`~eval.protocol.abstention.NO_NUMBER` where a method cannot run)."""
+    (:data:`~eval.core.abstention.NO_NUMBER` where a method cannot run)."""
     table = read_csv(Path(results) / "table_temporal.csv")
     if not _has(table, "method", "window", "preset", "f1_pooled"):
         return []

@@ -24,7 +24,7 @@ bootstrap interval. ``time_ratio``: ms per snapshot over that of the same matche
 preset at the smallest N, with its interval. The cycle-violation rate is 0 for every fused
 output by construction: :func:`goals` checks it as an invariant, not as a goal.
 A two-view matcher that cannot run under a preset (a prior reader under ``denied``,
-:mod:`eval.protocol.abstention`) keeps its rows with no number: it enters no bootstrap, no Holm
+:mod:`eval.core.abstention`) keeps its rows with no number: it enters no bootstrap, no Holm
 family and no "best".
 """
 
@@ -38,10 +38,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from eval.core.abstention import NO_NUMBER, cannot_run
 from eval.core.result_files import write_csv, write_text
 from eval.core.runner import Runner, requests_for
 from eval.core.tasks import MatcherSpec, PairOutcome
-from eval.protocol.abstention import NO_NUMBER, cannot_run
 from eval.protocol.calibration import calibrate, predictions
 from eval.protocol.goal_verdict import NOT_SHOWN, goal_line
 from eval.protocol.holm import holm
@@ -277,7 +277,7 @@ def multiagent_table(
     """One row per (N, matcher, fusion, preset) with :data:`COLUMNS`: the test snapshots'
     figures, their episode-bootstrap intervals (``resamples`` resamples of the episodes and runs,
     seeded), and the validation snapshots' ``val_*`` figures (NaN without validation rows). A
-    matcher that cannot run under the preset (:func:`eval.protocol.abstention.cannot_run`) keeps
+    matcher that cannot run under the preset (:func:`eval.core.abstention.cannot_run`) keeps
     its rows, every figure empty, and is in no gain family."""
     keys = _split(per_snapshot, "test")[BY].drop_duplicates()
     ran = [

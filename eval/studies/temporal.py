@@ -10,9 +10,9 @@ tracks from its own detections and odometry (:func:`matchers.tracking.hungarian.
 never a true id); odometry and camera mounts from the pairs. Methods (:data:`METHODS`):
 ``windowed:<m>`` for the two-view matchers ``consistency`` and ``pose_refine`` at W in
 {1, 3, 10} and ``temporal_pose`` at W in {1, 10}. A method that reads the localisation prior
-cannot run under ``denied`` (:mod:`eval.protocol.abstention`, from its ``requires``): it is not
+cannot run under ``denied`` (:mod:`eval.core.abstention`, from its ``requires``): it is not
 run nor tuned, its rows are kept with no number (empty CSV cells,
-:data:`~eval.protocol.abstention.NO_NUMBER` in Markdown), and it is in no "best" and no
+:data:`~eval.core.abstention.NO_NUMBER` in Markdown), and it is in no "best" and no
 comparison.
 
 Tuning (the equal budget of the two-view tables, :mod:`eval.protocol.tuning`). Per (method, W,
@@ -58,11 +58,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from eval.core.abstention import NO_NUMBER, cannot_run
 from eval.core.pose_metrics import matched_planar_error
 from eval.core.result_files import write_csv, write_text
 from eval.core.tasks import MatcherSpec
 from eval.protocol import pooled_bootstrap
-from eval.protocol.abstention import NO_NUMBER, cannot_run
 from eval.protocol.calibration import calibrate_ranked
 from eval.protocol.cluster_interval import t_interval
 from eval.protocol.goal_verdict import goal_line
@@ -165,7 +165,7 @@ class Sequenced:
 
 def abstains(method: str, preset: str) -> bool:
     """Whether temporal method ``method`` cannot run under ``preset`` (it requires the prior and
-    the preset gives none, :func:`eval.protocol.abstention.cannot_run`)."""
+    the preset gives none, :func:`eval.core.abstention.cannot_run`)."""
     return cannot_run(method, preset, temporal=True)
 
 

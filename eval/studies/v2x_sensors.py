@@ -10,7 +10,7 @@ equal episode sizes give the t-interval of episode means), and the two-sided p-v
 same t-statistic. Holm's adjustment (:mod:`eval.protocol.holm`) runs over every comparison of
 the file; a sensor is said to favour a matcher only where the Holm-adjusted p is at most
 :data:`ALPHA` (so the 95 % interval excludes 0 too). A matcher that cannot run under a preset
-(a prior reader under ``denied``, :func:`eval.protocol.abstention.cannot_run`) is not compared
+(a prior reader under ``denied``, :func:`eval.core.abstention.cannot_run`) is not compared
 there: no input, no number (DESIGN §3).
 
 Per preset and matcher family (with / without the prior) one row is marked ``chosen``: the
@@ -79,7 +79,7 @@ def sensor_differences(
     ``preset`` column); ``validation``: {preset: {matcher: validation F1 averaged over the two
     sensors}} to mark the ``chosen`` rows (module docstring). ValueError when a frame pair's
     episode or simulation seed differs between the two: they are not the same frames."""
-    from eval.protocol.abstention import cannot_run
+    from eval.core.abstention import cannot_run
     from eval.studies.v2x_table import reads_prior
 
     joined = _pair_means(lidar).merge(
@@ -97,7 +97,7 @@ def sensor_differences(
     rows = []
     for (preset, matcher), group in joined.groupby(["preset", "matcher"], sort=False):
         if cannot_run(matcher, preset):
-            continue  # no input, no number (eval.protocol.abstention)
+            continue  # no input, no number (eval.core.abstention)
         prior = reads_prior(matcher)
         d = (group["f1_lidar"] - group["f1_camera"]).to_numpy()
         episodes = group["episode_lidar"].to_numpy()

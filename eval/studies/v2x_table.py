@@ -11,8 +11,8 @@ other preset on that preset's validation draw (the same 8-configuration budget; 
 ``gnss-urban`` choice. τ is calibrated on the validation split at each preset (``DIR/v2x/<preset>/``
 holds each preset's evaluation files, ``tuning.csv`` among them). A matcher that does not read
 the prior is computed once per latency (``exact+0ms``, ``exact+100ms``). Under ``denied`` the
-prior matchers cannot run (:mod:`eval.protocol.abstention`): their rows are kept with no number
-(empty CSV cells, :data:`~eval.protocol.abstention.NO_NUMBER` in Markdown) and they are left out
+prior matchers cannot run (:mod:`eval.core.abstention`): their rows are kept with no number
+(empty CSV cells, :data:`~eval.core.abstention.NO_NUMBER` in Markdown) and they are left out
 of every ranking, "chosen on validation" and comparison.
 
 Reference rows per preset: ``oracle`` — the same robust fit of the *true* association (the ceiling
@@ -37,13 +37,13 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from eval.core.abstention import NO_NUMBER, cannot_run
 from eval.core.pose_metrics import COLUMNS as POSE_COLUMNS
 from eval.core.pose_metrics import SECONDARY, success_flags, summarise_pose
 from eval.core.result_files import write_csv, write_text
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
 from eval.protocol import tuning
-from eval.protocol.abstention import NO_NUMBER, cannot_run
 from eval.protocol.cluster_interval import t_interval
 from eval.protocol.goal_verdict import goal_line
 from eval.protocol.metrics import summarise_pooled, summarise_runs
@@ -100,7 +100,7 @@ def reads_prior(name: str) -> bool:
 
 def runnable(names: Sequence[str], preset: str) -> list[str]:
     """``names`` less the matchers that cannot run under ``preset`` (a prior reader under
-    ``denied``, :func:`eval.protocol.abstention.cannot_run`), in order."""
+    ``denied``, :func:`eval.core.abstention.cannot_run`), in order."""
     return [m for m in names if not cannot_run(m, preset)]
 
 

@@ -17,12 +17,12 @@ from __future__ import annotations
 import numpy as np
 
 from cadsim.object_sizes import draw_size
-from cadsim.sources.sumo.network import RoadNetwork, point_at
-from cadsim.sources.sumo.static_scene import (
+from cadsim.sources.sumo.free_space import (
     Region,
     rectangles_clear_of_points,
     road_space_points,
 )
+from cadsim.sources.sumo.network import RoadNetwork, point_at
 from cadsim.world import WorldObject
 
 CLUTTER_STREAM = 8

@@ -33,7 +33,13 @@ from cadsim.sources.street_furniture import (
     light_object,
     sign_object,
 )
-from cadsim.sources.sumo.network import RoadNetwork, point_at, polyline_points
+from cadsim.sources.sumo.free_space import (  # noqa: F401 (re-exported for callers)
+    Region,
+    rectangles_clear_of_points,
+    road_space_points,
+)
+from cadsim.sources.sumo.network import RoadNetwork, point_at
+from cadsim.sources.sumo.roadside_clutter import roadside_clutter
 from cadsim.world import WorldObject
 
 SIDEWALK_COLOR = (0.62, 0.62, 0.60)
@@ -108,8 +114,6 @@ def build_static_scene(
     lights = traffic_lights(network, region) if scene["traffic_lights"] else []
     lights = [replace(head, object=own_size(head.object, seed)) for head in lights]
     if scene.get("clutter_spacing", 0.0) > 0:
-        from cadsim.sources.sumo.roadside_clutter import roadside_clutter  # it uses this module
-
         furniture = np.array(
             [o.center[:2] for o in objects if o.cls == "sign"]
             + [h.object.center[:2] for h in lights],
@@ -124,23 +128,6 @@ def own_size(obj: WorldObject, seed: int) -> WorldObject:
     (``cadsim.object_sizes``) from ``seed`` and its id."""
     size = draw_size(seed, obj.id, obj.cls, obj.size)
     return replace(obj, size=size, center=(obj.center[0], obj.center[1], size[2] / 2.0))
-
-
-class Region:
-    """Points within ``radius`` metres of any of ``centres`` (k, 2)."""
-
-    def __init__(self, centres: np.ndarray, radius: float) -> None:
-        self.tree = cKDTree(centres)
-        self.radius = radius
-
-    def contains(self, points: np.ndarray, margin: float = 0.0) -> np.ndarray:
-        points = np.asarray(points, float).reshape(-1, 2)
-        d, _ = self.tree.query(points)
-        return d <= self.radius + margin
-
-
-# --------------------------------------------------------------------------------------------
-# Road surface.
 
 
 def road_surface(network: RoadNetwork, region: Region) -> list[WorldObject]:
@@ -290,54 +277,6 @@ def buildings(
         )
         for k, (c, y, hgt, ci) in enumerate(zip(centres, yaws, heights, colors, strict=True))
     ]
-
-
-def road_space_points(network: RoadNetwork, step: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
-    """Points every ``step`` m along every lane (internal lanes, crossings and walking areas
-    included) with the lane's half width, plus junction outlines (half width 0)."""
-    pts, hw = [], []
-    for edge in network.net.getEdges(withInternal=True):
-        for lane in edge.getLanes():
-            p, _ = polyline_points(lane.getShape(), step)
-            pts.append(p)
-            hw.append(np.full(len(p), lane.getWidth() / 2.0))
-    for node in network.net.getNodes():
-        shape = node.getShape()
-        if len(shape) >= 2:
-            p, _ = polyline_points([*shape, shape[0]], step)
-            pts.append(p)
-            hw.append(np.zeros(len(p)))
-            pts.append(np.asarray([node.getCoord()[:2]], float))
-            hw.append(np.zeros(1))
-    return np.concatenate(pts), np.concatenate(hw)
-
-
-def rectangles_clear_of_points(
-    centres: np.ndarray,
-    yaws: np.ndarray,
-    half_length: float,
-    half_width: float,
-    points: np.ndarray,
-    point_radius: np.ndarray,
-) -> np.ndarray:
-    """(k,) bool: rectangle k (centre, yaw, half extents) contains no disc (point, radius)."""
-    tree = cKDTree(points)
-    reach = np.hypot(half_length, half_width) + point_radius.max()
-    neighbours = tree.query_ball_point(centres, reach)
-    counts = np.array([len(n) for n in neighbours])
-    clear = np.ones(len(centres), bool)
-    if counts.sum() == 0:
-        return clear
-    rect = np.repeat(np.arange(len(centres)), counts)
-    idx = np.concatenate([np.asarray(n, int) for n in neighbours])
-    d = points[idx] - centres[rect]
-    c, s = np.cos(yaws[rect]), np.sin(yaws[rect])
-    along = np.abs(d[:, 0] * c + d[:, 1] * s)
-    across = np.abs(-d[:, 0] * s + d[:, 1] * c)
-    r = point_radius[idx] - 1e-6
-    hit = (along < half_length + r) & (across < half_width + r)
-    clear[np.unique(rect[hit])] = False
-    return clear
 
 
 def non_overlapping(
