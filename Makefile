@@ -63,7 +63,7 @@ NUMERIC_TESTS := tests/test_matchers_*.py tests/test_jit_kernels.py tests/test_m
 	tests/test_validation_synthetic.py tests/test_validation_metrics.py
 
 test: venv browser
-	$(PY) -m pytest -q
+	$(PY) -m pytest -q --durations=15
 	@features="$$($(PY) tests/cpu_dispatch.py --avx512-features)"; \
 	if [ -n "$$features" ]; then \
 	  echo "numeric tests again with NPY_DISABLE_CPU_FEATURES=\"$$features\""; \

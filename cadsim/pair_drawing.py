@@ -58,9 +58,11 @@ def draw_pair(
     labels2: Sequence[str] | None = None,
     gap: int = 16,
     linewidth: float = 1.5,
+    label_size: float = 6,
 ) -> None:
     """Draw on matplotlib ``ax``: both views, every box, and for each row (i, j) of ``pairs`` a
-    line from box i of view 1 to box j of view 2 (one colour, or one per row)."""
+    line from box i of view 1 to box j of view 2 (one colour, or one per row); ``labels1/2``
+    written above the boxes in ``label_size`` points."""
     from matplotlib.collections import LineCollection, PatchCollection
     from matplotlib.patches import Rectangle
 
@@ -86,7 +88,7 @@ def draw_pair(
         ax.scatter(*segments.reshape(-1, 2).T, s=8, c=np.repeat(colors, 2), zorder=3)
     for labels, boxes in ((labels1, b1), (labels2, b2)):
         for text, (u0, v0, _, _) in zip(labels or (), boxes, strict=False):
-            ax.text(u0, v0 - 2, text, color=box_color, fontsize=6, va="bottom")
+            ax.text(u0, v0 - 2, text, color=box_color, fontsize=label_size, va="bottom")
     ax.set_xlim(0, canvas.shape[1])
     ax.set_ylim(canvas.shape[0], 0)
     ax.set_axis_off()
@@ -217,6 +219,7 @@ def draw_birdseye(
     pair,
     lines: Sequence[tuple[np.ndarray, str, str]] = (),
     frustum_m: float | None = None,
+    numbers: Sequence[tuple[int, int, int]] = (),
 ) -> None:
     """Draw generated ``pair`` from above on matplotlib ``ax`` (world x east, y north, metres):
     every target object (grey), view 1's detections (blue circles) and view 2's (orange
@@ -224,7 +227,9 @@ def draw_birdseye(
     field of view out to ``frustum_m``, default the farthest detection + 5 m), and per entry
     (pairs (k, 2), colour, linestyle) of ``lines`` a line between the matched detections — or,
     where both are one object (a correct or a missed match), a disc ("-") or ring (other
-    styles) around it."""
+    styles) around it. ``numbers``: (i, j, number) rows — the number is written beside view 1's
+    detection i and view 2's detection j (one label where both are one object), the same
+    number :func:`draw_pair_from_record` writes on the two images."""
     from matplotlib.patches import Wedge
 
     cams = pair.cameras
@@ -260,6 +265,11 @@ def draw_birdseye(
                label="seen by 1")  # fmt: skip
     ax.scatter(*w2.T, s=44, facecolor="none", edgecolor=OBSERVER_COLORS[1], marker="s", zorder=5,
                label="seen by 2")  # fmt: skip
+    for i, j, number in numbers:
+        spots = [w1[i]] if np.hypot(*(w1[i] - w2[j])) < 0.5 else [w1[i], w2[j]]
+        for x, y in spots:
+            ax.annotate(str(number), (x, y), xytext=(6, 4), textcoords="offset points",
+                        fontsize=8, fontweight="bold", color="#15803d", zorder=6)  # fmt: skip
     shown = np.vstack([w1, w2, [c.position[:2] for c in cams]])
     low, high = shown.min(axis=0) - 8.0, shown.max(axis=0) + 8.0
     ax.set_xlim(low[0], high[0])
@@ -274,6 +284,15 @@ def draw_birdseye(
 def _labels(view) -> list[str]:
     """A view's labels as its detector reported them (the true class where the record has none)."""
     return view.true_classes if view.reported_classes is None else view.reported_classes
+
+
+def _numbered(classes: Sequence[str], numbers: dict[int, int], labels: bool) -> list[str]:
+    """Each detection's label: "number class" for one of a true pair (its number), the class
+    alone for the others; with ``labels`` False only the numbers."""
+    return [
+        " ".join(([str(numbers[k])] if k in numbers else []) + ([c] if labels else []))
+        for k, c in enumerate(classes)
+    ]
 
 
 def draw_pair_from_record(pair, labels: bool = True):
@@ -303,20 +322,29 @@ def draw_pair_from_record(pair, labels: bool = True):
     width, images = canvas.shape[1] / dpi, canvas.shape[0] / dpi
     height = images + below + 0.35
     fig = Figure(figsize=(width, height), dpi=dpi)
+    gt = np.asarray(pair.gt_pairs, int).reshape(-1, 2)
+    numbered = [(int(i), int(j), k + 1) for k, (i, j) in enumerate(gt)]
     draw_pair(
         fig.add_axes((0, (below + 0.05) / height, 1, images / height)),
         pair.color1,
         pair.color2,
         pair.view1.boxes,
         pair.view2.boxes,
-        pair.gt_pairs,
-        labels1=_labels(pair.view1) if labels else None,
-        labels2=_labels(pair.view2) if labels else None,
+        gt,
+        labels1=_numbered(_labels(pair.view1), {i: k for i, _, k in numbered}, labels),
+        labels2=_numbered(_labels(pair.view2), {j: k for _, j, k in numbered}, labels),
+        label_size=8,
     )
     draw_birdseye(
         fig.add_axes((0.08, 0.45 / height, 0.84, (below - 0.5) / height)),
         pair,
-        [(pair.gt_pairs, CORRECT, "-")],
+        [(gt, CORRECT, "-")],
+        numbers=numbered,
     )
-    fig.suptitle(title + " — ground truth; below: true positions from above", fontsize=9, y=0.995)
+    fig.suptitle(
+        title + " — ground truth: a true pair carries one number in both views and from above "
+        "(green discs: objects both observers detect)",
+        fontsize=9,
+        y=0.995,
+    )
     return fig

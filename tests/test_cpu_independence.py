@@ -160,6 +160,7 @@ def _tables(out: Path) -> dict[str, pd.DataFrame]:
     return tables
 
 
+@pytest.mark.timeout(1800)  # four small reproduces, ~190 s on 2 cores; 22 min at load 5-6
 def test_a_small_reproduce_gives_the_same_tables_on_every_dispatch_level(tmp_path):
     args = ["eval.reproduce", "--pairs", "2", "--val-pairs", "2", "--matchers", "sm,maximin,mos"]
     args += ["--rates", "0,0.01", "--keep", "1,0.5", "--regime-runs", "2", "--runs", "1"]

@@ -60,6 +60,7 @@ MATCHERS = ["maximin", "none", "sm"]
 
 @pytest.mark.slow
 @pytest.mark.render
+@pytest.mark.timeout(900)  # 84 s on 2 quiet cores, 272 s at load 10: room for a busy machine
 def test_tiny_reproduce_writes_every_output_and_reruns_from_cache(tmp_path, capsys):
     out, data, cache = tmp_path / "results", tmp_path / "data", tmp_path / "cache"
     argv = ["--pairs", "2", "--val-pairs", "2", "--matchers", "sm,maximin,none"]
