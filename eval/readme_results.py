@@ -50,6 +50,8 @@ from eval.studies.v2x_table import readme_part as v2x_readme
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
 ROOT = Path(__file__).resolve().parents[1]
 REPORT, SITE = "README.md", "index.html"
+SELF_LINK = f"The same page with sortable tables: [{SITE}](./{SITE})."
+SITE_SELF_LINK = f"The same report as Markdown: [{REPORT}](./{REPORT})."
 log = logging.getLogger(__name__)
 RIVALS = ("mos", "rrwhm")
 
@@ -803,9 +805,9 @@ def report_markdown(results: Path) -> str:
         "",
         "Written by `make reproduce` from the files in this folder — every number below is "
         "read from them, none typed by hand; `make report` (`python -m eval.readme_results`) "
-        "writes this page again from the same files without recomputing anything. The same "
-        f"page with sortable tables: [{SITE}]({rel}/{SITE}). How to read the numbers, and what "
-        f"they cannot say: [docs/evaluation.md]({docs}/evaluation.md#reading-the-results).",
+        f"writes this page again from the same files without recomputing anything. {SELF_LINK} "
+        f"How to read the numbers, and what they cannot say: "
+        f"[docs/evaluation.md]({docs}/evaluation.md#reading-the-results).",
         "",
         *body,
         *_appendix(results, text, rel),
@@ -825,7 +827,8 @@ def write_report(results: Path) -> tuple[Path, Path]:
     results = Path(results)
     markdown = report_markdown(results)
     report = write_text(results / REPORT, markdown)
-    site = write_site(markdown, results, "cadsim results", _site_links(markdown))
+    page = markdown.replace(SELF_LINK, SITE_SELF_LINK, 1)  # the page names the other form
+    site = write_site(page, results, "cadsim results", _site_links(page))
     return report, site
 
 

@@ -249,7 +249,7 @@ def to_html(markdown: str, links: dict[str, str] | None = None) -> str:
 _STYLE = """
 body { font: 15px/1.5 system-ui, -apple-system, "Segoe UI", Roboto, sans-serif; color: #1f2328;
   margin: 0; }
-main { max-width: 1200px; margin: 0 auto; padding: 1em 2em 4em; }
+main { max-width: 1600px; margin: 0 auto; padding: 1em 2em 4em; }
 nav { background: #f6f8fa; border-bottom: 1px solid #d0d7de; padding: .5em 2em; }
 nav ul { margin: 0; padding: 0; list-style: none; display: flex; flex-wrap: wrap; gap: .2em 1.2em; }
 h1, h2, h3 { line-height: 1.25; } h2 { border-bottom: 1px solid #d0d7de; padding-bottom: .2em; }
@@ -258,7 +258,8 @@ code { background: #f6f8fa; padding: 0 .25em; border-radius: 4px; font-size: 90%
 .scroll { overflow-x: auto; margin: 1em 0; }
 table { border-collapse: collapse; font-size: 13px; }
 th, td { border: 1px solid #d0d7de; padding: .25em .6em; white-space: nowrap; }
-th { background: #f6f8fa; cursor: pointer; user-select: none; position: sticky; top: 0; }
+th { background: #f6f8fa; cursor: pointer; user-select: none; position: sticky; top: 0;
+  white-space: normal; min-width: 4em; }
 th[aria-sort="ascending"]::after { content: " \\25B2"; }
 th[aria-sort="descending"]::after { content: " \\25BC"; }
 tbody tr:nth-child(even) { background: #fafbfc; }
