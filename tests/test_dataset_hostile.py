@@ -88,14 +88,19 @@ def test_far_from_zero_the_walk_keeps_its_increments_and_stays_linear_between_st
 
 
 def test_an_imported_split_with_epoch_timestamps_draws_gnss_priors(tmp_path):
-    """The V2X-Seq fixture's times are seconds since 1970 (~1.6e9)."""
+    """The V2X-Seq fixture's times are seconds since 1970 (~1.6e9): the import counts each
+    sequence's time from its first frame (the epoch kept in meta), so a GNSS preset's walk is
+    drawn over the sequence's own seconds — metres, not the kilometres 1.6e9 s of walk gives."""
     assert main(["import", "v2x-seq", str(write_v2x_seq(tmp_path / "spd")), "--out", str(tmp_path / "d")]) == 0  # fmt: skip
     pairs = list(Dataset(tmp_path / "d", verify=True))
-    assert min(p.time for p in pairs) > 1e9
+    assert min(p.time for p in pairs) == 0.0
+    assert min(p.record["meta"]["epoch_time_s"] for p in pairs) > 1e9
 
     def draw():
         for pair in pairs:
-            assert pair.localise_preset("gnss-urban", seed=0).prior() is not None
+            urban = pair.localise_preset("gnss-urban", seed=0).prior()[0]  # the vehicle
+            exact = pair.localise_preset("exact", seed=0).prior()[0]
+            assert np.abs(urban[:, :2] - exact[:, :2]).max() < 100.0
 
     assert _peak(draw) < 32 * 2**20
 

@@ -24,7 +24,9 @@ slots; an object seen by both sides (both track ids given) has one object id, ``
 on both; one seen by one side ``v<track>`` or ``i<track>``; boxes become box-only detections in
 each LiDAR's frame (:mod:`.sensor_frame`); the true relative pose is the calibration's; the
 vehicle's body is its NovAtel (GNSS/INS) unit, the roadside unit's its LiDAR; ``time`` is the
-vehicle's point-cloud time (s) and ``meta.time_offset_s`` the vehicle's minus the roadside
+vehicle's point-cloud time (s) counted from its sequence's first frame (the source's epoch time
+in ``meta.epoch_time_s``: a GNSS preset's walk then spans the sequence, not the years since
+1970) and ``meta.time_offset_s`` the vehicle's minus the roadside
 unit's. No localisation prior is stored (the data has no noisy pose): a preset draws one.
 """
 
@@ -33,6 +35,7 @@ from __future__ import annotations
 import hashlib
 import itertools
 from collections.abc import Iterable
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -342,6 +345,10 @@ def import_v2x_seq(
                     f"frames {a.meta['vehicle_frame'][:20]!r} and {b.meta['vehicle_frame'][:20]!r} "
                     f"of sequence {sequence[:20]!r}: same pointcloud_timestamp",
                 )
+        start = frames[0].time  # times from the sequence's first frame (the epoch in meta)
+        frames = [
+            replace(f, time=f.time - start, meta=f.meta | {"epoch_time_s": f.time}) for f in frames
+        ]
         records += sequence_records(episode, 0, episode, frames, sequential)
     source = SOURCE | {
         "folder": root.name,
