@@ -186,3 +186,25 @@ def test_show_draws_frame_t_of_sequence_k(sequences, dataset, tmp_path, capsys):
         assert words in capsys.readouterr().err, extra
     assert main(["show", str(dataset), "--sequence", "0", "--out", str(tmp_path / "y.png")]) == 2
     assert "not a sequence dataset" in capsys.readouterr().err
+
+
+def test_the_record_figure_numbers_each_true_pair_alike_in_both_views_and_from_above(dataset):
+    from cadsim.pair_drawing import draw_pair_from_record
+
+    pair = Dataset(dataset)[1]
+    fig = draw_pair_from_record(pair)
+    images, above = fig.axes[0], fig.axes[1]
+    width1 = pair.color1.shape[1]
+    on_image = {1: {}, 2: {}}
+    for text in images.texts:
+        number = text.get_text().split(" ")[0]
+        if number.isdigit():
+            on_image[1 if text.get_position()[0] < width1 else 2][int(number)] = text
+    expected = set(range(1, len(pair.gt_pairs) + 1))
+    assert set(on_image[1]) == set(on_image[2]) == expected  # one number per true pair, each view
+    offset = images.get_xlim()[1] - pair.color2.shape[1]  # view 2's left edge on the canvas
+    for k, (i, j) in enumerate(pair.gt_pairs, start=1):  # number k above box i and box j
+        assert on_image[1][k].get_position()[0] == pytest.approx(pair.view1.boxes[i][0])
+        assert on_image[2][k].get_position()[0] == pytest.approx(pair.view2.boxes[j][0] + offset)
+    numbers_above = {int(t.get_text()) for t in above.texts if t.get_text().isdigit()}
+    assert numbers_above == expected
