@@ -64,7 +64,7 @@ def load_npz(data: bytes | str, what: str, keys=None) -> dict[str, np.ndarray]:
                 if keys is not None and key not in keys:
                     continue
                 with zf.open(info) as member:
-                    shape, fortran, dtype = _member_header(member, what, key)
+                    shape, fortran, dtype = npy_header(member, what, key)
                     nbytes = math.prod(shape) * dtype.itemsize
                     declared += nbytes
                     if declared > MAX_NPZ_BYTES:
@@ -100,8 +100,9 @@ def load_npz(data: bytes | str, what: str, keys=None) -> dict[str, np.ndarray]:
         raise ValueError(f"{what}: not a readable .npz file ({exc})") from exc
 
 
-def _member_header(member, what: str, key: str) -> tuple[tuple[int, ...], bool, np.dtype]:
-    """(shape, Fortran order, dtype) of an ``.npy`` member, read from its header only."""
+def npy_header(member, what: str, key: str) -> tuple[tuple[int, ...], bool, np.dtype]:
+    """(shape, Fortran order, dtype) of an ``.npy`` member, read from its header only; a
+    ValueError naming ``what`` and ``key`` for another format version or an object dtype."""
     version = np.lib.format.read_magic(member)
     if version == (1, 0):
         shape, fortran, dtype = np.lib.format.read_array_header_1_0(member)

@@ -45,7 +45,7 @@ from cadsim.dataset import layout
 from cadsim.dataset.checksum import record_checksum
 from cadsim.dataset.cues import cue_problem
 from cadsim.dataset.detections import ViewDetections
-from cadsim.dataset.encoding import load_npz
+from cadsim.dataset.encoding import load_npz, npy_header
 from cadsim.dataset.manifest import DatasetError
 from cadsim.dataset.record_format import (
     MULTI_VIEW_VERSIONS,
@@ -566,15 +566,10 @@ def npz_headers(data: bytes, what: Path) -> dict[str, tuple[tuple[int, ...], np.
             for info in zf.infolist():
                 if not info.filename.endswith(".npy"):
                     raise DatasetError(f"{what}: {info.filename}: not an array")
+                key = info.filename[: -len(".npy")]
                 with zf.open(info) as member:
-                    version = np.lib.format.read_magic(member)
-                    if version == (1, 0):
-                        shape, _, dtype = np.lib.format.read_array_header_1_0(member)
-                    elif version == (2, 0):
-                        shape, _, dtype = np.lib.format.read_array_header_2_0(member)
-                    else:
-                        raise ValueError(f"npy format version {version}")
-                headers[info.filename[: -len(".npy")]] = (tuple(shape), np.dtype(dtype))
+                    shape, _, dtype = npy_header(member, str(what), key)
+                headers[key] = (shape, dtype)
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
         if isinstance(exc, DatasetError):
             raise

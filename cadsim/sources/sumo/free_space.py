@@ -4,6 +4,8 @@ Positions in SUMO's network frame (metres, x east, y north); yaws in radians fro
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -73,3 +75,16 @@ def rectangles_clear_of_points(
     hit = (along < half_length + r) & (across < half_width + r)
     clear[np.unique(rect[hit])] = False
     return clear
+
+
+def right_hand_lanes(network: RoadNetwork) -> Iterator[tuple[object, np.ndarray, np.ndarray]]:
+    """Per normal edge, in id order: its right-most lane (sumolib), the lane's (k, 2) polyline
+    and the arc length (k,) at each vertex, metres — the line buildings and roadside clutter
+    are placed along. Edges whose lane has fewer than two points are skipped."""
+    for edge in sorted(network.normal_edges, key=lambda e: e.getID()):
+        lane0 = edge.getLanes()[0]
+        xy = np.asarray([p[:2] for p in lane0.getShape()], float)
+        if len(xy) < 2:
+            continue
+        seg = np.diff(xy, axis=0)
+        yield lane0, xy, np.concatenate([[0.0], np.cumsum(np.hypot(seg[:, 0], seg[:, 1]))])

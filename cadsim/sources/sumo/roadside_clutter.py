@@ -20,6 +20,7 @@ from cadsim.object_sizes import draw_size
 from cadsim.sources.sumo.free_space import (
     Region,
     rectangles_clear_of_points,
+    right_hand_lanes,
     road_space_points,
 )
 from cadsim.sources.sumo.network import RoadNetwork, point_at
@@ -52,13 +53,7 @@ def roadside_clutter(
     shares = np.array([KIND_SHARES[k][0] for k in kinds])
     cum_share = np.cumsum(shares / shares.sum())
     objects: list[WorldObject] = []
-    for edge in sorted(network.normal_edges, key=lambda e: e.getID()):
-        lane0 = edge.getLanes()[0]
-        xy = np.asarray([p[:2] for p in lane0.getShape()], float)
-        if len(xy) < 2:
-            continue
-        seg = np.diff(xy, axis=0)
-        cum = np.concatenate([[0.0], np.cumsum(np.hypot(seg[:, 0], seg[:, 1]))])
+    for lane0, xy, cum in right_hand_lanes(network):
         n = int(np.ceil(cum[-1] / (0.5 * spacing))) + 1
         steps = spacing * (0.5 + rng.random(n))
         pick = rng.random(n)
@@ -73,7 +68,7 @@ def roadside_clutter(
         for k in range(len(s)):  # per object (a few per edge), not per tensor entry
             kind = kinds[int(np.searchsorted(cum_share, pick[k], side="right"))]
             _, shape, colours = KIND_SHARES[kind]
-            oid = f"roadside:{kind}:{edge.getID()}:{k}"
+            oid = f"roadside:{kind}:{lane0.getEdge().getID()}:{k}"
             size = draw_size(seed, oid, kind)
             offset = lane0.getWidth() / 2.0 + KERB_GAP_M + size[1] / 2.0
             centre = p[k] + right[k] * offset

@@ -36,6 +36,7 @@ from cadsim.sources.street_furniture import (
 from cadsim.sources.sumo.free_space import (  # noqa: F401 (re-exported for callers)
     Region,
     rectangles_clear_of_points,
+    right_hand_lanes,
     road_space_points,
 )
 from cadsim.sources.sumo.network import RoadNetwork, point_at
@@ -230,13 +231,7 @@ def buildings(
     frontage, depth = scene["building_frontage"], scene["building_depth"]
     gap, setback = scene["building_gap"], scene["building_setback"]
     centres, yaws = [], []
-    for edge in sorted(network.normal_edges, key=lambda e: e.getID()):
-        lane0 = edge.getLanes()[0]
-        xy = np.asarray([p[:2] for p in lane0.getShape()], float)
-        if len(xy) < 2:
-            continue
-        seg = np.diff(xy, axis=0)
-        cum = np.concatenate([[0.0], np.cumsum(np.hypot(seg[:, 0], seg[:, 1]))])
+    for lane0, xy, cum in right_hand_lanes(network):
         s = np.arange(gap / 2.0 + frontage / 2.0, cum[-1] - frontage / 2.0 + 1e-9, frontage + gap)
         if len(s) == 0:
             continue
