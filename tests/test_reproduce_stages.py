@@ -128,3 +128,16 @@ def test_a_stage_counting_runs_needs_the_runner():
 def test_a_new_stage_makes_the_committed_stage_table_stale():
     report = (ROOT / "results" / "README.md").read_text()
     assert stage_table_names(report) != [*NAMES, "lidar_temporal"]
+
+
+def test_a_dashed_skip_name_is_one_option_for_its_stages():
+    import argparse
+
+    from eval.pipeline.stage import add_skip_options, skipped
+
+    stages = [Stage(n, (), (), print, 1, skip="lidar-temporal") for n in ("gen", "table")]
+    parser = argparse.ArgumentParser()
+    add_skip_options(parser, stages)
+    args = parser.parse_args(["--no-lidar-temporal"])
+    assert all(skipped(args, s) for s in stages)
+    assert not any(skipped(parser.parse_args([]), s) for s in stages)

@@ -127,7 +127,7 @@ def add_skip_options(parser: argparse.ArgumentParser, stages: Sequence[Stage]) -
 
 def skipped(args: argparse.Namespace, stage: Stage) -> bool:
     """Whether ``stage``'s ``--no-X`` option was given."""
-    return stage.skip is not None and bool(getattr(args, f"no_{stage.skip}", False))
+    return stage.skip is not None and bool(getattr(args, f"no_{stage.skip}".replace("-", "_")))
 
 
 def walk(stages: Sequence[Stage], state: RunState, timer: StageTimer) -> dict[str, dict]:
