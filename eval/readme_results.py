@@ -89,6 +89,7 @@ def _header(record: dict) -> str:
         f" at commit `{str(git.get('commit', '?'))[:10]}`"
         + (" (with uncommitted changes)" if git.get("dirty") else "")
         + f"; {'a cold run (no dataset, model or cached run at its start)' if cold else 'a warm run (datasets, models or runs cached at its start: its times are not cold times)'}"
+        + (f"; every split × {record['scale']} (`--scale`)" if record.get("scale", 1) != 1 else "")
         + f"; wall time {wall.get('total', float('nan')):.0f} s ({computed} matcher runs computed, "
         f"{cached} taken from the result cache)."
     )

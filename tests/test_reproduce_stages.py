@@ -141,3 +141,21 @@ def test_a_dashed_skip_name_is_one_option_for_its_stages():
     args = parser.parse_args(["--no-lidar-temporal"])
     assert all(skipped(args, s) for s in stages)
     assert not any(skipped(parser.parse_args([]), s) for s in stages)
+
+
+def test_a_scaled_run_says_so_in_the_report_and_the_stated_cold_time(tmp_path):
+    from eval.readme_results import report_markdown
+    from eval.report.run_record import keep_cold_record
+
+    record = {"cold_start": {"cold": True}, "scale": 2, "git": {"commit": "abcdef123"}}
+    record |= {"wall_s": {"generate": 100.0, "total": 130.4}, "runs": {}, "created": "today"}
+    record |= {"budget_s": {"generate": 110}}
+    (tmp_path / "run_record.json").write_text(json.dumps(record))
+    keep_cold_record(tmp_path, record)
+    assert cold_time(tmp_path, tmp_path) == (
+        "a cold `make reproduce SCALE=2` took 2 min 10 s (130 s, `./cold_run.json`, commit "
+        "`abcdef1`)"
+    )
+    report = report_markdown(tmp_path)
+    assert "every split × 2" in report and stage_table_names(report) == ["generate"]
+    assert "| generate | 100 |  |  | 110 |" in report

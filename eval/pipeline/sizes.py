@@ -141,17 +141,16 @@ def plan_sizes(args: argparse.Namespace, scenarios: Sequence[tuple[str, int]]) -
     ``--*-pairs`` and ``--scale``) and the Table I ``scenarios`` as (label, scenario's pairs);
     generates nothing. Scale 1 gives the sizes the options alone give."""
     k = args.scale
-    datasets = []
+    unscaled = []  # (label, test pairs, validation pairs) at scale 1
     for label, scenario_pairs in scenarios:
         pairs = scenario_pairs if args.pairs is None else args.pairs
-        val = args.val_pairs or min(DEFAULT_VAL_PAIRS, pairs)
-        datasets.append((label, pairs * k, val * k))
-    largest_spread = next((p for label, p, _ in datasets if label == SPREAD_DATASET), 0) // k
+        unscaled.append((label, pairs, args.val_pairs or min(DEFAULT_VAL_PAIRS, pairs)))
+    spread_test = next((test for label, test, _ in unscaled if label == SPREAD_DATASET), 0)
     v2x = _capped(args.pairs, V2X_PAIRS) * k
     return SplitSizes(
         scale=k,
-        datasets=tuple(datasets),
-        spread=min(args.spread_pairs, largest_spread) * k,
+        datasets=tuple((label, test * k, val * k) for label, test, val in unscaled),
+        spread=min(args.spread_pairs, spread_test) * k,
         v2x={"test": v2x, "val": v2x, "train": V2X_TRAIN_FACTOR * v2x},
         lidar=v2x,
         multiagent={
