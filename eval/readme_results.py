@@ -110,7 +110,7 @@ def stage_table(record: dict) -> list[str]:
     budget = record.get("budget_s") or {}  # the stages' cold budgets, in records that have them
     scale = record.get("scale") or 1
     lines = [
-        f"Stage times of the {'last cold' if is_cold(record) else 'this warm'} run (commit "
+        f"Stage times of {'the last cold' if is_cold(record) else 'this warm'} run (commit "
         f"`{commit}`, {record.get('created', '?')}; seconds; {where}"
         + (f"; every split × {scale}" if scale != 1 else "")
         + "):",
