@@ -159,3 +159,16 @@ def test_a_scaled_run_says_so_in_the_report_and_the_stated_cold_time(tmp_path):
     report = report_markdown(tmp_path)
     assert "every split × 2" in report and stage_table_names(report) == ["generate"]
     assert "| generate | 100 |  |  | 110 |" in report
+
+
+def test_no_function_of_the_reproduce_module_or_its_stages_is_over_80_lines():
+    import ast
+
+    files = [ROOT / "eval" / "reproduce.py", *sorted((ROOT / "eval" / "pipeline").glob("*.py"))]
+    long = [
+        f"{path.name}:{node.name} ({node.end_lineno - node.lineno + 1} lines)"
+        for path in files
+        for node in ast.walk(ast.parse(path.read_text()))
+        if isinstance(node, ast.FunctionDef) and node.end_lineno - node.lineno + 1 > 80
+    ]
+    assert long == []
