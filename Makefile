@@ -83,8 +83,10 @@ format: venv
 	$(PY) -m ruff format cadsim matchers eval tests examples
 	$(PY) -m ruff check --fix cadsim matchers eval tests examples
 
+# SCALE=k multiplies every split size (pairs, sequences, snapshots of every study) by k:
+# `make reproduce SCALE=2`; unset, the default sizes.
 reproduce: venv
-	$(PY) -m eval.reproduce
+	$(PY) -m eval.reproduce $(if $(SCALE),--scale $(SCALE))
 
 # The report (results/README.md, results/index.html) and the README's results section, written
 # again from the files in results/: nothing is recomputed.

@@ -34,7 +34,7 @@ import pandas as pd
 from eval.core.abstention import NO_NUMBER
 from eval.core.result_files import write_text
 from eval.report import summary
-from eval.report.run_record import cold_record
+from eval.report.run_record import COLD_RECORD, cold_record
 from eval.report.site import headings, write_site
 from eval.report.tables import PAPER_COLUMN, PAPER_NAMES, dataset_order, method_name, params_text
 from eval.studies.agreement import readme_part as agreement_readme
@@ -48,6 +48,8 @@ from eval.studies.v2x_lidar import readme_part as v2x_lidar_readme
 from eval.studies.v2x_table import readme_part as v2x_readme
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
+COLD_BEGIN, COLD_END = "<!-- cold-run:begin -->", "<!-- cold-run:end -->"
+"""README.md's stated cold time (:func:`cold_time`) sits between these."""
 ROOT = Path(__file__).resolve().parents[1]
 REPORT, SITE = "README.md", "index.html"
 SELF_LINK = f"The same page with sortable tables: [{SITE}](./{SITE})."
@@ -87,6 +89,7 @@ def _header(record: dict) -> str:
         f" at commit `{str(git.get('commit', '?'))[:10]}`"
         + (" (with uncommitted changes)" if git.get("dirty") else "")
         + f"; {'a cold run (no dataset, model or cached run at its start)' if cold else 'a warm run (datasets, models or runs cached at its start: its times are not cold times)'}"
+        + (f"; every split × {record['scale']} (`--scale`)" if record.get("scale", 1) != 1 else "")
         + f"; wall time {wall.get('total', float('nan')):.0f} s ({computed} matcher runs computed, "
         f"{cached} taken from the result cache)."
     )
@@ -104,12 +107,16 @@ def stage_table(record: dict) -> list[str]:
     runs = record.get("runs", {})
     commit = str(record.get("git", {}).get("commit", "?"))[:10]
     where = "`cold_run.json`" if is_cold(record) else "`run_record.json`"
+    budget = record.get("budget_s") or {}  # the stages' cold budgets, in records that have them
+    scale = record.get("scale") or 1
     lines = [
-        f"Stage times of the {'last cold' if is_cold(record) else 'this warm'} run (commit "
-        f"`{commit}`, {record.get('created', '?')}; seconds; {where}):",
+        f"Stage times of {'the last cold' if is_cold(record) else 'this warm'} run (commit "
+        f"`{commit}`, {record.get('created', '?')}; seconds; {where}"
+        + (f"; every split × {scale}" if scale != 1 else "")
+        + "):",
         "",
-        "| Stage | s | runs computed | runs cached |",
-        "|:---|---:|---:|---:|",
+        "| Stage | s | runs computed | runs cached |" + (" cold budget s |" if budget else ""),
+        "|:---|---:|---:|---:|" + ("---:|" if budget else ""),
     ]
     for name, seconds in wall.items():
         if name == "total":
@@ -117,10 +124,37 @@ def stage_table(record: dict) -> list[str]:
         r = runs.get(name, {})
         lines.append(
             f"| {name.replace('_', ' ')} | {seconds:.0f} | {r.get('computed', '')} "
-            f"| {r.get('cached', '')} |"
+            f"| {r.get('cached', '')} |" + (f" {budget.get(name, '')} |" if budget else "")
         )
-    lines.append(f"| **total** | **{wall.get('total', float('nan')):.0f}** | | |")
+    total = f"| **total** | **{wall.get('total', float('nan')):.0f}** | | |"
+    lines.append(total + (f" **{sum(budget.values()):g}** |" if budget else ""))
     return lines + [""]
+
+
+def stage_table_names(report: str) -> list[str]:
+    """The stage names (underscored, as the run record keys them) of the stage table in a
+    report's Markdown (:func:`stage_table`), in order; empty without one."""
+    _, found, rest = report.partition("| Stage | s |")
+    rows = rest.split("\n\n", 1)[0].splitlines()[2:] if found else []
+    names = [row.split("|")[1].strip().replace(" ", "_") for row in rows]
+    return [n for n in names if n != "**total**"]
+
+
+def cold_time(results: Path, readme_dir: Path) -> str | None:
+    """README.md's stated cold time, read from the last cold run's ``cold_run.json`` (None
+    without one): 'a cold `make reproduce` took 11 min 44 s (704 s, …, commit `880e86d`)'."""
+    cold = cold_record(results)
+    if not cold or "total" not in cold.get("wall_s", {}):
+        return None
+    total = cold["wall_s"]["total"]
+    minutes, seconds = divmod(round(total), 60)
+    scale = cold.get("scale") or 1
+    rel = Path(os.path.relpath(results, readme_dir)).as_posix()
+    return (
+        f"a cold `make reproduce{f' SCALE={scale}' if scale != 1 else ''}` took {minutes} min "
+        f"{seconds} s ({total:.0f} s, `{rel}/{COLD_RECORD}`, commit "
+        f"`{str(cold.get('git', {}).get('commit', '?'))[:7]}`)"
+    )
 
 
 def paired_markdown(table: pd.DataFrame) -> str:
@@ -933,7 +967,9 @@ def summary_section(results: Path, readme_dir: Path) -> str:
 
 
 def update_readme(readme: Path, results: Path) -> bool:
-    """Replace the README's results section; False (README untouched) if it has no markers."""
+    """Replace the README's results section and its stated cold time (between
+    :data:`COLD_BEGIN` and :data:`COLD_END`, when there); False (README untouched) if it has no
+    results markers."""
     readme = Path(readme)
     text = readme.read_text()
     if BEGIN not in text or END not in text:
@@ -941,7 +977,12 @@ def update_readme(readme: Path, results: Path) -> bool:
     head, rest = text.split(BEGIN, 1)
     _, tail = rest.split(END, 1)
     body = summary_section(Path(results), readme.parent)
-    write_text(readme, f"{head}{BEGIN}\n{body}\n{END}{tail}")
+    text = f"{head}{BEGIN}\n{body}\n{END}{tail}"
+    stated = cold_time(Path(results), readme.parent)
+    if stated is not None and COLD_BEGIN in text and COLD_END in text:
+        before, rest = text.split(COLD_BEGIN, 1)
+        text = f"{before}{COLD_BEGIN}{stated}{COLD_END}{rest.split(COLD_END, 1)[1]}"
+    write_text(readme, text)
     return True
 
 

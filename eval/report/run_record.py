@@ -114,7 +114,8 @@ def keep_cold_record(results: str | Path, record: dict) -> Path | None:
     leave it otherwise. Returns the path written, or None."""
     if not record.get("cold_start", {}).get("cold"):
         return None
-    keys = ("created", "command", "git", "machine", "wall_s", "runs", "cold_start", "code_version")
+    keys = ("created", "command", "scale", "git", "machine", "wall_s", "budget_s", "runs")
+    keys += ("cold_start", "code_version")
     path = Path(results) / COLD_RECORD
     write_text(path, json.dumps({k: record.get(k) for k in keys}, indent=1, default=str) + "\n")
     return path

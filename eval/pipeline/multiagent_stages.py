@@ -1,0 +1,66 @@
+"""The stages of the multi-agent study on cad-multi: its test and validation snapshots, then
+two-view matchers on every pair of views fused per subset of N views. They fill the run
+record's ``multiagent`` section."""
+
+from __future__ import annotations
+
+import logging
+
+from eval.pipeline.sizes import ROOT, VAL_SEED_OFFSET
+from eval.pipeline.stage import RunState, shown
+from eval.report.run_record import scenario_file
+from eval.studies.evaluation import chosen_specs, parse_matchers
+from eval.studies.multiagent import LABEL as MA_LABEL
+from eval.studies.multiagent import MATCHERS as MA_MATCHERS
+from eval.studies.multiagent import PRESETS as MA_PRESETS
+from eval.studies.multiagent import SCENARIO as MA_SCENARIO
+from eval.studies.multiagent import SUBSETS as MA_SUBSETS
+from eval.studies.multiagent import evaluate_multiagent
+from matchers.fusion import usable_fusions
+
+log = logging.getLogger("eval.reproduce")
+
+
+def multiagent_seeds(state: RunState) -> list[int]:
+    return list(range(state.args.multiagent_runs))
+
+
+def multiagent_generate(state: RunState) -> None:
+    """cad-multi's test and validation snapshots on disjoint scenario seeds."""
+    from cadsim.scenario import load_scenario
+
+    if not multiagent_seeds(state):
+        return
+    record = state.record.setdefault("multiagent", {})
+    path = ROOT / MA_SCENARIO
+    scenario = load_scenario(path)
+    splits = {
+        "test": (state.data / "cad-multi", scenario.seed),
+        "val": (state.data / "cad-multi-val", scenario.seed + VAL_SEED_OFFSET),
+    }
+    for split, (folder, seed) in splits.items():
+        n = state.sizes.multiagent[split]
+        log.info("[multiagent generate] %s %s: %d snapshots (seed %d)", MA_LABEL, split, n, seed)
+        made = state.generate(path, folder, n, None if split == "test" else seed)
+        record[split] = {"dir": str(folder), "snapshots": n, "seed": seed}
+        record[split] |= {"new_records": made.new_records}
+    record["scenario"] = scenario_file(path) | {"path": shown(path)}
+    state.multi_dirs = splits["test"][0], splits["val"][0]
+
+
+def multiagent(state: RunState) -> None:
+    """The multi-agent table: CAD's tuned matchers, every fusion, every N, every preset."""
+    seeds = multiagent_seeds(state)
+    if state.multi_dirs is None:
+        return
+    named, _ = chosen_specs(state.out, "CAD", parse_matchers(",".join(MA_MATCHERS)))
+    log.info(
+        "[multiagent] %s: %d matchers × %d fusions × N in %s × %d presets × %d runs",
+        MA_LABEL, len(named), len(usable_fusions()), sorted(MA_SUBSETS), len(MA_PRESETS),
+        len(seeds),
+    )  # fmt: skip
+    evaluate_multiagent(*state.multi_dirs, named, seeds, state.runner, state.out)
+    record = state.record.setdefault("multiagent", {})
+    record |= {"seeds": seeds, "matchers": list(named)}
+    record |= {"presets": list(MA_PRESETS), "fusions": usable_fusions()}
+    record |= {"subsets": {str(n): list(v) for n, v in MA_SUBSETS.items()}}
