@@ -1,9 +1,9 @@
-"""The claim record (eval/protocol/claims.py) and the rank interval it carries for Table I."""
+"""The claim record (eval/protocol/claims.py): verdicts, the refusal of a choice on test, and
+goal lines read back into their numbers."""
 
 import math
 
 import numpy as np
-import pandas as pd
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
@@ -19,7 +19,6 @@ from eval.protocol.claims import (
     point_claim,
 )
 from eval.protocol.goal_verdict import goal_line, verdict
-from eval.protocol.rank_interval import rank_interval
 
 
 def test_a_difference_is_ahead_or_behind_only_when_its_interval_excludes_zero():
@@ -58,29 +57,3 @@ def test_a_goal_line_without_an_interval_is_not_shown():
                                        at_least=False, scale=1.0, digits=3))  # fmt: skip
     assert parsed["verdict"] == NOT_SHOWN and parsed["value"] == 0.745
     assert math.isnan(parsed["low"]) and parse_goal_line("no verdict here") is None
-
-
-def _pairs(f1: dict[str, list[float]], per_episode: int = 2) -> pd.DataFrame:
-    return pd.DataFrame(
-        [
-            {"matcher": m, "episode": k // per_episode, "pair": k, "seed": 0, "f1": v}
-            for m, values in f1.items()
-            for k, v in enumerate(values)
-        ]
-    )
-
-
-def test_a_rank_that_holds_in_every_episode_has_a_one_point_interval():
-    per_pair = _pairs({"maximin": [0.9] * 8, "mos": [0.5] * 8, "sm": [0.2] * 8})
-    assert rank_interval(per_pair, "maximin", ["maximin", "mos", "sm"]) == (1, 1, 1, 4)
-    assert rank_interval(per_pair, "sm", ["maximin", "mos", "sm"])[:3] == (3, 3, 3)
-
-
-def test_a_rank_that_episodes_disagree_on_has_a_wide_interval():
-    # maximin first in half the episodes, second in the others (first overall, 0.5 against
-    # 0.45): the interval spans both ranks
-    maximin = [0.9, 0.9, 0.1, 0.1] * 5
-    mos = [0.45] * 20
-    rank, low, high, episodes = rank_interval(_pairs({"maximin": maximin, "mos": mos}), "maximin",
-                                              ["maximin", "mos"])  # fmt: skip
-    assert (rank, low, high, episodes) == (1, 1, 2, 10)

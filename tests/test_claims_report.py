@@ -67,3 +67,23 @@ def test_claims_csv_is_written_with_its_columns(tmp_path):
         "F1 leader at 0.1: MOS 30.0 (point value)",
     ]
     assert claims["ci_low"].isna().all() and set(claims["chosen_on"]) == {"fixed"}
+
+
+def test_the_realism_goals_read_the_episode_interval_of_the_auc(tmp_path):
+    from eval.studies.v2x_table import realism_check
+
+    (tmp_path / "regime.csv").write_text(
+        "dataset,appearance_auc,image_auc,same_class_auc\nCAD-V2X,0.84,0.745,\n"
+    )
+    point = realism_check(tmp_path)
+    assert all(": not shown — " in line and "(no interval)" in line for line in point)
+    (tmp_path / "regime_auc_intervals.csv").write_text(
+        "dataset,appearance_auc,appearance_auc_low,appearance_auc_high,image_auc,image_auc_low,"
+        "image_auc_high,episodes\nCAD-V2X,0.84,0.81,0.87,0.745,0.696,0.792,13\n"
+    )
+    whole_low, whole_high, image = realism_check(tmp_path)
+    assert "AUC ≥ 0.60: met — 0.840 [0.810, 0.870]" in whole_low
+    assert "AUC ≤ 0.80: not met — 0.840 [0.810, 0.870]" in whole_high
+    # the point value 0.745 is within the goal, its interval is not: not shown
+    assert "image-only AUC ≤ 0.75: not shown — 0.745 [0.696, 0.792]" in image
+    assert "95 % interval over its 13 episodes" in image

@@ -49,6 +49,7 @@ from eval.protocol.cluster_interval import t_interval
 from eval.protocol.goal_verdict import goal_line
 from eval.protocol.metrics import summarise_pooled, summarise_runs
 from eval.studies.evaluation import chosen_specs, evaluate, open_entry
+from eval.studies.regime_cards import AUC_FILE
 
 log = logging.getLogger(__name__)
 
@@ -591,21 +592,27 @@ def runner_up_lines(intervals: pd.DataFrame) -> list[str]:
 def realism_check(results: Path) -> list[str]:
     """The appearance-realism goals on the held-out test split (``regime.csv``'s CAD-V2X row;
     its settings were chosen on validation seeds, docs/scenarios.md): whole-feature AUC within
-    :data:`AUC_BAND`, image-only AUC at most :data:`IMAGE_AUC_MAX`. ``regime.csv`` holds point
-    values over every candidate pair (no episode interval), so each goal is *not shown*
-    (:mod:`eval.protocol.goal_verdict`: a point value never meets a goal)."""
+    :data:`AUC_BAND`, image-only AUC at most :data:`IMAGE_AUC_MAX`, each read off its
+    episode-bootstrap interval (``regime_auc_intervals.csv``); without that file the values are
+    points and every goal is *not shown* (a point value never meets a goal)."""
     path = Path(results) / "regime.csv"
     if not path.is_file():
         return []
     table = pd.read_csv(path).set_index("dataset")
     if REALISM_LABEL not in table.index:
         return []
-    whole, image = table.at[REALISM_LABEL, "appearance_auc"], table.at[REALISM_LABEL, "image_auc"]
-    alike = table.at[REALISM_LABEL, "same_class_auc"] if "same_class_auc" in table.columns else None
+    row = table.loc[REALISM_LABEL].to_dict()
+    where = "over every candidate pair of the held-out test split"
+    bounds = Path(results) / AUC_FILE
+    intervals = pd.read_csv(bounds).set_index("dataset") if bounds.is_file() else None
+    if intervals is not None and REALISM_LABEL in intervals.index:
+        row |= intervals.loc[REALISM_LABEL].to_dict()
+        where += f", 95 % interval over its {int(row['episodes'])} episodes"
+    else:
+        where = f"a point value {where}, no episode interval"
+    nan = float("nan")
     low, high = AUC_BAND
-    point = (
-        "a point value over every candidate pair of the held-out test split, no episode interval"
-    )
+    alike = row.get("same_class_auc")
     within = (
         ""
         if alike is None or pd.isna(alike)
@@ -615,21 +622,21 @@ def realism_check(results: Path) -> list[str]:
             "against a sign, where DMGM's are mostly one class — docs/scenarios.md)"
         )
     )
-    nan = float("nan")
+
+    def goal(name: str, key: str, bar: float, at_least: bool, detail: str) -> str:
+        return goal_line(
+            f"appearance realism, {name} {'≥' if at_least else '≤'} {bar:.2f}", row[key],
+            row.get(f"{key}_low", nan), row.get(f"{key}_high", nan), bar, at_least,
+            scale=1.0, digits=3, detail=detail,
+        )  # fmt: skip
+
     return [
-        goal_line(
-            f"appearance realism, whole-feature AUC ≥ {low:.2f}", whole, nan, nan, low,
-            scale=1.0, digits=3, detail=point,
+        goal("whole-feature AUC", "appearance_auc", low, True, where),
+        goal(
+            "whole-feature AUC", "appearance_auc", high, False, f"{where}; DMGM's is 0.57{within}"
         ),
-        goal_line(
-            f"appearance realism, whole-feature AUC ≤ {high:.2f}", whole, nan, nan, high,
-            at_least=False, scale=1.0, digits=3, detail=f"{point}; DMGM's is 0.57{within}",
-        ),
-        goal_line(
-            f"appearance realism, image-only AUC ≤ {IMAGE_AUC_MAX:.2f}", image, nan, nan,
-            IMAGE_AUC_MAX, at_least=False, scale=1.0, digits=3, detail=point,
-        ),
-    ]  # fmt: skip
+        goal("image-only AUC", "image_auc", IMAGE_AUC_MAX, False, where),
+    ]
 
 
 def readme_part(results: Path, rel: str) -> list[str]:
