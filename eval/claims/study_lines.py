@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 
 import pandas as pd
@@ -80,8 +81,22 @@ def _parts(results: Path) -> list[tuple[str, str, Callable[[], list[str]]]]:
     ]
 
 
+_CHOSEN = re.compile(r"chosen on|on the validation|on validation")
+_PAIR = re.compile(r"^([\w:]+ \+ [\w:]+)")
+
+
 def _chosen_on(text: str) -> str:
-    return "validation" if "chosen on" in text else "fixed"
+    return "validation" if _CHOSEN.search(text) else "fixed"
+
+
+def _subject(goal: str, detail: str) -> str:
+    """The method a goal line is about: the first `name` of its detail, a multi-agent
+    "matcher + fusion", else the goal itself."""
+    tick = re.search(r"`([^`]+)`", detail)
+    if tick:
+        return tick[1]
+    pair = _PAIR.match(detail)
+    return pair[1] if pair else goal.split(" (")[0]
 
 
 def _clusters(text: str) -> str:
@@ -103,7 +118,7 @@ def _goal(study: str, source: str, parsed: dict) -> Claim:
     sign, bar = bars[-1] if bars else ("≥", "nan")
     text = parsed["goal"] + " " + parsed["detail"]
     return Claim(
-        study, parsed["detail"].split(",")[0].split(";")[0].strip("` ") or study, "goal",
+        study, _subject(parsed["goal"], parsed["detail"]), "goal",
         parsed["goal"], parsed["value"], parsed["low"], parsed["high"], float(bar),
         ">=" if sign == "≥" else "<=", parsed["verdict"], _chosen_on(text),
         _clusters(text) or ("simulation episodes" if finite(parsed["low"]) else ""),
@@ -124,7 +139,7 @@ def _difference(study: str, source: str, line: str) -> Claim | None:
         state = NOT_SHOWN  # beyond 0 only before the adjustment, or not at all
     else:
         state = difference_verdict(low, high)
-    subject = line.split(":")[0].strip("` ")
+    subject = line.split(":")[0].replace("`", "")
     return Claim(
         study, subject, "difference", "f1 points", diff, low, high, 0.0, "diff", state,
         _chosen_on(line), _clusters(line) or "simulation episodes", source, line,
@@ -143,8 +158,8 @@ def _temporal_gain(results: Path, line: str) -> Claim | None:
         return None
     r = row.iloc[0]
     return Claim(
-        "temporal", f"{head['method']} W = 10 ({head['preset']})", "W = 1", "f1_pooled",
-        r["pooled_diff"], r["pooled_low"], r["pooled_high"], 0.0, "diff",
+        "temporal", f"{head['method']} W = 10 ({head['preset']})", "W = 1", "pooled F1 points",
+        100 * r["pooled_diff"], 100 * r["pooled_low"], 100 * r["pooled_high"], 0.0, "diff",
         difference_verdict(r["pooled_low"], r["pooled_high"]), "validation",
         f"{int(r['episodes'])} simulation episodes (bootstrap)", "table_temporal_gain.csv", line,
     )  # fmt: skip
@@ -181,6 +196,15 @@ def line_claim(results: Path, study: str, source: str, line: str) -> Claim | Non
     return None
 
 
+def _same_choice(claims: list[Claim]) -> list[Claim]:
+    """A study's goals on a method it chose on validation (one line says so, the next names the
+    method only) are all ``chosen_on = validation``."""
+    chosen = {(c.study, c.subject) for c in claims if c.chosen_on == "validation"}
+    return [
+        replace(c, chosen_on="validation") if (c.study, c.subject) in chosen else c for c in claims
+    ]
+
+
 def study_claims(results: Path) -> list[Claim]:
     """Every claim the study parts of the report state."""
     results = Path(results)
@@ -196,4 +220,4 @@ def study_claims(results: Path) -> list[Claim]:
             claim = line_claim(results, study, source, line)
             if claim is not None:
                 out.append(claim)
-    return out
+    return _same_choice(out)
