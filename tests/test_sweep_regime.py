@@ -156,7 +156,13 @@ def test_regime_cards_are_written_per_dataset_and_shown_as_markdown(tmp_path, mo
         "position_error_median_m": None,
     }
     monkeypatch.setattr(regime_cards, "regime_of", lambda path: fields | {"extra": 1})
+    bounds = {"appearance_auc": 0.913, "appearance_auc_low": 0.9, "appearance_auc_high": 0.93}
+    monkeypatch.setattr(regime_cards, "auc_intervals_of", lambda path: bounds | {"episodes": 10})
     path = regime_cards.write_regime(tmp_path, {"CAD": "data/cad", "MRC": "data/mrc"})
+    intervals = pd.read_csv(tmp_path / regime_cards.AUC_FILE)
+    assert list(intervals.columns) == list(regime_cards.AUC_COLUMNS)
+    assert intervals["dataset"].tolist() == ["CAD", "MRC"]
+    assert intervals["appearance_auc_low"].tolist() == [0.9, 0.9]
     table = pd.read_csv(path)
     assert list(table.columns) == list(regime_cards.COLUMNS)
     assert table["dataset"].tolist() == ["CAD", "MRC"]

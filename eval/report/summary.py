@@ -4,9 +4,10 @@ from a results directory and returns the table's lines, or ``[]`` when the file 
 lacks what the table needs: a results folder written by another version of the code shortens
 the page, it never stops it being written.
 
-Nothing here picks a "best" matcher for a study whose protocol chooses on validation: the V2X,
-multi-agent and transfer tables show fixed columns (matchers, fusions, models), and the report's
-own verdict lines stay in the report.
+Every builder takes the folder and its claims (``claims.csv``, :mod:`eval.protocol.claims`):
+a comparative cell (a rank, a rival, a leader) is a claim's statement, chosen on validation; the
+V2X, multi-agent and transfer tables show fixed columns (matchers, fusions, models), and the
+report's own verdict lines stay in the report.
 """
 
 from __future__ import annotations
@@ -56,66 +57,69 @@ def _row(cells: list[str]) -> str:
     return row(cells)
 
 
-def table1(results: Path) -> list[str]:
-    """Per dataset: maximin's F1 and rank among the paper's methods (the paper's own rank of it
-    by accuracy beside), the strongest other paper method and maximin − it with its interval, and
-    the strongest matcher of all — under the equal-cue protocol (``table1_equal_cues.csv``) when
-    the folder has it, else as published (``table1.csv``)."""
+def _claims_of(claims: pd.DataFrame | None, study: str) -> pd.DataFrame:
+    if claims is None or not len(claims):
+        return pd.DataFrame(columns=["study", "subject", "comparison", "metric", "statement"])
+    return claims[claims["study"] == study]
+
+
+def table1(results: Path, claims: pd.DataFrame | None = None) -> list[str]:
+    """Per dataset: maximin's F1 and its rank among the paper's methods with the rank's episode
+    interval (the paper's own rank of it by accuracy beside), the other paper method of highest
+    *validation* F1 and maximin − it on test with its interval, and the matcher of highest
+    validation F1 of all — each comparative cell a claim's statement (``claims``, study
+    "table1") — under the equal-cue protocol (``table1_equal_cues.csv``) when the folder has it,
+    else as published (``table1.csv``)."""
     results = Path(results)
     suffix = "_equal_cues" if (results / "table1_equal_cues.csv").is_file() else ""
+    protocol = "equal cues" if suffix else "as published"
     table = read_csv(results / f"table1{suffix}.csv")
     if not _has(table, "dataset", "matcher", "f1_mean"):
         return []
-    paired = read_csv(results / f"paired_differences{suffix}.csv")
+    said = _claims_of(claims, "table1")
     lines = [
-        "| Dataset | Maximin F1 | its rank of the paper's 8 (paper's) | best other paper method "
-        "| Maximin − it, F1 [95 % CI] | best of all matchers |",
+        "| Dataset | Maximin F1 | its rank of the paper's 8 [95 % CI] (paper's) | other paper "
+        "method of highest validation F1 | Maximin − it, F1 [95 % CI] | highest validation F1 "
+        "of all matchers |",
         "|:---|---:|---:|:---|---:|:---|",
     ]
     for dataset in sorted(table["dataset"].unique(), key=dataset_order):
         rows = table[table["dataset"] == dataset].set_index("matcher")
-        paper = rows[rows.index.isin(list(PAPER_NAMES))].sort_values("f1_mean", ascending=False)
+        paper = rows[rows.index.isin(list(PAPER_NAMES))]
         if "maximin" not in paper.index:
             continue
-        ranks = list(paper.index)
-        rank = f"{ranks.index('maximin') + 1} of {len(ranks)}"
+        mine = said[said["subject"] == f"maximin on {dataset} ({protocol})"]
+        rank = mine[mine["metric"] == "rank_f1"]
+        cell = str(rank["statement"].iloc[0]) if len(rank) else "–"
         if "paper_accuracy_mean" in paper.columns and paper["paper_accuracy_mean"].notna().any():
             by_paper = paper["paper_accuracy_mean"].dropna().sort_values(ascending=False)
             if "maximin" in by_paper.index:
-                rank += f" ({list(by_paper.index).index('maximin') + 1})"
-        rivals = [m for m in ranks if m != "maximin"]
-        rival = rivals[0] if rivals else None
-        interval = "–"
-        if rival and _has(paired, "dataset", "matcher_b", "metric", "diff", "ci_low", "ci_high"):
-            hit = paired[
-                (paired["dataset"] == dataset)
-                & (paired["matcher_b"] == rival)
-                & (paired["metric"] == "f1")
-            ]
-            if len(hit):
-                r = hit.iloc[0]
-                interval = (
-                    f"{100 * r['diff']:+.1f} [{100 * r['ci_low']:+.1f}, {100 * r['ci_high']:+.1f}]"
-                )
-        best = rows["f1_mean"].idxmax()
+                cell += f" ({list(by_paper.index).index('maximin') + 1})"
+        rival = mine[mine["metric"] == "f1"]
+        rival_cell, interval = "–", "–"
+        if len(rival):
+            name = str(rival["comparison"].iloc[0])
+            rival_cell = f"{method_name(name)} {pct(rows.loc[name, 'f1_mean'])}"
+            interval = str(rival["statement"].iloc[0])
+        best = said[said["subject"] == f"{dataset} ({protocol})"]
         lines.append(
             _row(
                 [
                     dataset,
                     pct(paper.loc["maximin", "f1_mean"]),
-                    rank,
-                    f"{method_name(rival)} {pct(paper.loc[rival, 'f1_mean'])}" if rival else "–",
+                    cell,
+                    rival_cell,
                     interval,
-                    f"{method_name(best)} {pct(rows.loc[best, 'f1_mean'])}",
+                    str(best["statement"].iloc[0]) if len(best) else "–",
                 ]
             )
         )
     return lines if len(lines) > 2 else []
 
 
-def noise(results: Path) -> list[str]:
+def noise(results: Path, claims: pd.DataFrame | None = None) -> list[str]:
     """Per swept dataset: F1 of maximin and its two rivals at the lowest and the highest noise
-    rate, and the F1 leader at each end."""
+    rate, and the F1 leader at each end — a labelled point value (the "fig4" claims)."""
     runs = read_csv(Path(results) / "noise_runs.csv")
     if not _has(runs, "dataset", "matcher", "noise_rate", "f1"):
         return []
@@ -124,23 +128,31 @@ def noise(results: Path) -> list[str]:
         return []
     lo, hi = rates[0], rates[-1]
     shown = [m for m in NOISE_MATCHERS if m in set(runs["matcher"])]
+    said = _claims_of(claims, "fig4")
     lines = [
         "| Dataset | "
         + " | ".join(f"{method_name(m)} F1, {lo:g} → {hi:g}" for m in shown)
-        + f" | F1 leader at {lo:g} | at {hi:g} |",
+        + f" | F1 leader at {lo:g} (point value) | at {hi:g} (point value) |",
         "|:---|" + "---:|" * len(shown) + ":---|:---|",
     ]
     for dataset, rows in runs.groupby("dataset", sort=False):
         means = rows[rows["matcher"] != "none"].groupby(["noise_rate", "matcher"])["f1"].mean()
         cells = [f"{pct(means.get((lo, m)))} → {pct(means.get((hi, m)))}" for m in shown]
-        leaders = [
-            method_name(str(means.loc[r].idxmax())) if r in means.index else "–" for r in (lo, hi)
-        ]
+        mine = said[said["subject"].str.endswith(f" on {dataset}")]
+        leaders = []
+        for rate in (lo, hi):
+            hit = mine[mine["comparison"] == f"F1 leader at noise rate {rate:g}"]
+            leaders.append(
+                f"{method_name(str(hit['subject'].iloc[0]).rsplit(' on ', 1)[0])} "
+                f"{pct(hit['value'].iloc[0])}"
+                if len(hit)
+                else "–"
+            )
         lines.append(_row([str(dataset), *cells, *leaders]))
     return lines
 
 
-def external(results: Path, top: int = 2) -> list[str]:
+def external(results: Path, claims: pd.DataFrame | None = None, top: int = 2) -> list[str]:
     """The external DMGM pairs: the strongest matchers without and with the prior (pooled F1,
     as the full table sorts them), maximin's rows and the published DMGM figure."""
     table = read_csv(Path(results) / "table_external.csv")
@@ -176,7 +188,7 @@ def external(results: Path, top: int = 2) -> list[str]:
     return lines if len(lines) > 2 else []
 
 
-def v2x(results: Path) -> list[str]:
+def v2x(results: Path, claims: pd.DataFrame | None = None) -> list[str]:
     """CAD-V2X: F1 per localisation preset of a fixed set of matchers."""
     table = read_csv(Path(results) / "table_v2x.csv")
     if not _has(table, "matcher", "preset", "f1_mean"):
@@ -223,7 +235,7 @@ def _boxes_best(results: Path) -> dict[str, str]:
 TEMPORAL_METHODS = ("windowed:consistency", "temporal_pose")
 
 
-def temporal(results: Path) -> list[str]:
+def temporal(results: Path, claims: pd.DataFrame | None = None) -> list[str]:
     """CAD-V2X sequences: pooled F1 at W = 1 and W = 10 of a fixed pair of methods, per preset
     (:data:`~eval.core.abstention.NO_NUMBER` where a method cannot run)."""
     table = read_csv(Path(results) / "table_temporal.csv")
@@ -245,7 +257,9 @@ def temporal(results: Path) -> list[str]:
     return lines
 
 
-def multiagent(results: Path, preset: str = "gnss-urban") -> list[str]:
+def multiagent(
+    results: Path, claims: pd.DataFrame | None = None, preset: str = "gnss-urban"
+) -> list[str]:
     """CAD-multi at the largest number of agents (under ``preset`` when it was run): pooled
     pairwise F1 of every two-view matcher under every fusion."""
     table = read_csv(Path(results) / "table_multiagent.csv")
@@ -270,7 +284,7 @@ def multiagent(results: Path, preset: str = "gnss-urban") -> list[str]:
     return lines
 
 
-def transfer(results: Path) -> list[str]:
+def transfer(results: Path, claims: pd.DataFrame | None = None) -> list[str]:
     """Learned matchers on the external test set (DMGM's when present): pooled F1 per training
     set and matcher, the hand-crafted reference the study compares each matcher with below."""
     table = read_csv(Path(results) / "table_transfer.csv")

@@ -43,6 +43,7 @@ from eval.core.result_files import write_csv, write_text
 from eval.core.runner import Runner, requests_for
 from eval.core.tasks import MatcherSpec, PairOutcome
 from eval.protocol.calibration import calibrate, predictions
+from eval.protocol.claims import measurement_line
 from eval.protocol.goal_verdict import NOT_SHOWN, goal_line
 from eval.protocol.holm import holm
 from eval.protocol.multiway_metrics import (
@@ -590,18 +591,12 @@ def _time_lines(table: pd.DataFrame, stage_s: float | None) -> list[str]:
         )
     if stage_s is not None:  # given only from a cold run (eval.readme_results)
         lines.append(
-            goal_line(
-                "this table's stages ≤ 2 min cold",
-                stage_s,
-                stage_s,  # a measured time, not an estimate: no sampling interval
+            measurement_line(
+                "this table's stages (generation and runs)",
                 stage_s,
                 120.0,
-                at_least=False,
-                scale=1.0,
-                digits=0,
-                unit=" s",
-                detail="measured in the last cold run (results/cold_run.json): generation and runs",
-            ).replace(f" [{stage_s:.0f}, {stage_s:.0f}]", "")
+                "last cold run, results/cold_run.json",
+            )
         )
     return lines
 

@@ -4,7 +4,9 @@ separates true from false candidate pairs, and how far covisible objects' positi
 
 The numbers come from ``cadsim.dataset.regime.dataset_regime`` (the one implementation, also behind
 ``cadsim info --json``); this module writes them as ``regime.csv`` (one row per dataset, key
-column ``dataset``) and as the Markdown table the README shows beside Table I.
+column ``dataset``) and as the Markdown table the README shows beside Table I. Beside it,
+``regime_auc_intervals.csv``: the appearance and image-only AUCs with their episode-bootstrap
+95 % intervals (:mod:`eval.protocol.auc_interval`), which the appearance-realism goals read.
 """
 
 from __future__ import annotations
@@ -12,9 +14,11 @@ from __future__ import annotations
 from collections.abc import Mapping
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from eval.core.keyed_csv import upsert_csv
+from eval.protocol.auc_interval import episode_auc_interval
 
 COLUMNS = (
     "dataset",
@@ -53,15 +57,57 @@ def regime_of(path: str | Path) -> dict:
     return regime.dataset_regime(dataset) | {"lidar_false_positive_sources": sources}
 
 
+AUC_FILE = "regime_auc_intervals.csv"
+AUC_COLUMNS = (
+    "dataset",
+    "appearance_auc",
+    "appearance_auc_low",
+    "appearance_auc_high",
+    "image_auc",
+    "image_auc_low",
+    "image_auc_high",
+    "episodes",
+)
+
+
+def auc_intervals_of(path: str | Path) -> dict:
+    """The pooled appearance (whole feature) and image-only AUCs of the dataset at ``path``
+    over every candidate pair, each with its episode-bootstrap 95 % interval."""
+    from cadsim.dataset import Dataset
+    from cadsim.dataset.regime import cosine_similarity, image_similarity
+
+    scores: dict[int, list[list[np.ndarray]]] = {}
+    for pair in Dataset(path, verify=True):
+        gt = np.asarray(pair.gt_pairs, dtype=np.int64).reshape(-1, 2)
+        f1, f2 = pair.view1.features, pair.view2.features
+        whole, image = cosine_similarity(f1, f2), image_similarity(f1, f2)
+        true = np.zeros(whole.shape, dtype=bool)
+        true[gt[:, 0], gt[:, 1]] = True
+        lists = scores.setdefault(pair.episode, [[], [], [], []])
+        for k, values in enumerate((whole[true], whole[~true], image[true], image[~true])):
+            lists[k].append(values)
+    episodes = [[np.concatenate(v) for v in scores[e]] for e in sorted(scores)]
+    row: dict = {"episodes": len(episodes)}
+    for name, (t, f) in (("appearance_auc", (0, 1)), ("image_auc", (2, 3))):
+        auc, low, high = episode_auc_interval([e[t] for e in episodes], [e[f] for e in episodes])
+        row |= {name: auc, f"{name}_low": low, f"{name}_high": high}
+    return row
+
+
 def write_regime(out_dir: str | Path, datasets: Mapping[str, str | Path]) -> Path:
     """Rows for `datasets` ({table label: test dataset directory}) into ``out_dir/regime.csv``
-    (other datasets' rows kept); returns its path."""
-    rows = []
+    and their AUC intervals into ``out_dir/regime_auc_intervals.csv`` (other datasets' rows
+    kept); returns the first's path."""
+    rows, intervals = [], []
     for label, path in datasets.items():
         regime = regime_of(path)
         rows.append({"dataset": label} | {c: regime.get(c) for c in COLUMNS[1:]})
+        intervals.append({"dataset": label} | auc_intervals_of(path))
     path = Path(out_dir) / "regime.csv"
     upsert_csv(path, pd.DataFrame(rows, columns=list(COLUMNS)).round(4))
+    upsert_csv(
+        Path(out_dir) / AUC_FILE, pd.DataFrame(intervals, columns=list(AUC_COLUMNS)).round(4)
+    )
     return path
 
 

@@ -54,8 +54,9 @@ import pandas as pd
 from eval.core.result_files import write_csv, write_text
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
+from eval.protocol.claims import measurement_line
 from eval.protocol.cluster_interval import t_interval
-from eval.protocol.goal_verdict import goal_line, verdict
+from eval.protocol.goal_verdict import goal_line
 from eval.protocol.metrics import summarise_pooled
 from eval.protocol.model_options import with_model
 from eval.protocol.variants import MAIN, variant_path
@@ -674,7 +675,10 @@ def _clusters_text(row: pd.Series | None, lead: str = "95 % cluster t-interval o
     if not math.isfinite(count) or not isinstance(unit, str):
         return "95 % cluster t-interval"
     plural = unit.replace("block", "blocks", 1) if unit.startswith("block") else unit + "s"
-    return f"{lead} {int(count)} {plural if int(count) != 1 else unit}"
+    text = f"{lead} {int(count)} {plural if int(count) != 1 else unit}"
+    if unit.startswith("block") and lead != "in":  # DMGM's test pairs: two sequences
+        text += " from 2 sequences (blocks of one sequence are not independent clusters)"
+    return text
 
 
 def goals(
@@ -750,11 +754,13 @@ def goals(
             )
         )
     if stage_s is not None and computed:
-        state = verdict(stage_s, stage_s, GOAL_SECONDS, at_least=False)  # a measured time
         out.append(
-            f"training and evaluation of the learned rows: {stage_s:.0f} s in the last cold run "
-            f"(results/cold_run.json), {computed} runs computed (goal ≤ {GOAL_SECONDS} s cold; a "
-            f"measurement, no sampling interval) — {state}"
+            measurement_line(
+                "training and evaluation of the learned rows",
+                stage_s,
+                GOAL_SECONDS,
+                f"last cold run, results/cold_run.json; {computed} runs computed",
+            )
         )
     elif stage_s is not None:
         out.append(

@@ -30,6 +30,7 @@ from pathlib import Path
 import pandas as pd
 
 from eval.core.tasks import MatcherSpec
+from eval.protocol.claims import measurement_line
 
 log = logging.getLogger(__name__)
 
@@ -165,7 +166,11 @@ def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[s
         *[f"- {line}." for line in _delta_line(results)],
         *(
             [
-                f"- stage time (export, import, evaluation; last cold run): {seconds:.0f} s (goal ≤ 120 s)."
+                "- "
+                + measurement_line(
+                    "stage time (export, import, evaluation)", seconds, 120.0, "last cold run"
+                )
+                + "."
             ]
             if seconds is not None
             else []
