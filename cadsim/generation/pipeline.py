@@ -467,10 +467,12 @@ def run_sequence_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
         if len(kept) < min_frames:
             return
         first = active_now["first"]
+        c = time.process_time()
         for k, rec in enumerate(kept):
             rec.sequence["frames"] = len(kept)
             if write_record(out, layout.record_name(e, first + k), encode_record(rec)):
                 result.new_records += 1
+        result.write_core_seconds += time.process_time() - c
         slot = first + len(kept)
         result.accepted += 1
         used.add(_observer_key(active_now["pair"]))
