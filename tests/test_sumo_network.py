@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 import sumo
 
-from cadsim.sources.sumo.build import write_person_types
 from cadsim.sources.sumo.command import sumo_run
 from cadsim.sources.sumo.config import read_sumocfg
 from cadsim.sources.sumo.network import RoadNetwork
@@ -103,14 +102,6 @@ def test_sumo_run_passes_allowlisted_options_and_confines_additional_files(tmp_p
     assert args[args.index("--seed") + 1] == "5" and args[args.index("--end") + 1] == "300"
     assert args.count("--end") == 1 and args.count("--seed") == 1
     assert run.net == (GAME / "square" / "square.net.xml").resolve()
-
-
-def test_person_types_are_split_from_the_vtypes_file(tmp_path):
-    out = tmp_path / "persons.add.xml"
-    write_person_types(ROOT / "scenarios" / "cad-vtypes.add.xml", out)
-    root = ET.parse(out).getroot()
-    assert [e.get("id") for e in root] == ["persons"]
-    assert all(t.get("vClass") == "pedestrian" for t in root.iter("vType"))
 
 
 def test_signal_heads_show_the_commonest_signal_of_their_links():

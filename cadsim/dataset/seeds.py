@@ -8,6 +8,9 @@ stream 3: detector attributes of (e, s, v)     spawn_key (3, e, s, v)   (class c
 stream 4: localisation error of (e, s, v)      spawn_key (4, e, s, v)
 stream 6: odometry of a sequence's view v      spawn_key (6, e, s0, v)  s0: the sequence's first slot
 
+SUMO's random demand (``cadsim.sources.sumo.demand``, demand model 1) is stream 9 under the
+episode's *simulation seed*: spawn_key (9, kind), kind 0 vehicles, 1 bicycles, 2 persons.
+
 Object sizes (``cadsim.object_sizes``, size model 2; SUMO sources) are drawn per object, not per
 record: stream 7 under the episode's *simulation seed* for a vehicle or person
 (spawn_key (7, crc32(id), crc32(reversed id + "#"))), the same under the *scenario seed* for

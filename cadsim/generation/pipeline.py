@@ -83,6 +83,7 @@ from cadsim.observer_pose import ObserverPose
 from cadsim.render.appearance import AppearanceConfig, exposed
 from cadsim.scenario_views import view_count
 from cadsim.sensing.odometry import Odometer, OdometryModel
+from cadsim.sources.sumo.demand import DEMAND_MODEL
 
 log = logging.getLogger(__name__)
 
@@ -161,7 +162,10 @@ class EpisodeTask:
 @dataclass
 class EpisodeResult:
     """What one episode did. accepted: records of this episode now on disk (a prefix of slots);
-    exhausted: the simulation ended before ``max_slots`` pairs were found."""
+    exhausted: the simulation ended before ``max_slots`` pairs were found. seconds,
+    render_seconds: wall clock; core_seconds: the worker process's CPU time (every thread, the
+    renderer's too) over the episode, of which view_core_seconds rendering + noise + detection
+    (or the LiDAR) of every view tried and write_core_seconds encoding and writing records."""
 
     episode: int
     sim_seed: int
@@ -174,6 +178,9 @@ class EpisodeResult:
     views: int = 0
     seconds: float = 0.0
     render_seconds: float = 0.0
+    core_seconds: float = 0.0
+    view_core_seconds: float = 0.0
+    write_core_seconds: float = 0.0
 
 
 @dataclass
@@ -286,7 +293,7 @@ def run_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
     ``task.max_slots``. ``on_record()`` is called after each record written."""
     if getattr(task.scenario, "sequence", None):
         return run_sequence_episode(task, on_record)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     out = Path(task.out)
     e = task.episode
     sim_seed = simulation_seed(task.root_seed, e)
@@ -334,8 +341,10 @@ def run_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
                 )
                 if record is None:
                     continue
+                c = time.process_time()
                 if write_record(out, layout.record_name(e, slot), encode(record)):
                     result.new_records += 1
+                result.write_core_seconds += time.process_time() - c
                 slot += 1
                 taken += 1
                 used.add(_observer_key(pair))
@@ -347,6 +356,7 @@ def run_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
             result.exhausted = True
     result.accepted = slot
     result.seconds = time.perf_counter() - t0
+    result.core_seconds = time.process_time() - c0
     summary = asdict(result)
     write_file_atomic(
         out / layout.EPISODES_DIR / layout.episode_summary_name(e), json_bytes(summary)
@@ -423,7 +433,7 @@ def run_sequence_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
     is dropped. Every frame is kept in memory until the sequence ends, then written in order,
     so that what is on disk is whole sequences (resume: :func:`_sequences_on_disk`).
     ``task.max_slots`` and ``accepted`` count sequences."""
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     out = Path(task.out)
     e = task.episode
     sim_seed = simulation_seed(task.root_seed, e)
@@ -457,10 +467,12 @@ def run_sequence_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
         if len(kept) < min_frames:
             return
         first = active_now["first"]
+        c = time.process_time()
         for k, rec in enumerate(kept):
             rec.sequence["frames"] = len(kept)
             if write_record(out, layout.record_name(e, first + k), encode_record(rec)):
                 result.new_records += 1
+        result.write_core_seconds += time.process_time() - c
         slot = first + len(kept)
         result.accepted += 1
         used.add(_observer_key(active_now["pair"]))
@@ -542,6 +554,7 @@ def run_sequence_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
                 finish()  # the simulation ended: the sequence ends short
             result.exhausted = result.accepted < task.max_slots
     result.seconds = time.perf_counter() - t0
+    result.core_seconds = time.process_time() - c0
     write_file_atomic(
         out / layout.EPISODES_DIR / layout.episode_summary_name(e), json_bytes(asdict(result))
     )
@@ -584,9 +597,10 @@ def _capture(task, stages, noise_cfg, det_cfg, snapshot, camera, observer, view,
     sensor = getattr(task.scenario, "sensor", "camera")
     lidar = None
     if sensor != "camera":
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         lidar = _lidar_observation(task, snapshot, camera, observer, seed, slot, view)
         result.render_seconds += time.perf_counter() - t
+        result.view_core_seconds += time.process_time() - c
     if sensor == "lidar":
         result.views += 1
         return ViewCapture(
@@ -595,7 +609,7 @@ def _capture(task, stages, noise_cfg, det_cfg, snapshot, camera, observer, view,
             localisation_seed(task.root_seed, task.episode, slot, view), lidar,
         )  # fmt: skip
     renderer = _renderer(task.stages, camera.width, camera.height)
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     appearance = _appearance(task.scenario)
     if hasattr(renderer, "set_lighting"):  # the episode's light (the default without a table)
         if appearance is None:
@@ -608,6 +622,7 @@ def _capture(task, stages, noise_cfg, det_cfg, snapshot, camera, observer, view,
         appearance,
     )  # fmt: skip
     result.render_seconds += time.perf_counter() - t
+    result.view_core_seconds += time.process_time() - c
     result.views += 1
     return ViewCapture(
         camera, observer, rendered.color, rendered.depth, rendered.instance, det, seed,
@@ -797,6 +812,9 @@ def _plan(scenario, out, pairs, seed, workers, max_episodes) -> _Plan:
     crit = Criteria.from_sampling(scenario.sampling)
     acceptance = {k: v for k, v in asdict(crit).items() if k != "pairs_per_episode"}
     config = generation_config(scenario, root_seed, crit.pairs_per_episode, acceptance)
+    traffic = scenario.traffic or {}
+    if traffic.get("source") == "sumo" and traffic.get("demand") is not None:
+        config["demand"] = DEMAND_MODEL  # drawn in process (cadsim.sources.sumo.demand)
     if max_episodes is None:
         max_episodes = 10 * math.ceil(n_pairs / crit.pairs_per_episode) + 10
     out = check_output_folder(out)  # new, empty or a cadsim dataset: never a user's folder

@@ -159,6 +159,13 @@ register(
 )
 register(
     lazy_section(
+        "generation",
+        "core-seconds per camera pair, per LiDAR pair and per episode (cad-v2x, cad-v2x-lidar)",
+        "eval.bench.generation:generation_section",
+    )
+)
+register(
+    lazy_section(
         "lidar",
         "LiDAR rays/s, a 64 x 1024 sweep, LiDAR pair vs camera pair",
         "eval.bench.lidar:lidar_section",

@@ -8,7 +8,9 @@ unit: the cluster-robust t-interval of :func:`eval.protocol.cluster_interval.t_i
 equal episode sizes, the t-interval on the episode means of d, G − 1 degrees of freedom). It
 replaces a percentile bootstrap over episodes whose 95 % interval covered the truth 83 % of the
 time at 5 episodes. ``episodes`` says how many there were: with few, the interval is wide; with
-one there is none.
+one there is none. ``mdd`` is the minimum detectable difference at 95 % confidence and 80 % power
+from the same per-cluster differences (:mod:`eval.protocol.detectable_difference`), ``clusters``
+the number of independent clusters it counts.
 
 Output: ``paired_differences.csv`` (:data:`COLUMNS`), maximin against every other matcher.
 """
@@ -22,6 +24,7 @@ import pandas as pd
 
 from eval.core.result_files import write_csv
 from eval.protocol.cluster_interval import t_interval
+from eval.protocol.detectable_difference import minimum_detectable_difference
 
 COLUMNS = (
     "dataset",
@@ -33,6 +36,8 @@ COLUMNS = (
     "ci_high",
     "pairs",
     "episodes",
+    "mdd",
+    "clusters",
 )
 DIFF_METRICS = ("f1", "balanced_accuracy", "recall")
 REFERENCE = "maximin"
@@ -68,9 +73,9 @@ def paired_differences(
             joined = ref.merge(rest, on="pair", suffixes=("", "_b"))
             for metric in metrics:
                 d = (joined[metric] - joined[f"{metric}_b"]).to_numpy()
-                diff, low, high, _ = t_interval(
-                    d, joined["episode"].to_numpy(), level, bounds=(-1.0, 1.0)
-                )
+                episodes = joined["episode"].to_numpy()
+                diff, low, high, _ = t_interval(d, episodes, level, bounds=(-1.0, 1.0))
+                mdd, clusters = minimum_detectable_difference(d, episodes, level)
                 rows.append(
                     {
                         "dataset": dataset,
@@ -82,6 +87,8 @@ def paired_differences(
                         "ci_high": high,
                         "pairs": len(joined),
                         "episodes": joined["episode"].nunique(),
+                        "mdd": mdd,
+                        "clusters": clusters,
                     }
                 )
     return pd.DataFrame(rows, columns=list(COLUMNS))

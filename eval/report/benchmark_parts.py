@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from eval.report.tables import PAPER_NAMES, dataset_order, method_name
@@ -33,11 +34,12 @@ def _interval(row) -> str:
 
 
 def paired_markdown(table: pd.DataFrame) -> str:
-    """One row per (dataset, rival): maximin − rival in F1, balanced accuracy and recall (pp)."""
+    """One row per (dataset, rival): maximin − rival in F1, balanced accuracy and recall (pp),
+    and the minimum detectable ΔF1 (95 % confidence, 80 % power; "–" in files without it)."""
     lines = [
-        "| Dataset | maximin − | ΔF1 [95 % CI] | Δ balanced acc. [95 % CI] | Δ recall [95 % CI] |"
-        " episodes |",
-        "|:---|:---|---:|---:|---:|---:|",
+        "| Dataset | maximin − | ΔF1 [95 % CI] | ΔF1 MDD | Δ balanced acc. [95 % CI] "
+        "| Δ recall [95 % CI] | episodes |",
+        "|:---|:---|---:|---:|---:|---:|---:|",
     ]
     datasets = sorted(table["dataset"].unique(), key=dataset_order)
     for dataset in datasets:
@@ -48,6 +50,9 @@ def paired_markdown(table: pd.DataFrame) -> str:
                 _interval(by_metric[m]) if m in by_metric else "–"
                 for m in ("f1", "balanced_accuracy", "recall")
             ]
+            f1 = by_metric.get("f1")
+            mdd = float(f1["mdd"]) if f1 is not None and "mdd" in f1 else float("nan")
+            cells.insert(1, f"{100 * mdd:.1f}" if np.isfinite(mdd) else "–")
             episodes = int(group["episodes"].iloc[0])
             lines.append(
                 f"| {dataset} | {method_name(rival)} | " + " | ".join(cells) + f" | {episodes} |"
@@ -128,7 +133,8 @@ def paired_part(results: Path, rel: str) -> list[str]:
             "",
             "Runs averaged per frame pair; the 95 % interval is a cluster-robust t-interval with "
             "the simulation episode as the unit (frame pairs of one episode are correlated; "
-            "`episodes` says how many): "
+            "`episodes` says how many); MDD: the smallest ΔF1 these episodes detect at 95 % "
+            "confidence and 80 % power: "
             f"[{rel}/paired_differences{suffix}.csv]({rel}/paired_differences{suffix}.csv).",
             "",
         ]

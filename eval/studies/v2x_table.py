@@ -46,6 +46,7 @@ from eval.core.tasks import MatcherSpec
 from eval.protocol import tuning
 from eval.protocol.claims import difference_verdict
 from eval.protocol.cluster_interval import t_interval
+from eval.protocol.detectable_difference import minimum_detectable_difference
 from eval.protocol.goal_verdict import goal_line
 from eval.protocol.metrics import summarise_pooled, summarise_runs
 from eval.studies.evaluation import chosen_specs, evaluate, open_entry
@@ -87,6 +88,8 @@ INTERVAL_COLUMNS = (
     "ci_high",
     "pairs",
     "episodes",
+    "mdd",
+    "clusters",
 )
 
 
@@ -313,7 +316,9 @@ def best_against_runner_up(
 ) -> pd.DataFrame:
     """Per preset: the matcher of highest validation F1 (``validation``: {preset: {matcher: val
     F1}}) against the second, the mean per-pair *test* F1 difference (runs averaged first) and
-    its cluster t-interval over episodes. Matchers that cannot run under the preset are in no
+    its cluster t-interval over episodes, with the minimum detectable difference (``mdd``, 95 %
+    confidence, 80 % power; :mod:`eval.protocol.detectable_difference`) over its ``clusters``.
+    Matchers that cannot run under the preset are in no
     comparison (:func:`ranked_on_validation`)."""
     rows = []
     for preset, group in per_pair.groupby("preset", sort=False):
@@ -330,11 +335,13 @@ def best_against_runner_up(
             means[means["matcher"] == second], on="pair", suffixes=("", "_b")
         )
         d = (joined["f1"] - joined["f1_b"]).to_numpy()
-        diff, low, high, _ = t_interval(d, joined["episode"].to_numpy(), level, bounds=(-1.0, 1.0))
+        episodes = joined["episode"].to_numpy()
+        diff, low, high, _ = t_interval(d, episodes, level, bounds=(-1.0, 1.0))
+        mdd, clusters = minimum_detectable_difference(d, episodes, level)
         rows.append(
             {"preset": preset, "best": best, "runner_up": second, "f1_diff": diff}
             | {"ci_low": low, "ci_high": high, "pairs": len(joined)}
-            | {"episodes": joined["episode"].nunique()}
+            | {"episodes": joined["episode"].nunique(), "mdd": mdd, "clusters": clusters}
         )
     return pd.DataFrame(rows, columns=list(INTERVAL_COLUMNS))
 
@@ -394,10 +401,11 @@ def to_markdown(table: pd.DataFrame, intervals: pd.DataFrame, label: str) -> str
     lines += [
         "",
         "Best against runner-up, both chosen by validation F1 (test F1, percentage points; 95 % "
-        "cluster t-interval over episodes):",
+        "cluster t-interval over episodes; MDD: the smallest difference these clusters detect at "
+        "95 % confidence and 80 % power):",
         "",
-        "| Preset | Best | Runner-up | Difference | Interval | Episodes |",
-        "|:---|:---|:---|---:|---:|---:|",
+        "| Preset | Best | Runner-up | Difference | Interval | MDD | Episodes |",
+        "|:---|:---|:---|---:|---:|---:|---:|",
     ]
     for row in intervals.itertuples(index=False):
         interval = (
@@ -405,9 +413,10 @@ def to_markdown(table: pd.DataFrame, intervals: pd.DataFrame, label: str) -> str
             if np.isfinite(row.ci_low) and np.isfinite(row.ci_high)
             else "– (one episode)"
         )
+        mdd = getattr(row, "mdd", float("nan"))  # absent from files written before it
         lines.append(
             f"| {row.preset} | {row.best} | {row.runner_up} | {100 * row.f1_diff:+.1f} "
-            f"| {interval} | {row.episodes} |"
+            f"| {interval} | {_cell(mdd)} | {row.episodes} |"
         )
     return "\n".join(lines)
 

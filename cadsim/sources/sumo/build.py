@@ -1,8 +1,8 @@
-"""Building a scenario's network (netgenerate) and random demand (randomTrips) at run time.
+"""Building a scenario's network (netgenerate) at run time (its random demand:
+:mod:`cadsim.sources.sumo.demand`, in process).
 
-Everything is written under a cache folder (``workdir``), in a sub-folder named by a hash of the
-inputs (parameters, input file contents, seed, SUMO version), so a second run with the same inputs
-reuses it. A folder is built under a temporary name and renamed into place, so parallel workers
+The network is written under a cache folder (``workdir``), in a sub-folder named by a hash of the
+inputs (parameters, SUMO version), so a second run with the same inputs reuses it. A folder is built under a temporary name and renamed into place, so parallel workers
 that build the same folder at once never see a half-written one. The SUMO binaries and tools are
 those of the installed eclipse-sumo wheel.
 """
@@ -15,18 +15,12 @@ import logging
 import os
 import shutil
 import subprocess
-import sys
 import tempfile
-import xml.etree.ElementTree as ET
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
-from cadsim.sources.sumo.install import binary, sumo_env, sumo_home, sumo_version
+from cadsim.sources.sumo.install import binary, sumo_env, sumo_version
 from cadsim.sources.sumo.options import check_netgenerate_args
-from cadsim.sources.sumo.xml_files import parse_xml
 
 log = logging.getLogger(__name__)
 
@@ -35,18 +29,9 @@ BUILTIN_TYPES = {"DEFAULT_VEHTYPE", "DEFAULT_PEDTYPE", "DEFAULT_BIKETYPE", "DEFA
 
 
 class ToolFailed(RuntimeError):
-    """netgenerate or randomTrips exited with an error (its output's last lines say why)."""
+    """netgenerate failed (its output's last lines say why), or a demand cannot be drawn."""
 
     user_error = True  # a scenario's options or inputs, not a bug (cadsim.user_errors)
-
-
-@dataclass(frozen=True)
-class Demand:
-    """Files of generated demand: route files for sumo ``-r`` and additional files (vTypes that
-    route files refer to but do not contain) for sumo ``-a``."""
-
-    routes: list[Path]
-    additional: list[Path]
 
 
 def build_network(params: dict, workdir: Path) -> Path:
@@ -89,99 +74,6 @@ def netgenerate_args(params: dict) -> list[str]:
     extra = list(params["extra_args"])
     check_netgenerate_args(extra)  # the scenario check refuses these first; never run them
     return args + extra
-
-
-def build_demand(net: Path, demand: dict, seed: int, workdir: Path) -> Demand:
-    """Random trips for motor vehicles, bicycles and pedestrians (randomTrips, seeded), routed
-    with duarouter; pedestrians walk from/to edges routed by sumo at departure."""
-    vtypes = Path(demand["vtypes"])
-    key = content_hash(
-        {
-            "net": file_hash(net),
-            "vtypes": file_hash(vtypes),
-            "demand": {k: v for k, v in demand.items() if k != "vtypes"},
-            "seed": seed,
-            "sumo": sumo_version(),
-        }
-    )
-    seeds = [int(s) % 2**31 for s in np.random.SeedSequence(seed).generate_state(3)]
-    common = ["-n", str(net), "-e", str(demand["end"]), "--fringe-factor", "max"]
-    jobs: dict[str, list[str]] = {
-        "vehicles": [
-            *common,
-            *["-p", str(demand["vehicle_period"]), "--seed", str(seeds[0]), "--prefix", "veh"],
-            *["--validate", "--additional-files", str(vtypes)],
-            "--trip-attributes",
-            f'type="{demand["vehicle_type"]}" departLane="best" departSpeed="max"',
-        ],
-    }
-    if demand["bicycle_period"] > 0:
-        jobs["bicycles"] = [
-            *common,
-            *["-p", str(demand["bicycle_period"]), "--seed", str(seeds[1]), "--prefix", "bike"],
-            *["--validate", "--vclass", "bicycle", "--additional-files", str(vtypes)],
-            "--trip-attributes",
-            f'type="{demand["bicycle_type"]}" departLane="best"',
-        ]
-    if demand["person_period"] > 0:
-        jobs["persons"] = [
-            *common,
-            *["-p", str(demand["person_period"]), "--seed", str(seeds[2]), "--prefix", "ped"],
-            "--pedestrians",
-            "--trip-attributes",
-            f'type="{demand["person_type"]}"',
-        ]
-
-    def build(tmp: Path) -> None:
-        tool = sumo_home() / "tools" / "randomTrips.py"
-        procs = {}
-        for name, args in jobs.items():
-            out = ["-o", str(tmp / f"{name}.trips.xml")]
-            if name != "persons":
-                out += ["-r", str(tmp / f"{name}.rou.xml")]
-            procs[name] = subprocess.Popen(
-                [sys.executable, str(tool), *args, *out],
-                cwd=tmp,
-                env=sumo_env(),
-                stdout=subprocess.PIPE,
-                stderr=subprocess.STDOUT,
-                text=True,
-            )
-        for name, proc in procs.items():
-            output, _ = proc.communicate()
-            if proc.returncode != 0:
-                raise ToolFailed(f"randomTrips ({name}) failed: {_tail(output)}")
-        write_person_types(vtypes, tmp / "persons.add.xml")
-
-    folder = cached_folder(Path(workdir) / f"demand-{key}", build)
-    routes = [folder / f"{n}.rou.xml" for n in ("vehicles", "bicycles") if n in jobs]
-    if "persons" in jobs:
-        routes.append(folder / "persons.trips.xml")
-    return Demand(routes=routes, additional=[folder / "persons.add.xml"])
-
-
-def write_person_types(vtypes: Path, out: Path) -> None:
-    """Copy the pedestrian vTypes and vTypeDistributions of ``vtypes`` into ``out``.
-
-    duarouter copies only the vTypes that routed vehicles use into its route files; pedestrian
-    trips are left to sumo, so their types must be loaded separately (and loading the vehicle
-    types twice is an error in sumo)."""
-    root = parse_xml(vtypes).getroot()
-    types = {e.get("id"): e for e in root if e.tag == "vType"}
-    pedestrian = {i for i, e in types.items() if e.get("vClass") == "pedestrian"}
-    keep = [e for i, e in types.items() if i in pedestrian]
-    for dist in (e for e in root if e.tag == "vTypeDistribution"):
-        members = [c for c in dist if c.tag == "vType"]
-        refs = (dist.get("vTypes") or "").split()
-        if (
-            (members or refs)
-            and all(c.get("vClass") == "pedestrian" for c in members)
-            and all(r in pedestrian for r in refs)
-        ):
-            keep.append(dist)
-    out_root = ET.Element("additional")
-    out_root.extend(keep)
-    ET.ElementTree(out_root).write(out, encoding="unicode")
 
 
 def cached_folder(target: Path, build: Callable[[Path], None]) -> Path:

@@ -14,9 +14,10 @@ import logging
 from dataclasses import dataclass
 from pathlib import Path
 
-from cadsim.sources.sumo.build import build_demand, build_network
+from cadsim.sources.sumo.build import build_network
 from cadsim.sources.sumo.config import read_sumocfg
 from cadsim.sources.sumo.confinement import confined_files
+from cadsim.sources.sumo.demand import write_demand
 from cadsim.sources.sumo.options import sumo_time, sumocfg_options
 
 log = logging.getLogger(__name__)
@@ -33,7 +34,8 @@ class SumoRun:
 
 
 def sumo_run(traffic: dict, seed: int, workdir: Path, run_dir: Path, end: float | None) -> SumoRun:
-    """Build the net/demand if the scenario generates them (cached in ``workdir``) and assemble
+    """Build the net (cached in ``workdir``) and draw the demand (into ``run_dir``) if the scenario
+    generates them, and assemble
     the arguments. ``run_dir``: this simulation's private folder for confined inputs and
     outputs. Raises ``OptionError``/``ConfinementError`` (ValueErrors) for a sumocfg option or an
     XML file that cannot be run confined (the scenario check refuses those first)."""
@@ -54,7 +56,7 @@ def sumo_run(traffic: dict, seed: int, workdir: Path, run_dir: Path, end: float 
     else:
         net = Path(traffic["net"]) if traffic["net"] else build_network(traffic["network"], workdir)
         if traffic["demand"] is not None:
-            demand = build_demand(net, traffic["demand"], seed, workdir)
+            demand = write_demand(net, traffic["demand"], seed, run_dir)
             routes = [*demand.routes, *routes]
             additional = [*demand.additional, *additional]
     # Every file SUMO loads goes through the run folder, the network too: an actuated traffic

@@ -221,7 +221,7 @@ def _check_confinable(path: str, ctx: ScenarioContext, key: str) -> None:
 
 
 def _check_trip_counts(demand: dict, ctx: ScenarioContext, key: str) -> None:
-    """randomTrips writes end / period trips per kind: bounded by MAX_TRIPS."""
+    """The demand holds end / period trips per kind: bounded by MAX_TRIPS."""
     for kind in ("vehicle", "bicycle", "person"):
         period, end = demand[f"{kind}_period"], demand["end"]
         if period > 0 and end / period > MAX_TRIPS:
