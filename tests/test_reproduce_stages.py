@@ -48,7 +48,7 @@ def test_scale_1_is_the_sizes_the_options_give():
     args = reproduce.build_parser().parse_args(["--pairs", "3", "--sweep-pairs", "0"])
     sizes = reproduce.planned_sizes(args)
     assert [d[1:] for d in sizes.datasets] == [(3, 3)] * len(sizes.datasets)
-    assert sizes.v2x == {"test": 3, "val": 3, "train": 6} and sizes.temporal["test"] == 3
+    assert sizes.v2x == {"test": 3, "val": 3, "train": 3} and sizes.lidar == {"test": 3, "val": 3} and sizes.temporal["test"] == 3
     assert sizes.sweep is None  # 0: every test pair, at any scale
     assert sizes.data_root(Path("data")) == Path("data")
     assert replace(sizes, scale=3).data_root(Path("data")) == Path("data/scale-3")
@@ -70,9 +70,9 @@ def test_every_declared_skip_is_an_option_and_names_its_stages():
     assert "temporal_generate and temporal" in helps["--no-temporal"]
 
 
-def test_the_declarations_are_unique_and_within_the_fifteen_minute_goal():
+def test_the_declarations_are_unique_and_within_the_thirty_minute_goal():
     assert len(set(NAMES)) == len(NAMES) and NAMES[-1] == "tables_figures"
-    assert sum(stage.budget_s for stage in STAGES) <= 15 * 60
+    assert sum(stage.budget_s for stage in STAGES) <= 30 * 60
     assert all(stage.budget_s > 0 and stage.writes for stage in STAGES)
 
 

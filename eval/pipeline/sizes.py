@@ -54,9 +54,10 @@ EXTERNAL_TUNE_PAIRS = 0
 # localisation sweep's preset axes (error scale, latency) with CAD's tuned parameters, τ per level.
 V2X_SCENARIO = "scenarios/cad-v2x.toml"
 V2X_LABEL = "CAD-V2X"
-V2X_PAIRS = 25
+V2X_PAIRS = 100  # test: one pair per episode (the scenarios' pairs_per_episode = 1), 100 clusters
+V2X_VAL_PAIRS = 50
 V2X_TRAIN_SEED_OFFSET = 2000
-V2X_TRAIN_FACTOR = 2
+V2X_TRAIN_FACTOR = 1
 V2X_RUNS = 3
 # Multi-agent (cad-multi: 4 vehicles + 2 roadside units per snapshot): test and validation
 # snapshots on disjoint scenario seeds, two-view matchers on every pair of views, fused per
@@ -85,14 +86,14 @@ class SplitSizes:
     """Every split's size for one run, scale applied. ``datasets``: per Table I scenario (in
     order) its label and (test, validation) pairs; ``spread``: pairs of each extra spread dataset;
     ``v2x``, ``multiagent``, ``temporal``: per split (test, val[, train]); ``lidar``: pairs of each
-    two-sensor split; ``cad_train``: CAD's training pairs; ``sweep``, ``regime``,
+    two-sensor split (test, val); ``cad_train``: CAD's training pairs; ``sweep``, ``regime``,
     ``localisation``: the first N test pairs those sweeps use (None: all)."""
 
     scale: int
     datasets: tuple[tuple[str, int, int], ...]
     spread: int
     v2x: dict[str, int]
-    lidar: int
+    lidar: dict[str, int]
     multiagent: dict[str, int]
     temporal: dict[str, int]
     cad_train: int
@@ -116,7 +117,7 @@ class SplitSizes:
             ],
             "dataset_spread": {"pairs": self.spread},
             "v2x": {split: {"pairs": n} for split, n in self.v2x.items()}
-            | {"lidar": {split: {"pairs": self.lidar} for split in ("test", "val")}},
+            | {"lidar": {split: {"pairs": n} for split, n in self.lidar.items()}},
             "multiagent": {split: {"snapshots": n} for split, n in self.multiagent.items()},
             "temporal": {split: {"sequences": n} for split, n in self.temporal.items()},
             "transfer": {"cad_train": {"pairs": self.cad_train}},
@@ -147,12 +148,13 @@ def plan_sizes(args: argparse.Namespace, scenarios: Sequence[tuple[str, int]]) -
         unscaled.append((label, pairs, args.val_pairs or min(DEFAULT_VAL_PAIRS, pairs)))
     spread_test = next((test for label, test, _ in unscaled if label == SPREAD_DATASET), 0)
     v2x = _capped(args.pairs, V2X_PAIRS) * k
+    v2x_val = _capped(args.pairs, V2X_VAL_PAIRS) * k
     return SplitSizes(
         scale=k,
         datasets=tuple((label, test * k, val * k) for label, test, val in unscaled),
         spread=min(args.spread_pairs, spread_test) * k,
-        v2x={"test": v2x, "val": v2x, "train": V2X_TRAIN_FACTOR * v2x},
-        lidar=v2x,
+        v2x={"test": v2x, "val": v2x_val, "train": V2X_TRAIN_FACTOR * v2x},
+        lidar={"test": v2x, "val": v2x_val},
         multiagent={
             "test": _capped(args.pairs, MA_TEST_SNAPSHOTS) * k,
             "val": _capped(args.pairs, MA_VAL_SNAPSHOTS) * k,

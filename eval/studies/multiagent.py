@@ -72,8 +72,8 @@ from matchers.fusion.universe import canonical_labels, components
 
 SCENARIO = "scenarios/cad-multi.toml"
 LABEL = "CAD-multi"
-TEST_SNAPSHOTS = 20
-VAL_SNAPSHOTS = 10
+TEST_SNAPSHOTS = 60
+VAL_SNAPSHOTS = 30
 SUBSETS: dict[int, tuple[int, ...]] = {
     2: (1, 2),
     3: (1, 2, 5),

@@ -86,8 +86,8 @@ log = logging.getLogger(__name__)
 
 LABEL = "CAD-V2X-Seq"
 SCENARIO = "scenarios/cad-v2x-seq.toml"
-TEST_SEQUENCES = 20
-VAL_SEQUENCES = 10
+TEST_SEQUENCES = 40
+VAL_SEQUENCES = 20
 PRESETS = ("gnss-open-sky", "gnss-urban", "denied")
 METHODS: tuple[tuple[str, tuple[int, ...]], ...] = (
     ("windowed:consistency", (1, 3, 10)),

@@ -44,10 +44,11 @@ SCENARIO = "scenarios/cad-v2x-both.toml"
 
 
 def generate_lidar_splits(
-    root: Path, data: Path, pairs: int, val_seed_offset: int, generate: Callable
+    root: Path, data: Path, pairs: dict[str, int], val_seed_offset: int, generate: Callable
 ) -> tuple[Path, Path, dict]:
-    """The test and validation splits of :data:`SCENARIO` under ``data`` (``generate(path,
-    folder, pairs, seed)`` makes or resumes one); (test dir, val dir, what the run record keeps)."""
+    """The test and validation splits of :data:`SCENARIO` under ``data``, ``pairs[split]`` frame
+    pairs each (``generate(path, folder, n, seed)`` makes or resumes one); (test dir, val dir,
+    what the run record keeps)."""
     from cadsim.scenario import load_scenario
 
     path = root / SCENARIO
@@ -55,9 +56,10 @@ def generate_lidar_splits(
     test, val = data / "cad-v2x-both", data / "cad-v2x-both-val"
     record = {}
     for split, folder, split_seed in (("test", test, None), ("val", val, seed + val_seed_offset)):
-        log.info("[v2x lidar generate] %s %s: %d pairs", LABEL, split, pairs)
-        made = generate(path, folder, pairs, split_seed)
-        record[split] = {"dir": str(folder), "pairs": pairs, "seed": split_seed or seed}
+        n = pairs[split]
+        log.info("[v2x lidar generate] %s %s: %d pairs", LABEL, split, n)
+        made = generate(path, folder, n, split_seed)
+        record[split] = {"dir": str(folder), "pairs": n, "seed": split_seed or seed}
         record[split] |= {"new_records": made.new_records}
     return test, val, record
 
