@@ -27,9 +27,11 @@ Ground truth (:func:`linked_pairs`): each side's boxes, moved into the world, ar
 cooperative boxes where they are given, else the roadside boxes, moved into the vehicle LiDAR
 frame, directly to the vehicle's: one-to-one (Hungarian on ground-plane centre distance), same
 class only, within :data:`LINK_GATE_M`. A vehicle and a roadside box matched to one cooperative
-box (or to each other) are one object, ``c<k>``; every other box is seen by one side only
-(``v<k>``, ``i<k>``). No localisation prior is stored (the data has no noisy pose): a
-``--localisation`` preset of ``cadsim evaluate`` draws one. Episodes are ``batch_id``s (0 when
+box are one object, ``c<k>`` (k: the cooperative box); boxes of classes the cooperative label does
+not cover (:data:`COOPERATIVE_CLASSES`), and every box where it is not given, are matched side
+to side, ``s<k>``; every other box is seen by one side only (``v<k>``, ``i<k>``). No
+localisation prior is stored (the data has no noisy pose): a ``--localisation`` preset of
+``cadsim evaluate`` draws one. Episodes are ``batch_id``s (0 when
 the side ``data_info.json`` is absent), slots the frame pairs in listed order.
 """
 
@@ -72,6 +74,9 @@ LINK_GATE_M = 1.0
 frame pair checked (docs/external-data.md) the 7 covisible boxes lie 0.09–0.29 m apart after the
 calibration and the nearest box of the same class that is another object ≥ 10 m away; traffic
 cones stand about 1.3 m apart, so a gate above that could pair a cone with its neighbour."""
+COOPERATIVE_CLASSES = frozenset({"car", "truck", "van", "bus"})
+"""The classes DAIR-V2X-C's cooperative label covers; boxes of other classes are linked side to
+side even where the cooperative boxes are given."""
 _SIDES = {
     "vehicle": ("vehicle-side", "label/lidar", "v"),
     "infrastructure": ("infrastructure-side", "label/virtuallidar", "i"),
@@ -196,17 +201,24 @@ def _ids(veh_boxes, inf_boxes, vehicle, roadside, coop, gate_m) -> str:
         box["id"] = f"v{k}"
     for k, box in enumerate(inf_boxes):
         box["id"] = f"i{k}"
+    direct_v = [k for k, c in enumerate(v_cls) if coop is None or c not in COOPERATIVE_CLASSES]
+    direct_i = [k for k, c in enumerate(i_cls) if coop is None or c not in COOPERATIVE_CLASSES]
+    pairs = [
+        (direct_v[v], direct_i[i], f"s{n}")
+        for n, (v, i) in enumerate(
+            linked_pairs(v_xy[direct_v], [v_cls[k] for k in direct_v],
+                         i_xy[direct_i], [i_cls[k] for k in direct_i], gate_m)
+        )
+    ]  # fmt: skip
+    how = "side boxes"
     if coop is not None:
         c_xy, c_cls = coop
         v_of = {c: v for v, c in linked_pairs(v_xy, v_cls, c_xy, c_cls, gate_m)}
         i_of = {c: i for i, c in linked_pairs(i_xy, i_cls, c_xy, c_cls, gate_m)}
-        pairs = [(v_of[c], i_of[c], c) for c in sorted(set(v_of) & set(i_of))]
-        how = "cooperative boxes"
-    else:
-        pairs = [(v, i, n) for n, (v, i) in enumerate(linked_pairs(v_xy, v_cls, i_xy, i_cls, gate_m))]  # fmt: skip
-        how = "side boxes"
-    for v, i, c in pairs:
-        veh_boxes[v]["id"] = inf_boxes[i]["id"] = f"c{c}"
+        pairs += [(v_of[c], i_of[c], f"c{c}") for c in sorted(set(v_of) & set(i_of))]
+        how = "cooperative boxes (other classes: side boxes)"
+    for v, i, name in pairs:
+        veh_boxes[v]["id"] = inf_boxes[i]["id"] = name
     return how
 
 
@@ -306,7 +318,7 @@ def import_dair_v2x(
     for episode in sorted(by_episode):
         records += sequence_records(episode, 0, episode, by_episode[episode], False)
     linked = sum(
-        len({o.id for o in f.objects if o.id.startswith("c")})
+        len({o.id for o in f.objects if o.id[0] in "cs"})
         for frames in by_episode.values()
         for f in frames
     )
@@ -324,4 +336,4 @@ def _digest(root: Path, files) -> str:
     return h.hexdigest()
 
 
-__all__ = ["LINK_GATE_M", "SCENARIO_NAME", "import_dair_v2x", "linked_pairs"]
+__all__ = ["COOPERATIVE_CLASSES", "LINK_GATE_M", "SCENARIO_NAME", "import_dair_v2x", "linked_pairs"]
