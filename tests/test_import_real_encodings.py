@@ -125,7 +125,7 @@ def test_a_connected_vehicle_listed_by_another_keeps_its_class_and_size(tmp_path
     assert objects["3"]["cls"] == "agent"  # the other agent, listed by nobody, stays a marker
 
 
-def test_v2xset_prior_is_per_agent(tmp_path):
+def test_v2xset_prior_is_per_agent(tmp_path, capsys):
     src = write_opv2v(tmp_path / "split")
     for path in (src / "2021_08_22_21_41_24" / "-1").glob("*.yaml"):
         _edit_yaml(path, lambda d: d.pop("predicted_ego_pos"))
@@ -135,6 +135,8 @@ def test_v2xset_prior_is_per_agent(tmp_path):
     assert snap.pair(1, 2).prior() is not None  # the two vehicles keep theirs
     assert snap.pair(1, 3).prior() is None and snap.pair(2, 3).prior() is None
     assert ds.manifest["source"]["agents_without_prior"] == ["2021_08_22_21_41_24/-1"]
+    assert main(["info", str(result.out)]) == 0
+    assert "no stored prior for     2021_08_22_21_41_24/-1" in capsys.readouterr().out
 
 
 # --- V2X-Seq-SPD ------------------------------------------------------------------------
@@ -249,3 +251,19 @@ def test_near_orthonormal_rotations_are_polar_decomposed_and_far_ones_refused(tm
     assert np.abs(out[:3, :3] - r).max() < 4e-3
     with pytest.raises(ImportFormatError, match="not a rotation matrix"):
         rigid((2.0 * r).tolist(), [0.0, 0.0, 0.0], tmp_path / "c.json", "")
+
+
+# --- the temporal table on imported data ------------------------------------------------
+
+
+def test_temporal_methods_run_on_an_imported_v2x_seq_split(tmp_path):
+    """An imported V2X-Seq split loads as the temporal table loads its splits, and every
+    temporal method of the table runs on it and assigns the covisible objects."""
+    from eval.studies.temporal import METHODS, load_split, run_method
+
+    out = import_v2x_seq(write_v2x_seq(tmp_path / "spd"), tmp_path / "out").out
+    [(seed, item)] = load_split(out, "gnss-urban", (0,))
+    assert len(item.seq.frames) == 3
+    for method, windows in METHODS:
+        frames, _ = run_method(method, windows[-1], item, seed, "gnss-urban")
+        assert len(frames) == 3 and all(len(assigned) >= 1 for assigned, _ in frames), method

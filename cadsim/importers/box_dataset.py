@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import shutil
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -25,6 +26,10 @@ from cadsim.dataset.encoding import json_bytes
 from cadsim.dataset.manifest import FORMAT_NAME
 from cadsim.dataset.output_folder import OutputFolderError, check_output_folder
 from cadsim.provenance import git_state, package_versions
+
+WRITER_THREADS = 4
+"""Records written at once: each file and folder is fsynced, so a lone writer mostly waits on
+the disk (measured on 10,000 DAIR-V2X-C frame pairs: ``make bench``, section dair-import)."""
 
 
 @dataclass(frozen=True)
@@ -93,28 +98,37 @@ def write_box_dataset(
         raise
 
 
+def _write_one(out: Path, rec: BoxRecord, sequential: bool) -> dict:
+    """Encode and write one record atomically; its manifest entry."""
+    files = encode_box_record(rec)
+    name = layout.record_name(rec.episode, rec.slot)
+    write_record(out, name, files)
+    entry = {
+        "name": name,
+        "episode": int(rec.episode),
+        "slot": int(rec.slot),
+        "sim_seed": int(rec.sim_seed),
+        "checksum": record_checksum(files),
+    }
+    if sequential:
+        entry |= {"sequence": rec.sequence["id"], "frame": int(rec.sequence["frame"])}
+    return entry
+
+
 def _write(out: Path, records: Sequence[BoxRecord], scenario: str, source: dict) -> ImportResult:
     """:func:`write_box_dataset` once ``out`` is checked and clear."""
     views = len(records[0].views)
     sequential = records[0].sequence is not None
     version = record_version(views, sequential)
-    entries = []
-    for rec in sorted(records, key=lambda r: (r.episode, r.slot)):
+    ordered = sorted(records, key=lambda r: (r.episode, r.slot))
+    for rec in ordered:
         if len(rec.views) != views or (rec.sequence is not None) != sequential:
             raise ValueError("every record of a dataset has the same views and sequence kind")
-        files = encode_box_record(rec)
-        name = layout.record_name(rec.episode, rec.slot)
-        write_record(out, name, files)
-        entry = {
-            "name": name,
-            "episode": int(rec.episode),
-            "slot": int(rec.slot),
-            "sim_seed": int(rec.sim_seed),
-            "checksum": record_checksum(files),
-        }
-        if sequential:
-            entry |= {"sequence": rec.sequence["id"], "frame": int(rec.sequence["frame"])}
-        entries.append(entry)
+    pool = ThreadPoolExecutor(WRITER_THREADS)  # fsync waits overlap; the bytes do not change
+    try:
+        entries = list(pool.map(lambda rec: _write_one(out, rec, sequential), ordered))
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)
     episodes: dict[int, int] = {}
     for entry in entries:
         episodes[entry["episode"]] = episodes.get(entry["episode"], 0) + 1
