@@ -17,8 +17,12 @@ Per agent and frame:
   ``--prior-sigma``, else 1 m);
 - ``vehicles``: {actor id: {``location``, ``angle`` [roll, yaw, pitch], ``center`` (box centre
   offset in the actor's frame), ``extent`` (half length, width, height), ``speed`` (km/h),
-  ``obj_type``}} — the boxes the agent sees; actor ids shared across agents are the ground
-  truth.
+  ``obj_type``, V2V4Real's ``ass_id``}} — the boxes the agent sees; the centre is ``location`` +
+  ``center`` added in world axes (OpenCOOD's ``project_world_objects``); ``ass_id`` is the
+  cross-agent identity where given (−1: never linked), else actor ids shared across agents are
+  the ground truth; a connected agent listed by another is an ordinary object of that box.
+
+Files may carry the numpy tags PyYAML's default dumper writes (:mod:`.numpy_yaml`, V2V4Real).
 
 Mapping: a scenario is an episode, its frames the slots (``data_protocol.yaml``'s ``cadsim``
 block — written by ``cadsim export opv2v`` — restores the original episode, slot, simulation

@@ -6,18 +6,22 @@ Read (paths relative to the folder given; every one confined to it, :mod:`.safe_
 - ``cooperative/data_info.json``: per cooperative frame ``vehicle_frame``,
   ``infrastructure_frame``, ``vehicle_sequence``, ``infrastructure_sequence``,
   ``system_error_offset`` {``delta_x``, ``delta_y``} (metres);
-- ``cooperative/label/<vehicle_frame>.json``: objects with ``veh_track_id`` and
-  ``inf_track_id`` ("-1" where one side does not see the object) — the ground truth;
+- ``cooperative/label/<vehicle_frame>.json``: objects with ``veh_token`` / ``inf_token`` (each
+  side label's ``token``), ``veh_track_id`` / ``inf_track_id`` ("-1" or empty where one side does
+  not see the object) and ``track_id`` — the ground truth, linked by token and cross-checked
+  against the track ids (by track id where the file has no tokens);
 - ``vehicle-side/data_info.json`` and ``infrastructure-side/data_info.json``: per frame
   ``frame_id``, ``pointcloud_timestamp`` (µs) and the label and calibration paths
   (``label_lidar_std_path``, ``calib_lidar_to_novatel_path``, ``calib_novatel_to_world_path``,
   ``calib_virtuallidar_to_world_path``; the published defaults when absent);
-- each side's labels: ``type``, ``track_id``, ``3d_dimensions`` {h, w, l} (metres),
-  ``3d_location`` {x, y, z} (box centre, that side's LiDAR frame: x forward, y left, z up),
-  ``rotation`` (yaw about z, radians);
+- each side's labels (:mod:`.dair_side`): ``type``, ``track_id`` (absent for traffic cones:
+  such boxes get one frame's id and are counted), ``token``, ``3d_dimensions`` {h, w, l}
+  (metres), ``3d_location`` {x, y, z} (box centre, that side's LiDAR frame: x forward, y left,
+  z up), ``rotation`` (yaw about z, radians);
 - calibration: vehicle LiDAR → world = ``novatel_to_world`` · ``lidar_to_novatel`` (its
   ``transform``); roadside LiDAR → world = ``virtuallidar_to_world`` with the frame's
-  ``system_error_offset`` added to its translation (DAIR-V2X's correction).
+  ``system_error_offset`` applied by the chosen convention (:data:`OFFSET_CONVENTIONS`; default:
+  added to its translation, DAIR-V2X's ``calib_i2v.py``).
 
 Mapping: a cooperative sequence is an episode (its number), its frames in time order the
 slots; an object seen by both sides (both track ids given) has one object id, ``v<veh track>``,
