@@ -12,9 +12,10 @@ it was. Must not import matchers or eval.
 
 from __future__ import annotations
 
+import queue
 import shutil
+import threading
 from collections.abc import Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -30,6 +31,9 @@ from cadsim.provenance import git_state, package_versions
 WRITER_THREADS = 4
 """Records written at once: each file and folder is fsynced, so a lone writer mostly waits on
 the disk (measured on 10,000 DAIR-V2X-C frame pairs: ``make bench``, section dair-import)."""
+STOP_WAIT_S = 2.0
+"""How long an interrupted import waits for each writer to finish its record (milliseconds
+in practice) before clearing what was written."""
 
 
 @dataclass(frozen=True)
@@ -115,6 +119,55 @@ def _write_one(out: Path, rec: BoxRecord, sequential: bool) -> dict:
     return entry
 
 
+def _write_all(out: Path, ordered: Sequence[BoxRecord], sequential: bool) -> list[dict]:
+    """Every record written by :data:`WRITER_THREADS` daemon threads (their fsync waits overlap;
+    the bytes are the same); the manifest entries in ``ordered``'s order. A worker's error is
+    raised here; on any exception (Ctrl-C too) the workers stop taking records and are given
+    :data:`STOP_WAIT_S` to finish the one they write, so the caller's clean-up comes after them."""
+    jobs: queue.SimpleQueue = queue.SimpleQueue()
+    for item in enumerate(ordered):
+        jobs.put(item)
+    done: queue.SimpleQueue = queue.SimpleQueue()
+    stop = threading.Event()
+
+    def work() -> None:
+        while not stop.is_set():
+            try:
+                k, rec = jobs.get_nowait()
+            except queue.Empty:
+                return
+            try:
+                done.put((k, _write_one(out, rec, sequential), None))
+            except BaseException as exc:  # handed to the main thread
+                done.put((k, None, exc))
+                return
+
+    workers = [
+        threading.Thread(target=work, daemon=True, name=f"cadsim-writer-{n}")
+        for n in range(min(WRITER_THREADS, len(ordered)))
+    ]
+    for worker in workers:
+        worker.start()
+    entries: list[dict | None] = [None] * len(ordered)
+    try:
+        for _ in range(len(ordered)):
+            while True:
+                try:
+                    k, entry, exc = done.get(timeout=0.2)  # a timeout keeps Ctrl-C prompt
+                    break
+                except queue.Empty:
+                    continue
+            if exc is not None:
+                raise exc
+            entries[k] = entry
+    except BaseException:
+        stop.set()
+        for worker in workers:
+            worker.join(timeout=STOP_WAIT_S)
+        raise
+    return entries
+
+
 def _write(out: Path, records: Sequence[BoxRecord], scenario: str, source: dict) -> ImportResult:
     """:func:`write_box_dataset` once ``out`` is checked and clear."""
     views = len(records[0].views)
@@ -124,11 +177,7 @@ def _write(out: Path, records: Sequence[BoxRecord], scenario: str, source: dict)
     for rec in ordered:
         if len(rec.views) != views or (rec.sequence is not None) != sequential:
             raise ValueError("every record of a dataset has the same views and sequence kind")
-    pool = ThreadPoolExecutor(WRITER_THREADS)  # fsync waits overlap; the bytes do not change
-    try:
-        entries = list(pool.map(lambda rec: _write_one(out, rec, sequential), ordered))
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+    entries = _write_all(out, ordered, sequential)
     episodes: dict[int, int] = {}
     for entry in entries:
         episodes[entry["episode"]] = episodes.get(entry["episode"], 0) + 1
