@@ -285,7 +285,7 @@ def import_dair_v2x(
     malformed input; nothing is written then.
 
     >>> import_dair_v2x("cooperative-vehicle-infrastructure", "data/dair-v2x-c")  # doctest: +SKIP
-    ImportResult(out=PosixPath('data/dair-v2x-c'), episodes={0: 6616, ...}, views=2, ...)
+    ImportResult(out=PosixPath('data/dair-v2x-c'), episodes={...}, views=2, checksum='...')
     """
     gate = LINK_GATE_M if link_gate_m is None else float(link_gate_m)
     if not 0 < gate <= 10:
