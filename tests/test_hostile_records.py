@@ -427,7 +427,7 @@ def test_ctrl_c_during_import_is_one_line_and_leaves_no_records(tmp_path):
         [sys.executable, "-c", _SLOW_IMPORT, str(src), str(out)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=ROOT,
     )  # fmt: skip
-    assert proc.stdout.readline().strip() == "wrote"  # one record is on disk
+    assert "wrote" in proc.stdout.readline()  # a record is on disk (writers print concurrently)
     proc.send_signal(signal.SIGINT)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 130

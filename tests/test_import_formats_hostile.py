@@ -280,3 +280,118 @@ def test_the_v2x_seq_digest_reads_only_the_files_imported(tmp_path):
         while deep != src:
             deep.rmdir()
             deep = deep.parent
+
+
+# --- the numpy-tag reader (V2V4Real) and the DAIR-V2X-C importer ---
+
+_DTYPE = "!!python/object/apply:numpy.dtype {args: [f8, false, true]}"
+NUMPY_TAG_CASES = {
+    "other python tag": ("!!python/object/apply:subprocess.Popen [[touch, pwned]]", "refused tag !!python/object/apply:subprocess.Popen"),
+    "python name": ("!!python/name:os.system ''", "refused tag !!python/name:os.system"),
+    "object dtype": ("!!python/object/apply:numpy.dtype {args: [O8, false, true]}", "numpy.dtype: expected one of"),
+    "scalar payload too short": (f"!!python/object/apply:numpy.core.multiarray.scalar [{_DTYPE}, !!binary AAAA]", "3 bytes for a 8-byte item"),
+    "array payload lies": (
+        "!!python/object/apply:numpy.core.multiarray._reconstruct {args: [!!python/name:numpy.ndarray '', "
+        f"!!python/tuple [0], !!binary Yg==], state: !!python/tuple [1, !!python/tuple [4, 4], {_DTYPE}, false, !!binary AAAA]}}",
+        "3 bytes for 16 items",
+    ),
+    "array too large": (
+        "!!python/object/apply:numpy.core.multiarray._reconstruct {args: [!!python/name:numpy.ndarray '', "
+        f"!!python/tuple [0], !!binary Yg==], state: !!python/tuple [1, !!python/tuple [60000, 60000], {_DTYPE}, false, !!binary AAAA]}}",
+        "more than 65536",
+    ),
+    "reconstruct of another class": (
+        "!!python/object/apply:numpy.core.multiarray._reconstruct {args: [!!python/name:numpy.matrix '', "
+        "!!python/tuple [0], !!binary Yg==]}",
+        "refused tag !!python/name:numpy.matrix",
+    ),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("case", sorted(NUMPY_TAG_CASES))
+def test_v2v4real_hostile_numpy_tags_are_one_line(tmp_path, capsys, case):
+    from format_fixtures import write_v2v4real
+
+    src = write_v2v4real(tmp_path / "src")
+    path = next(src.rglob("000001.yaml"))
+    value, expected = NUMPY_TAG_CASES[case]
+    path.write_text(path.read_text() + f"extra: {value}\n")
+    _refused(tmp_path, capsys, ["v2v4real", str(src)], "000001.yaml", expected)
+    assert not (tmp_path / "pwned").exists() and not Path("pwned").exists()
+
+
+def test_numpy_tag_alias_bomb_is_refused(tmp_path, capsys):
+    from format_fixtures import write_v2v4real
+
+    src = write_v2v4real(tmp_path / "src")
+    path = next(src.rglob("000002.yaml"))
+    bomb = "a0: &a0 [" + ", ".join(["*id001"] * 9) + "]\n"
+    for k in range(1, 9):
+        bomb += f"a{k}: &a{k} [" + ", ".join([f"*a{k - 1}"] * 9) + "]\n"
+    path.write_text(path.read_text() + bomb)
+    _refused(
+        tmp_path, capsys, ["v2v4real", str(src)], "000002.yaml", "values with its aliases expanded"
+    )
+
+
+def _dair_edit(path: Path, edit) -> None:
+    path.write_text(json.dumps(edit(json.loads(path.read_text()))))
+
+
+DAIR_CASES = {
+    "cooperative label path traversal": (
+        "cooperative/data_info.json",
+        lambda d: [d[0] | {"cooperative_label_path": "../../../etc/passwd"}, *d[1:]],
+        "[0].cooperative_label_path: path '../../../etc/passwd' leaves",
+    ),
+    "not a frame file name": (
+        "cooperative/data_info.json",
+        lambda d: [d[0] | {"vehicle_pointcloud_path": "vehicle-side/velodyne/../x.pcd"}, *d[1:]],
+        "[0].vehicle_pointcloud_path: expected a digit file name",
+    ),
+    "NaN corner": (
+        "cooperative/label_world/000010.json",
+        lambda d: [d[0] | {"world_8_points": [[float("nan"), 0, 0]] * 8}],
+        "non-finite number NaN",
+    ),
+    "seven corners": (
+        "cooperative/label_world/000010.json",
+        lambda d: [d[0] | {"world_8_points": d[0]["world_8_points"][:7]}],
+        "[0].world_8_points: expected a list of 24 numbers",
+    ),
+    "huge offset": (
+        "cooperative/data_info.json",
+        lambda d: [d[0] | {"system_error_offset": {"delta_x": 1e9, "delta_y": 0}}, *d[1:]],
+        "[0].system_error_offset.delta_x: expected a finite number",
+    ),
+    "a reflection as the roadside rotation": (
+        "infrastructure-side/calib/virtuallidar_to_world/000020.json",
+        lambda d: d | {"rotation": [[1, 0, 0], [0, 1, 0], [0, 0, -1]]},
+        "rotation: not a rotation matrix",
+    ),
+    "missing label": (
+        "vehicle-side/label/lidar/000011.json",
+        None,
+        "missing file",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(DAIR_CASES))
+def test_dair_v2x_hostile_input_is_one_line(tmp_path, capsys, case):
+    from format_fixtures import write_dair_v2x
+
+    src = write_dair_v2x(tmp_path / "dair")
+    rel, edit, expected = DAIR_CASES[case]
+    if edit is None:
+        (src / rel).unlink()
+    else:
+        _dair_edit(src / rel, edit)
+    _refused(tmp_path, capsys, ["dair-v2x", str(src)], rel.split("/")[-1], expected)
+
+
+def test_dair_v2x_without_any_calibration_is_one_line(tmp_path, capsys):
+    from format_fixtures import write_dair_v2x
+
+    src = write_dair_v2x(tmp_path / "dair", world=False)
+    _refused(tmp_path, capsys, ["dair-v2x", str(src)], "lidar_i2v/000010.json", "missing file")

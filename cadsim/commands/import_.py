@@ -1,8 +1,10 @@
 """`cadsim import FORMAT SRC --out DIR`: external data written as a frame-pair dataset.
 
 Formats (docs/external-data.md): ``dmgm`` (the DMGM CAD test pairs, ``proc_s/<id>/data.pt`` +
-``proc_t/<id>/data.pt``), ``v2x-seq`` (V2X-Seq-SPD's cooperative frames) and ``opv2v`` (the
-OPV2V family's ``scenario/<agent>/<frame>.yaml``), the last two as box-only records. A
+``proc_t/<id>/data.pt``), ``v2x-seq`` (V2X-Seq-SPD's cooperative frames), ``dair-v2x``
+(DAIR-V2X-C's cooperative frame pairs), ``opv2v`` (the OPV2V family's
+``scenario/<agent>/<frame>.yaml``) and ``v2v4real`` (the same layout as V2V4Real encodes it), all
+but ``dmgm`` as box-only records. A
 malformed input file is one error line naming the file (and key), exit status 2.
 """
 
@@ -69,14 +71,36 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="only these cooperative sequences, e.g. 0010,0011 (default: all)",
     )
+    seq.add_argument(
+        "--offset-convention",
+        choices=("roadside", "vehicle"),
+        default="roadside",
+        help="where system_error_offset applies: added to the roadside LiDAR -> world "
+        "translation (default; DAIR-V2X's calib_i2v.py, OpenCOOD, CoAlign, HEAL) or in the "
+        "vehicle LiDAR frame (label_i2v.py, UniV2X, CoopTrack)",
+    )
     opv2v = formats.add_parser(
         "opv2v",
-        help="OPV2V / V2XSet / V2V4Real labels (scenario/<agent>/<frame>.yaml)",
+        help="OPV2V / V2XSet labels (scenario/<agent>/<frame>.yaml)",
         description="Write OPV2V-layout labels as box-only records (every frame's agents).",
         epilog="examples:\n  cadsim import opv2v path/to/OPV2V/test --out data/opv2v-test\n"
         "  cadsim import opv2v path/to/V2XSet/test --out data/v2xset-3 --agents 3",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
+    _opv2v_arguments(opv2v)
+    v2v4real = formats.add_parser(
+        "v2v4real",
+        help="V2V4Real labels as recorded (numpy-tagged yaml, ass_id links, right-handed poses)",
+        description="Write V2V4Real's labels as box-only records: the OPV2V layout, yaml written "
+        "by PyYAML from numpy values, objects linked across vehicles by ass_id.",
+        epilog="example:\n  cadsim import v2v4real path/to/V2V4Real/test --out data/v2v4real",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _opv2v_arguments(v2v4real)
+    _dair_arguments(formats)
+
+
+def _opv2v_arguments(opv2v: argparse.ArgumentParser) -> None:
     opv2v.add_argument("src", metavar="SRC", help="a split folder or one scenario folder")
     opv2v.add_argument("--out", required=True, help="new (or empty) dataset folder")
     opv2v.add_argument(
@@ -100,7 +124,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.format in ("v2x-seq", "opv2v"):
+    if args.format in ("v2x-seq", "opv2v", "v2v4real", "dair-v2x"):
         try:
             return _run_boxes(args)
         except KeyboardInterrupt:
@@ -124,14 +148,52 @@ def _run_boxes(args: argparse.Namespace) -> int:
     if args.format == "v2x-seq":
         from cadsim.importers.v2x_seq import import_v2x_seq
 
-        result = import_v2x_seq(args.src, args.out, args.sequences)
+        result = import_v2x_seq(args.src, args.out, args.sequences, args.offset_convention)
+    elif args.format == "dair-v2x":
+        from cadsim.importers.dair_v2x import import_dair_v2x
+
+        result = import_dair_v2x(args.src, args.out, args.link_gate)
     else:
         from cadsim.importers.opv2v import import_opv2v
 
-        result = import_opv2v(args.src, args.out, args.agents, not args.no_prior, args.prior_sigma)
+        result = import_opv2v(
+            args.src, args.out, args.agents, not args.no_prior, args.prior_sigma,
+            v2v4real=args.format == "v2v4real",
+        )  # fmt: skip
     kind = "frame pairs" if result.views == 2 else f"{result.views}-view snapshots"
     print(
         f"{result.out}: {result.records} {kind} in {len(result.episodes)} episodes, box-only, "
         f"checksum {result.checksum[:16]}"
     )
     return 0
+
+
+def _gate(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of metres, got {text!r}") from None
+    if not 0 < value <= 10:
+        raise argparse.ArgumentTypeError(f"expected metres in (0, 10], got {value}")
+    return value
+
+
+def _dair_arguments(formats) -> None:
+    dair = formats.add_parser(
+        "dair-v2x",
+        help="DAIR-V2X-C cooperative frame pairs (vehicle + roadside labels, calibration)",
+        description="Write DAIR-V2X-C's cooperative frames as box-only frame pairs; ground truth "
+        "from the cooperative world boxes, else from the calibrated side boxes.",
+        epilog="examples:\n  cadsim import dair-v2x path/to/cooperative-vehicle-infrastructure "
+        "--out data/dair-v2x-c\n  cadsim evaluate data/dair-v2x-c --localisation gnss-urban ...",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    dair.add_argument("src", metavar="SRC", help="folder holding cooperative/, vehicle-side/, ...")
+    dair.add_argument("--out", required=True, help="new (or empty) dataset folder")
+    dair.add_argument(
+        "--link-gate",
+        type=_gate,
+        default=None,
+        help="largest centre distance (metres) of two boxes linked as one object "
+        "(default: cadsim.importers.dair_v2x.LINK_GATE_M)",
+    )

@@ -178,6 +178,25 @@ def _lidar_card(frame_pairs) -> dict:
     return {} if card is None else {"lidar_detector": card}
 
 
+def _import_notes(src: dict) -> list[str]:
+    """What an import could not give every record: agents without a stored prior, objects
+    without a track id, how ground truth was recovered (lines of ``cadsim info``)."""
+    lines = []
+    if src.get("agents_without_prior"):
+        missing = src["agents_without_prior"]
+        shown = ", ".join(missing[:4]) + (
+            f", … ({len(missing)} in all)" if len(missing) > 4 else ""
+        )
+        lines.append(f"  no stored prior for     {shown} (pairs with them have none)")
+    if src.get("untracked_objects"):
+        lines.append(f"  objects without track   {src['untracked_objects']} (one frame's id each)")
+    if "link_gate_m" in src:
+        lines.append(
+            f"  ground truth            recovered by matching boxes within {src['link_gate_m']:g} m"
+        )
+    return lines
+
+
 def _text(s: dict) -> str:
     total = sum(s["class_mix"].values()) or 1
     mix = ", ".join(f"{c} {n} ({100 * n / total:.0f}%)" for c, n in s["class_mix"].items())
@@ -197,6 +216,7 @@ def _text(s: dict) -> str:
             if (src := s.get("source"))
             else []
         ),
+        *_import_notes(s.get("source") or {}),
         f"  objects per view        {_fmt(s['objects_per_view'])}",
         f"  covisible per pair      {_fmt(s['covisible'])}",
         f"  non-covisible per view  {_fmt(s['non_covisible_per_view'])}",

@@ -114,6 +114,12 @@ def _observer(view: BoxView, sequential: bool) -> dict:
     return entry
 
 
+def _prior_views(views: tuple[BoxView, ...]) -> dict:
+    """``{"views": [k, ...]}`` (1-based) when only some views carry a stored prior, else {}."""
+    having = [k for k, v in enumerate(views, start=1) if v.detections.world is not None]
+    return {} if len(having) == len(views) else {"views": having}
+
+
 def encode_box_record(rec: BoxRecord) -> dict[str, bytes]:
     """{file name: bytes} of a box-only record (deterministic: same record ⇒ same bytes)."""
     views = rec.views
@@ -138,6 +144,7 @@ def encode_box_record(rec: BoxRecord) -> dict[str, bytes]:
             if rec.prior_sigma_m is None
             else {"kind": "stored", "world_sigma_m": float(rec.prior_sigma_m)}
             | {"frame": rec.prior_frame}
+            | _prior_views(views)
         ),
         "objects": [o.as_dict() for o in rec.objects],
     }

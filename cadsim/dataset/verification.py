@@ -200,10 +200,16 @@ def check_record(
     except ValueError as exc:
         raise DatasetError(str(exc).splitlines()[0]) from None
     views = check_views(arrays, what, expected)
-    if (record.get("prior") or {}).get("kind") == "stored":
+    prior = record.get("prior") or {}
+    if prior.get("kind") == "stored":
+        # "views": the views that carry one (a source whose agents do not all report a pose)
+        having = prior.get("views", list(range(1, len(views) + 1)))
+        if not isinstance(having, list) or not all(isinstance(v, int) for v in having):
+            raise DatasetError(f"{where}: prior.views: expected a list of view numbers")
         for v, view in enumerate(views, start=1):
-            if view.world is None:
-                raise DatasetError(f"{what}: view{v}_world: missing (the record's prior is stored)")
+            if (view.world is None) == (v in having):
+                state = "missing" if v in having else "present, but not in prior.views"
+                raise DatasetError(f"{what}: view{v}_world: {state} (the record's prior is stored)")
     _check_images(record_dir, files, record["observers"], expected)
     if layout.LIDAR_NPZ in files:
         _check_points(record_dir, files[layout.LIDAR_NPZ], expected, len(record["objects"]))

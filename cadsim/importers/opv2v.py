@@ -17,8 +17,12 @@ Per agent and frame:
   ``--prior-sigma``, else 1 m);
 - ``vehicles``: {actor id: {``location``, ``angle`` [roll, yaw, pitch], ``center`` (box centre
   offset in the actor's frame), ``extent`` (half length, width, height), ``speed`` (km/h),
-  ``obj_type``}} — the boxes the agent sees; actor ids shared across agents are the ground
-  truth.
+  ``obj_type``, V2V4Real's ``ass_id``}} — the boxes the agent sees; the centre is ``location`` +
+  ``center`` added in world axes (OpenCOOD's ``project_world_objects``); ``ass_id`` is the
+  cross-agent identity where given (−1: never linked), else actor ids shared across agents are
+  the ground truth; a connected agent listed by another is an ordinary object of that box.
+
+Files may carry the numpy tags PyYAML's default dumper writes (:mod:`.numpy_yaml`, V2V4Real).
 
 Mapping: a scenario is an episode, its frames the slots (``data_protocol.yaml``'s ``cadsim``
 block — written by ``cadsim export opv2v`` — restores the original episode, slot, simulation
@@ -50,7 +54,7 @@ from cadsim.dataset.box_record import BoxView, box_detections
 from cadsim.importers import ImportFormatError
 from cadsim.importers.box_dataset import ImportResult, check_out, write_box_dataset
 from cadsim.importers.box_sequence import ImportedFrame, sequence_records
-from cadsim.importers.carla_frame import carla_matrix, mirrored, mirrored_points, pose_matrix
+from cadsim.importers.carla_frame import carla_matrix, mirrored, mirrored_points
 from cadsim.importers.safe_read import (
     confined,
     field,
@@ -104,22 +108,27 @@ class _Agent:
     speed: float = 0.0  # ego_speed, m/s
 
 
-def _pose(value, path: Path, key: str) -> np.ndarray:
-    """4×4 right-handed transform of an OPV2V / V2V4Real pose (module docstring)."""
+def _pose(value, path: Path, key: str, right_handed: bool = False) -> np.ndarray:
+    """4×4 right-handed transform of an OPV2V / V2V4Real pose (module docstring);
+    ``right_handed``: a matrix pose is already in a right-handed world (V2V4Real as recorded)."""
+    flip = (lambda t: t) if right_handed else mirrored
     if isinstance(value, dict):
         transform = rigid(field(value, "rotation", path, key), field(value, "translation", path, key), path, key)  # fmt: skip
-        return mirrored(transform)
+        return flip(transform)
     if isinstance(value, list) and len(value) == 4 and all(isinstance(r, list) for r in value):
         m = matrix(value, path, key, 4, 4)
         if not np.array_equal(m[3], [0.0, 0.0, 0.0, 1.0]):
             raise ImportFormatError(
                 path, f"{key}[3]: expected the row [0, 0, 0, 1] of a rigid transform"
             )
-        return mirrored(rigid(m[:3, :3].tolist(), m[:3, 3].tolist(), path, key))
-    return pose_matrix(numbers(value, path, key, 6))
+        return flip(rigid(m[:3, :3].tolist(), m[:3, 3].tolist(), path, key))
+    return flip(carla_matrix(numbers(value, path, key, 6)))
 
 
-def _boxes(vehicles, path: Path) -> list[dict]:
+def _boxes(vehicles, path: Path, agent: int = 0) -> list[dict]:
+    """The boxes of an agent's ``vehicles``: id = ``a<ass_id>`` where the entry has an
+    ``ass_id`` ≥ 0 (V2V4Real's cross-vehicle identity), ``<agent>:<actor>`` where it is −1
+    (never linked: the key is the agent's local id), else the actor id (shared across agents)."""
     if vehicles is None:
         return []
     if not isinstance(vehicles, dict):
@@ -150,11 +159,19 @@ def _boxes(vehicles, path: Path) -> list[dict]:
         speed = number(entry.get("speed", 0.0), path, f"{key}.speed", 1e4)
         kind = entry.get("obj_type", "car")
         m = carla_matrix([*location, *angle])
+        oid = str(int(actor))
+        if "ass_id" in entry:
+            link = entry["ass_id"]
+            if isinstance(link, bool) or not isinstance(link, int) or not -1 <= link < 2**31:
+                raise ImportFormatError(
+                    path, f"{key}.ass_id: expected an integer >= -1, got {shown(link, 30)}"
+                )
+            oid = f"{agent}:{oid}" if link == -1 else f"a{link}"
         out.append(
             {
-                "id": str(int(actor)),
+                "id": oid,
                 "cls": str(kind).lower()[:40] if isinstance(kind, str) else "car",
-                "centre": apply(m, [center])[0],
+                "centre": np.add(location, center),  # OpenCOOD: added in world axes
                 "direction": m[:3, 0],
                 "size": [2.0 * e for e in extent],
                 "speed": speed * _KMH,
@@ -163,16 +180,25 @@ def _boxes(vehicles, path: Path) -> list[dict]:
     return out
 
 
-def _read_agent(path: Path, agent: int) -> _Agent:
-    data = read_yaml(path)
+def _read_agent(path: Path, agent: int, v2v4real: bool = False) -> _Agent:
+    """One agent's yaml; numpy tags (:mod:`.numpy_yaml`) are read in any of the family's
+    files; ``v2v4real``: poses in a right-handed world, as V2V4Real records them."""
+    data = read_yaml(path, numpy_tags=True)
     if not isinstance(data, dict):
         raise ImportFormatError(path, "top level: expected a mapping")
-    sensor = _pose(field(data, "lidar_pose", path), path, "lidar_pose")
-    body = _pose(data["true_ego_pos"], path, "true_ego_pos") if "true_ego_pos" in data else sensor
+    sensor = _pose(field(data, "lidar_pose", path), path, "lidar_pose", v2v4real)
+    body = (
+        _pose(data["true_ego_pos"], path, "true_ego_pos", v2v4real)
+        if "true_ego_pos" in data
+        else sensor
+    )
     predicted = data.get("predicted_ego_pos")
-    predicted = None if predicted is None else _pose(predicted, path, "predicted_ego_pos")
+    predicted = None if predicted is None else _pose(predicted, path, "predicted_ego_pos", v2v4real)
     speed = number(data.get("ego_speed", 0.0), path, "ego_speed", 1e4) * _KMH
-    return _Agent(agent, sensor, body, predicted, _boxes(data.get("vehicles"), path), speed)
+    boxes = _boxes(data.get("vehicles"), path, agent)
+    if v2v4real:  # boxes in the same right-handed world: undo _view's mirroring
+        boxes = [b | {"centre": b["centre"] * [1.0, -1.0, 1.0], "direction": b["direction"] * [1.0, -1.0, 1.0]} for b in boxes]  # fmt: skip
+    return _Agent(agent, sensor, body, predicted, boxes, speed)
 
 
 def _ordered(agents: list[int]) -> list[int]:
@@ -404,6 +430,7 @@ def import_opv2v(
     agents: int | None = None,
     prior: bool = True,
     prior_sigma_m: float | None = None,
+    v2v4real: bool = False,
 ) -> ImportResult:
     """Convert the OPV2V-layout folder ``src`` (a split or one scenario) into a box-only dataset
     at ``out`` (a new or empty folder): ``agents`` views per record (default: the fewest of any
@@ -411,7 +438,11 @@ def import_opv2v(
     presets can then draw one). The stored prior's stated uncertainty (metres) is
     ``prior_sigma_m`` when given (``--prior-sigma``: it overrides a ``data_protocol.yaml``'s
     ``prior_sigma_m``, with a warning), else the file's, else :data:`DEFAULT_PRIOR_SIGMA_M`;
-    an info line says which came from where (:func:`_stated_sigmas`). ``ImportFormatError``
+    an info line says which came from where (:func:`_stated_sigmas`). An agent without
+    ``predicted_ego_pos`` gets no stored prior (the others keep theirs; the manifest's
+    ``source.agents_without_prior`` and ``cadsim info`` name them). ``v2v4real``: the files'
+    poses and boxes are in a right-handed world (V2V4Real as recorded; ``cadsim import
+    v2v4real``). ``ImportFormatError``
     (one line naming file and key) for malformed input; nothing is written then.
 
     >>> import_opv2v("OPV2V/test", "data/opv2v-test")  # doctest: +SKIP
@@ -433,7 +464,8 @@ def import_opv2v(
     if not 2 <= n <= layout.MAX_VIEWS:
         raise ImportFormatError(root, f"agents: expected 2..{layout.MAX_VIEWS}, got {n}")
     pieces = []  # (episode, first slot, sim_seed, interval, frames)
-    skipped, stored, files = 0, True, []
+    skipped, stored, files = 0, False, []
+    lacking: set[tuple[str, int]] = set()  # (scenario, agent) read without predicted_ego_pos
     next_episode = 0
     for scenario, frames, protocol in listing:
         episode = protocol.get("episode", next_episode)
@@ -446,10 +478,11 @@ def import_opv2v(
             if len(chosen) < n:
                 skipped += 1
                 continue
-            read = [_read_agent(by_agent[a], a) for a in chosen]
+            read = [_read_agent(by_agent[a], a, v2v4real) for a in chosen]
             _check_ids(read, protocol.get("ids", {}), owners, where)
             files += [by_agent[a] for a in chosen]
-            stored = stored and all(a.predicted is not None for a in read)
+            stored = stored or any(a.predicted is not None for a in read)
+            lacking |= {(scenario.name, a.agent) for a in read if a.predicted is None}
             if chosen != chosen_before and run:
                 pieces.append((episode, slot, protocol, run))
                 slot += len(run)
@@ -478,14 +511,18 @@ def import_opv2v(
         for k, (name, scenario_name, read) in enumerate(run):
             views, objects = [], {}
             for v, agent in enumerate(read):
-                view, found = _view(agent, use_prior, ids, latency if v else 0.0)
+                own = use_prior and agent.predicted is not None  # a prior per agent
+                view, found = _view(agent, own, ids, latency if v else 0.0)
                 views.append(view)
-                for obj in found:
-                    objects.setdefault(obj.id, obj)
+                for obj in found:  # a box (class, size) wins over the agent's own marker
+                    if obj.id not in objects or not objects[obj.id].target:
+                        objects[obj.id] = obj
             start = protocol.get("start_time")
             time = None if start is None else start + k * protocol.get("interval_s", 0.1)
             meta = {"source": SOURCE["kind"], "scenario": scenario_name, "frame": name}
             meta["agents"] = [a.agent for a in read]
+            if use_prior and any(a.predicted is None for a in read):
+                meta["agents_without_prior"] = [a.agent for a in read if a.predicted is None]
             if use_prior:
                 meta["prior"] = {"stated_sigma_m": sigma, "latency_s": latency} | {
                     key.removeprefix("prior_"): protocol[key]
@@ -511,6 +548,8 @@ def import_opv2v(
         h.update(hashlib.sha256(read_bytes(path)).digest())
     source = SOURCE | {"folder": root.name, "agents": n, "skipped_frames": skipped}
     source |= {"prior": "stored" if use_prior else "none", "sha256": h.hexdigest()}
+    if use_prior and lacking:
+        source["agents_without_prior"] = [f"{s}/{a}" for s, a in sorted(lacking)]
     return write_box_dataset(out, records, SCENARIO_NAME, source)
 
 

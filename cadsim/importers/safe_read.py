@@ -32,6 +32,7 @@ from pathlib import Path, PurePosixPath
 import numpy as np
 
 from cadsim.importers import ImportFormatError
+from cadsim.importers.numpy_yaml import NumpyTagLoader
 from cadsim.importers.strict_yaml import UniqueKeyLoader
 
 MAX_BYTES = 64 * 2**20
@@ -124,15 +125,18 @@ def read_json(path: Path):
         raise ImportFormatError(path, f"not valid JSON ({str(exc).splitlines()[0][:80]})") from None
 
 
-def read_yaml(path: Path):
-    """The parsed YAML file at ``path`` through the safe loader (limits of the docstring)."""
+def read_yaml(path: Path, numpy_tags: bool = False):
+    """The parsed YAML file at ``path`` through the safe loader (limits of the docstring);
+    ``numpy_tags``: also the numpy scalars, dtypes and arrays PyYAML's default dumper writes
+    (:mod:`~cadsim.importers.numpy_yaml`, V2V4Real's files), rebuilt as plain numbers."""
     import yaml
 
     loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
     text = _text(path, MAX_YAML_BYTES)
     try:
         _check_yaml_events(yaml.parse(text, Loader=loader), path)
-        return yaml.load(text, Loader=UniqueKeyLoader)  # noqa: S506 (a safe loader)
+        strict = NumpyTagLoader if numpy_tags else UniqueKeyLoader
+        return yaml.load(text, Loader=strict)  # noqa: S506 (a safe loader)
     except yaml.YAMLError as exc:
         problem = str(getattr(exc, "problem", None) or exc).splitlines()[0][:80]
         raise ImportFormatError(path, f"not safe YAML ({problem})") from None
@@ -225,13 +229,31 @@ __all__ = [
 ]  # fmt: skip
 
 
+ORTHONORMAL_ATOL = 1e-9
+"""A rotation whose R·Rᵀ is within this of I (elementwise) is used as given."""
+POLAR_ATOL = 0.05
+"""A rotation whose R·Rᵀ is off I by more than :data:`ORTHONORMAL_ATOL` but at most this
+(elementwise) is replaced by its nearest rotation, the orthogonal factor of its polar
+decomposition (U·Vᵀ of its SVD), as UniV2X and CoopTrack do for DAIR-V2X's released
+calibrations (some are not orthonormal to 1e-3); beyond it, refused."""
+
+
 def rigid(rotation, translation, path: Path, key: str) -> np.ndarray:
     """4×4 transform of a 3×3 ``rotation`` (nested list) and a 3-vector ``translation`` (flat
-    or a column); refused unless the rotation is orthonormal with determinant +1 (±1e-3)."""
+    or a column); the rotation re-orthonormalised (polar decomposition) when R·Rᵀ is within
+    :data:`POLAR_ATOL` of I, refused beyond it or with determinant ≤ 0."""
     r = matrix(rotation, path, f"{key}.rotation", 3, 3)
     t = matrix(translation, path, f"{key}.translation", 3, 1).ravel()
-    if not np.allclose(r @ r.T, np.eye(3), atol=1e-3) or np.linalg.det(r) < 0:
-        raise ImportFormatError(path, f"{key}.rotation: not a rotation matrix")
+    deviation = float(np.abs(r @ r.T - np.eye(3)).max())
+    if deviation > POLAR_ATOL or np.linalg.det(r) <= 0:
+        raise ImportFormatError(
+            path,
+            f"{key}.rotation: not a rotation matrix (R·Rᵀ off I by {deviation:.3g}, "
+            f"at most {POLAR_ATOL:g} is re-orthonormalised)",
+        )
+    if deviation > ORTHONORMAL_ATOL:
+        u, _, vt = np.linalg.svd(r)
+        r = u @ vt
     out = np.eye(4)
     out[:3, :3], out[:3, 3] = r, t
     return out

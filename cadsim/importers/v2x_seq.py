@@ -6,18 +6,22 @@ Read (paths relative to the folder given; every one confined to it, :mod:`.safe_
 - ``cooperative/data_info.json``: per cooperative frame ``vehicle_frame``,
   ``infrastructure_frame``, ``vehicle_sequence``, ``infrastructure_sequence``,
   ``system_error_offset`` {``delta_x``, ``delta_y``} (metres);
-- ``cooperative/label/<vehicle_frame>.json``: objects with ``veh_track_id`` and
-  ``inf_track_id`` ("-1" where one side does not see the object) — the ground truth;
+- ``cooperative/label/<vehicle_frame>.json``: objects with ``veh_token`` / ``inf_token`` (each
+  side label's ``token``), ``veh_track_id`` / ``inf_track_id`` ("-1" or empty where one side does
+  not see the object) and ``track_id`` — the ground truth, linked by token and cross-checked
+  against the track ids (by track id where the file has no tokens);
 - ``vehicle-side/data_info.json`` and ``infrastructure-side/data_info.json``: per frame
   ``frame_id``, ``pointcloud_timestamp`` (µs) and the label and calibration paths
   (``label_lidar_std_path``, ``calib_lidar_to_novatel_path``, ``calib_novatel_to_world_path``,
   ``calib_virtuallidar_to_world_path``; the published defaults when absent);
-- each side's labels: ``type``, ``track_id``, ``3d_dimensions`` {h, w, l} (metres),
-  ``3d_location`` {x, y, z} (box centre, that side's LiDAR frame: x forward, y left, z up),
-  ``rotation`` (yaw about z, radians);
+- each side's labels (:mod:`.dair_side`): ``type``, ``track_id`` (absent for traffic cones:
+  such boxes get one frame's id and are counted), ``token``, ``3d_dimensions`` {h, w, l}
+  (metres), ``3d_location`` {x, y, z} (box centre, that side's LiDAR frame: x forward, y left,
+  z up), ``rotation`` (yaw about z, radians);
 - calibration: vehicle LiDAR → world = ``novatel_to_world`` · ``lidar_to_novatel`` (its
   ``transform``); roadside LiDAR → world = ``virtuallidar_to_world`` with the frame's
-  ``system_error_offset`` added to its translation (DAIR-V2X's correction).
+  ``system_error_offset`` applied by the chosen convention (:data:`OFFSET_CONVENTIONS`; default:
+  added to its translation, DAIR-V2X's ``calib_i2v.py``).
 
 Mapping: a cooperative sequence is an episode (its number), its frames in time order the
 slots; an object seen by both sides (both track ids given) has one object id, ``v<veh track>``,
@@ -41,20 +45,11 @@ from pathlib import Path
 import numpy as np
 
 from cadsim import portable_math as pm
-from cadsim.dataset.box_record import BoxView, box_detections
 from cadsim.importers import ImportFormatError
 from cadsim.importers.box_dataset import ImportResult, check_out, write_box_dataset
 from cadsim.importers.box_sequence import ImportedFrame, sequence_records
+from cadsim.importers.dair_side import read_boxes, side_view
 from cadsim.importers.safe_read import confined, field, number, read_bytes, read_json, rigid
-from cadsim.importers.sensor_frame import (
-    apply,
-    boxes_in_view,
-    heading_of,
-    sensor_camera,
-    yaw_directions,
-)
-from cadsim.observer_pose import ObserverPose
-from cadsim.world import WorldObject
 
 SCENARIO_NAME = "v2x-seq-spd"
 SOURCE = {
@@ -127,8 +122,17 @@ def _timestamp(entry: dict, path: Path) -> float:
     return number(value, path, f"{entry['_where']}.pointcloud_timestamp", 1e20) / 1e6
 
 
-def _calibration(reader: _Reader, side: str, entry: dict, offset: tuple[float, float]) -> tuple:
-    """(sensor → world, body → world) 4×4 of a side's frame."""
+OFFSET_CONVENTIONS = ("roadside", "vehicle")
+"""Where ``system_error_offset`` applies (docs/external-data.md): ``roadside`` (the default)
+adds (delta_x, delta_y) to the roadside LiDAR → world translation, as DAIR-V2X's own
+``calib_i2v.py`` and the OpenCOOD / CoAlign / HEAL loaders do; ``vehicle`` adds it to the
+roadside → vehicle LiDAR translation, in the vehicle LiDAR's axes, as DAIR-V2X's
+``label_i2v.py`` converter, UniV2X and CoopTrack do. They differ by (R_vehicle − I)·δ, up to
+2|δ|."""
+
+
+def _calibration(reader: _Reader, side: str, entry: dict) -> tuple:
+    """(sensor → world, body → world) 4×4 of a side's frame, without the system error offset."""
     frame = str(entry["frame_id"])
     if side == "vehicle":
         l2n_path = reader.side_path(
@@ -146,86 +150,112 @@ def _calibration(reader: _Reader, side: str, entry: dict, offset: tuple[float, f
     path = reader.side_path(side, entry, "calib_virtuallidar_to_world_path", f"calib/virtuallidar_to_world/{frame}.json")  # fmt: skip
     calib = read_json(path)
     sensor = rigid(field(calib, "rotation", path), field(calib, "translation", path), path, "")
-    sensor[:2, 3] += offset
     return sensor, sensor
 
 
-def _labels(path: Path, prefix: str, links: dict[str, str]) -> list[dict]:
-    """A side's objects: id, class, centre (sensor frame), yaw, size l, w, h."""
-    objects = read_json(path)
-    if not isinstance(objects, list):
-        raise ImportFormatError(path, "top level: expected a list of objects")
-    out, seen = [], set()
-    for k, obj in enumerate(objects):
-        where = f"[{k}]"
-        track = str(field(obj, "track_id", path, where))
-        dims = field(obj, "3d_dimensions", path, where)
-        loc = field(obj, "3d_location", path, where)
-        size = [number(field(dims, a, path, f"{where}.3d_dimensions"), path, f"{where}.3d_dimensions.{a}", 1e3) for a in "lwh"]  # fmt: skip
-        if min(size) <= 0:
-            raise ImportFormatError(path, f"{where}.3d_dimensions: sizes must be > 0, got {size}")
-        centre = [number(field(loc, a, path, f"{where}.3d_location"), path, f"{where}.3d_location.{a}") for a in "xyz"]  # fmt: skip
-        oid = links.get(track, f"{prefix}{track}")
-        if oid in seen:
-            raise ImportFormatError(path, f"{where}.track_id: {track[:20]!r} appears twice")
-        seen.add(oid)
-        out.append(
-            {
-                "id": oid,
-                "cls": str(field(obj, "type", path, where)).lower()[:40],
-                "centre": centre,
-                "yaw": number(field(obj, "rotation", path, where), path, f"{where}.rotation", 1e3),
-                "size": size,
-            }
+def corrected_roadside(
+    roadside: np.ndarray, vehicle: np.ndarray, offset: tuple[float, float], convention: str
+) -> np.ndarray:
+    """The roadside LiDAR → world 4×4 with the system error offset (metres) applied by
+    ``convention`` (:data:`OFFSET_CONVENTIONS`); ``vehicle``: the vehicle LiDAR → world."""
+    out = np.array(roadside, dtype=np.float64)
+    delta = np.array([offset[0], offset[1], 0.0])
+    if convention == "roadside":
+        out[:3, 3] += delta
+    elif convention == "vehicle":  # T_i2v's translation + δ, in the vehicle LiDAR's axes
+        out[:3, 3] += pm.matmul(np.asarray(vehicle, dtype=np.float64)[:3, :3], delta)
+    else:
+        raise ValueError(
+            f"offset convention: expected one of {OFFSET_CONVENTIONS}, got {convention!r}"
         )
     return out
 
 
-def _links(path: Path) -> tuple[dict[str, str], dict[str, str]]:
-    """{vehicle track: object id}, {roadside track: object id} of a cooperative label file."""
+def _links(path: Path) -> list[dict]:
+    """The cooperative label's objects seen by both sides: ``id`` (``v<veh track>``, else
+    ``c<track_id>``), per side its ``token`` (``veh_token`` / ``inf_token``, None when the file
+    has none) and ``track`` (``veh_track_id`` / ``inf_track_id``)."""
     labels = read_json(path)
     if not isinstance(labels, list):
         raise ImportFormatError(path, "top level: expected a list of objects")
-    veh, inf = {}, {}
+    out, seen = [], {}
     for k, label in enumerate(labels):
-        v = str(field(label, "veh_track_id", path, f"[{k}]"))
-        i = str(field(label, "inf_track_id", path, f"[{k}]"))
-        if v == _MISSING or i == _MISSING:
-            continue
-        if veh.get(v, i) != i or inf.get(i, v) != v:
-            raise ImportFormatError(path, f"[{k}]: track {v!r} / {i!r} linked twice")
-        veh[v], inf[i] = i, v
-    return {v: f"v{v}" for v in veh}, {i: f"v{v}" for i, v in inf.items()}
-
-
-def _view(observer: str, kind: str, sensor: np.ndarray, body: np.ndarray, boxes: list[dict]):
-    """A side's box view and its boxes as world objects."""
-    camera = sensor_camera(sensor)
-    k = len(boxes)
-    centres = np.array([b["centre"] for b in boxes], dtype=float).reshape(k, 3)
-    yaws = np.array([b["yaw"] for b in boxes], dtype=float)
-    world = apply(sensor, centres)
-    directions = pm.matmul(yaw_directions(yaws), sensor[:3, :3].T)
-    positions, headings = boxes_in_view(camera, world, directions)
-    sizes = np.array([b["size"] for b in boxes], dtype=float).reshape(k, 3)
-    ids, classes = [b["id"] for b in boxes], [b["cls"] for b in boxes]
-    forward = body[:3, 0]
-    pose = ObserverPose(
-        tuple(float(v) for v in body[:3, 3]), float(pm.arctan2(forward[1], forward[0]))
-    )
-    det = box_detections(positions, sizes, headings, ids, classes)
-    view = BoxView(observer, kind, camera, pose, det, sizes)
-    world_yaw = heading_of(directions)
-    objects = [
-        WorldObject(i, c, "box", tuple(w), float(y), tuple(s), (0.5, 0.5, 0.5))
-        for i, c, w, y, s in zip(
-            ids, classes, world.tolist(), world_yaw, sizes.tolist(), strict=True
+        where = f"[{k}]"
+        if not isinstance(label, dict):
+            raise ImportFormatError(path, f"{where}: expected a mapping")
+        entry = {"where": where}
+        for side, short in (("vehicle", "veh"), ("infrastructure", "inf")):
+            track = _track(label, f"{short}_track_id", path, where)
+            token = _track(label, f"{short}_token", path, where)
+            entry[side] = {"track": track, "token": token}
+        v, i = entry["vehicle"], entry["infrastructure"]
+        if (v["token"] or v["track"]) is None or (i["token"] or i["track"]) is None:
+            continue  # one side alone sees it
+        entry["id"] = (
+            f"v{v['track']}" if v["track"] else f"c{_track(label, 'track_id', path, where)}"
         )
-    ]
-    return view, objects
+        for side in ("vehicle", "infrastructure"):
+            key = (side, entry[side]["token"] or entry[side]["track"])
+            if key in seen:
+                raise ImportFormatError(
+                    path, f"{where}: {side} object {key[1][:20]!r} linked twice (also {seen[key]})"
+                )
+            seen[key] = where
+        out.append(entry)
+    return out
 
 
-def _frame(reader: _Reader, coop: dict, where: Path, key: str) -> tuple[str, ImportedFrame]:
+def _track(label: dict, key: str, path: Path, where: str) -> str | None:
+    value = label.get(key)
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int | str) or len(str(value)) > 64:
+        raise ImportFormatError(
+            path, f"{where}.{key}: expected an id string, got {str(value)[:30]}"
+        )
+    return None if str(value) in ("", _MISSING) else str(value)
+
+
+def _side_ids(
+    boxes: list[dict], side: str, prefix: str, links: list[dict], coop: Path, frame: str
+) -> int:
+    """Give each box of a side its object id (in place): linked by token where the cooperative
+    label names tokens, the track ids cross-checked (a mismatch is an error naming the frame),
+    else by track id; an unlinked box ``<prefix><track>``, a box without a track id
+    ``<prefix>untracked:<frame>:<index>``. Returns the number of boxes without a track id."""
+    by_token = {e[side]["token"]: e for e in links if e[side]["token"]}
+    by_track = {e[side]["track"]: e for e in links if e[side]["track"] and not e[side]["token"]}
+    untracked, seen = 0, set()
+    for k, box in enumerate(boxes):
+        entry = by_token.get(box["token"]) if box["token"] else None
+        if entry is not None:
+            listed = entry[side]["track"]
+            if listed is not None and listed != box["track"]:
+                raise ImportFormatError(
+                    coop,
+                    f"{entry['where']}: frame {frame[:20]!r}: {side} token {box['token'][:30]!r} "
+                    f"is track {str(box['track'])[:20]!r} in the side label, {listed[:20]!r} here",
+                )
+        elif box["track"] is not None:
+            entry = by_track.get(box["track"])
+        if entry is not None:
+            box["id"] = entry["id"]
+        elif box["track"] is not None:
+            box["id"] = f"{prefix}{box['track']}"
+        else:
+            box["id"] = f"{prefix}untracked:{frame}:{k}"
+            untracked += 1
+        if box["id"] in seen:
+            raise ImportFormatError(
+                coop, f"frame {frame[:20]!r}: {side} object {box['id'][:30]!r} appears twice"
+            )
+        seen.add(box["id"])
+    return untracked
+
+
+def _frame(
+    reader: _Reader, coop: dict, where: Path, key: str, convention: str = "roadside"
+) -> tuple[str, ImportedFrame]:
     """(sequence id, frame) of one cooperative frame."""
     veh_id = str(field(coop, "vehicle_frame", where, key))
     inf_id = str(field(coop, "infrastructure_frame", where, key))
@@ -243,18 +273,25 @@ def _frame(reader: _Reader, coop: dict, where: Path, key: str) -> tuple[str, Imp
     )
     veh = reader.frame("vehicle", veh_id, where, f"{key}.vehicle_frame")
     inf = reader.frame("infrastructure", inf_id, where, f"{key}.infrastructure_frame")
-    veh_links, inf_links = _links(reader.path(f"cooperative/label/{veh_id}.json", where, f"{key}.vehicle_frame"))  # fmt: skip
-    views, objects = [], {}
-    for side, entry, links, kind in (("vehicle", veh, veh_links, "vehicle"), ("infrastructure", inf, inf_links, "roadside")):  # fmt: skip
+    coop_path = reader.path(f"cooperative/label/{veh_id}.json", where, f"{key}.vehicle_frame")
+    links = _links(coop_path)
+    vehicle_sensor, vehicle_body = _calibration(reader, "vehicle", veh)
+    roadside, _ = _calibration(reader, "infrastructure", inf)
+    roadside = corrected_roadside(roadside, vehicle_sensor, offset, convention)
+    views, objects, untracked = [], {}, 0
+    sides = (
+        ("vehicle", veh, "vehicle", vehicle_sensor, vehicle_body),
+        ("infrastructure", inf, "roadside", roadside, roadside),
+    )
+    for side, entry, kind, sensor, body in sides:
         folder, label_folder, prefix = _SIDES[side]
         frame = str(entry["frame_id"])
         label = reader.side_path(
             side, entry, "label_lidar_std_path", f"{label_folder}/{frame}.json"
         )
-        sensor, body = _calibration(
-            reader, side, entry, offset if side == "infrastructure" else (0.0, 0.0)
-        )
-        view, found = _view(f"{side}:{frame}", kind, sensor, body, _labels(label, prefix, links))
+        boxes = read_boxes(label)
+        untracked += _side_ids(boxes, side, prefix, links, coop_path, veh_id)
+        view, found = side_view(f"{side}:{frame}", kind, sensor, body, boxes)
         views.append(view)
         for obj in found:
             objects.setdefault(obj.id, obj)  # the vehicle's box of a shared object first
@@ -269,6 +306,8 @@ def _frame(reader: _Reader, coop: dict, where: Path, key: str) -> tuple[str, Imp
         "infrastructure_sequence": str(coop.get("infrastructure_sequence", "")),
         "time_offset_s": t_veh - t_inf,
         "system_error_offset": list(offset),
+        "offset_convention": convention,
+        "untracked_objects": untracked,
     }
     return sequence, ImportedFrame(t_veh, tuple(views), list(objects.values()), meta)
 
@@ -291,15 +330,23 @@ def _digest(root: Path, files: Iterable[Path]) -> str:
 
 
 def import_v2x_seq(
-    src: str | Path, out: str | Path, sequences: Iterable[str] | None = None
+    src: str | Path,
+    out: str | Path,
+    sequences: Iterable[str] | None = None,
+    offset_convention: str = "roadside",
 ) -> ImportResult:
     """Convert the V2X-Seq-SPD folder ``src`` (only ``sequences``, e.g. ``["0010"]``, if given)
-    into a box-only dataset at ``out`` (a new or empty folder). Raises ``ImportFormatError``
+    into a box-only dataset at ``out`` (a new or empty folder); ``offset_convention``: where
+    ``system_error_offset`` applies (:data:`OFFSET_CONVENTIONS`). Raises ``ImportFormatError``
     (one line naming the file and key) for malformed input; nothing is written then.
 
     >>> import_v2x_seq("V2X-Seq-SPD", "data/v2x-seq")  # doctest: +SKIP
     ImportResult(out=PosixPath('data/v2x-seq'), episodes={10: 80, ...}, views=2, ...)
     """
+    if offset_convention not in OFFSET_CONVENTIONS:
+        raise ValueError(
+            f"offset convention: expected one of {OFFSET_CONVENTIONS}, got {offset_convention!r}"
+        )
     root, out = Path(src), check_out(out)  # checked before Path("") could become "."
     if not root.is_dir():
         raise ImportFormatError(root, "not a folder")
@@ -317,7 +364,7 @@ def import_v2x_seq(
         sequence = str(field(coop, "vehicle_sequence", coop_path, f"[{k}]"))
         if wanted is not None and sequence not in wanted:
             continue
-        sequence, frame = _frame(reader, coop, coop_path, f"[{k}]")
+        sequence, frame = _frame(reader, coop, coop_path, f"[{k}]", offset_convention)
         first = listed.setdefault(frame.meta["vehicle_frame"], f"[{k}]")
         if first != f"[{k}]":
             raise ImportFormatError(
@@ -353,10 +400,14 @@ def import_v2x_seq(
     source = SOURCE | {
         "folder": root.name,
         "sequences": {s: len(f) for s, f in sorted(grouped.items())},
+        "offset_convention": offset_convention,
+        "untracked_objects": sum(
+            f.meta["untracked_objects"] for frames in grouped.values() for f in frames
+        ),
     }
     return write_box_dataset(
         out, records, SCENARIO_NAME, source | {"sha256": _digest(root, reader.used)}
     )
 
 
-__all__ = ["import_v2x_seq"]
+__all__ = ["OFFSET_CONVENTIONS", "corrected_roadside", "import_v2x_seq"]

@@ -173,6 +173,13 @@ register(
 )
 register(
     lazy_section(
+        "dair-import",
+        "cadsim import dair-v2x of 10,000 generated DAIR-V2X-C frame pairs",
+        "eval.bench.dair_import:dair_import_section",
+    )
+)
+register(
+    lazy_section(
         "scaleout",
         "noise sweep on the local pool vs a 2-worker Dask LocalCluster",
         "eval.bench.scaleout:scaleout_section",
