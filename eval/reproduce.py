@@ -290,6 +290,7 @@ def _record(
         timer,
         command=" ".join(command),
         scale=state.sizes.scale,
+        executor=executor_record(args.workers, args.scheduler),
         datasets=state.record.get("datasets", []),
         matchers=[m.label for m in state.matchers],
         seeds=state.seeds,
@@ -307,6 +308,18 @@ def _record(
         cache=str(args.cache),
         budget_s={stage.name: stage.budget_s for stage in STAGES},
     )
+
+
+def executor_record(workers: int | None, scheduler: str | None) -> dict:
+    """Where the run's tasks ran, for the run record: a Dask scheduler's address (``--scheduler``
+    or ``$CADSIM_SCHEDULER``; the cluster decides the workers) or local processes and how many."""
+    from cadsim.generation.executors import scheduler_address
+    from cadsim.generation.local_executor import default_workers
+
+    address = scheduler_address(scheduler)
+    if address is not None:
+        return {"kind": "dask", "scheduler": address}
+    return {"kind": "local processes", "workers": default_workers() if workers is None else workers}
 
 
 def _report(out: Path, record: Path) -> None:

@@ -48,7 +48,11 @@ def test_scale_1_is_the_sizes_the_options_give():
     args = reproduce.build_parser().parse_args(["--pairs", "3", "--sweep-pairs", "0"])
     sizes = reproduce.planned_sizes(args)
     assert [d[1:] for d in sizes.datasets] == [(3, 3)] * len(sizes.datasets)
-    assert sizes.v2x == {"test": 3, "val": 3, "train": 3} and sizes.lidar == {"test": 3, "val": 3} and sizes.temporal["test"] == 3
+    assert (
+        sizes.v2x == {"test": 3, "val": 3, "train": 3}
+        and sizes.lidar == {"test": 3, "val": 3}
+        and sizes.temporal["test"] == 3
+    )
     assert sizes.sweep is None  # 0: every test pair, at any scale
     assert sizes.data_root(Path("data")) == Path("data")
     assert replace(sizes, scale=3).data_root(Path("data")) == Path("data/scale-3")
@@ -172,3 +176,12 @@ def test_no_function_of_the_reproduce_module_or_its_stages_is_over_80_lines():
         if isinstance(node, ast.FunctionDef) and node.end_lineno - node.lineno + 1 > 80
     ]
     assert long == []
+
+
+def test_the_run_record_names_the_executor(monkeypatch):
+    monkeypatch.delenv("CADSIM_SCHEDULER", raising=False)
+    assert reproduce.executor_record(3, None) == {"kind": "local processes", "workers": 3}
+    dask = reproduce.executor_record(3, "tcp://10.0.0.1:8786")
+    assert dask == {"kind": "dask", "scheduler": "tcp://10.0.0.1:8786"}
+    monkeypatch.setenv("CADSIM_SCHEDULER", "tcp://h:1")
+    assert reproduce.executor_record(None, None)["scheduler"] == "tcp://h:1"

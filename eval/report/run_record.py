@@ -114,7 +114,17 @@ def keep_cold_record(results: str | Path, record: dict) -> Path | None:
     leave it otherwise. Returns the path written, or None."""
     if not record.get("cold_start", {}).get("cold"):
         return None
-    keys = ("created", "command", "scale", "git", "machine", "wall_s", "budget_s", "runs")
+    keys = (
+        "created",
+        "command",
+        "scale",
+        "executor",
+        "git",
+        "machine",
+        "wall_s",
+        "budget_s",
+        "runs",
+    )
     keys += ("cold_start", "code_version")
     path = Path(results) / COLD_RECORD
     write_text(path, json.dumps({k: record.get(k) for k in keys}, indent=1, default=str) + "\n")
