@@ -29,7 +29,7 @@ from eval.studies.evaluation import open_entry  # noqa: E402
 
 pytestmark = [pytest.mark.slow, pytest.mark.render]
 
-# MRC renders fastest; 7 pairs at 5 per episode = 2 episodes, so both workers simulate.
+# MRC renders fastest; 7 pairs at 1 per episode = 7 episodes, so both workers simulate.
 SCENARIO = Path(__file__).resolve().parents[1] / "scenarios" / "mrc-arena.toml"
 PAIRS = 7
 MATCHERS = [MatcherSpec("sm"), MatcherSpec("rrwhm"), MatcherSpec("maximin")]
@@ -54,7 +54,7 @@ def datasets(tmp_path_factory, cluster) -> tuple[Path, Path]:
     result = generate_dataset(
         SCENARIO, remote, pairs=PAIRS, scheduler=cluster.scheduler_address, progress=False
     )
-    assert result.episodes == 2 and result.pairs == PAIRS
+    assert result.episodes == PAIRS and result.pairs == PAIRS
     return local, remote
 
 
@@ -169,3 +169,60 @@ def test_two_threads_in_one_worker_never_run_two_simulations(datasets, tmp_path)
             ex.workers = 2  # submit both episodes together, to the one worker
             generate_dataset(SCENARIO, tmp_path / "ds", pairs=PAIRS, executor=ex, progress=False)
     assert _files(tmp_path / "ds") == _files(local)
+
+
+@pytest.fixture(scope="module")
+def cli_cluster(tmp_path_factory):
+    """A real ``dask scheduler`` and two ``dask worker`` processes, as a cluster is started by
+    hand (docs/scale-out.md), the workers importing this checkout."""
+    import json
+    import subprocess
+    import sys
+
+    folder = tmp_path_factory.mktemp("cli-cluster")
+    file = folder / "scheduler.json"
+    dask = Path(sys.executable).with_name("dask")
+    root = str(Path(__file__).resolve().parents[1])
+    env = {**os.environ, "PYTHONPATH": root + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    quiet = {"stdout": subprocess.DEVNULL, "stderr": subprocess.DEVNULL, "env": env, "cwd": root}
+    scheduler = subprocess.Popen(
+        [str(dask), "scheduler", "--scheduler-file", str(file), "--no-dashboard", "--port", "0"],
+        **quiet,
+    )
+    workers = [
+        subprocess.Popen(
+            [
+                str(dask),
+                "worker",
+                "--scheduler-file",
+                str(file),
+                "--nthreads",
+                "1",
+                "--no-dashboard",
+                "--memory-limit",
+                "0",
+            ],
+            **quiet,
+        )  # fmt: skip
+        for _ in range(2)
+    ]
+    try:
+        deadline = time.monotonic() + 60
+        while not file.is_file() and time.monotonic() < deadline:
+            time.sleep(0.2)
+        address = json.loads(file.read_text())["address"]
+        with distributed.Client(address, timeout=60) as client:
+            client.wait_for_workers(2, timeout=60)
+        yield address
+    finally:
+        for process in [*workers, scheduler]:
+            process.terminate()
+        for process in [*workers, scheduler]:
+            process.wait(timeout=30)
+
+
+def test_a_cluster_started_by_hand_generates_the_same_dataset(datasets, cli_cluster, tmp_path):
+    local, _ = datasets
+    result = generate_dataset(SCENARIO, tmp_path / "cli", pairs=PAIRS, scheduler=cli_cluster, progress=False)  # fmt: skip
+    assert result.pairs == PAIRS
+    assert Dataset(tmp_path / "cli", verify=True).checksum == Dataset(local).checksum
