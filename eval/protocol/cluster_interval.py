@@ -59,21 +59,31 @@ def t_intervals(
     return mean, mean - half, mean + half
 
 
-def t_p_value(values: np.ndarray, clusters: np.ndarray) -> float:
-    """Two-sided p-value of "the mean of ``values`` is 0" with the cluster-robust standard error
-    and G − 1 degrees of freedom of :func:`t_interval` (the test its interval inverts: p < 1 −
-    level exactly when the interval excludes 0). NaN with fewer than two clusters; with no
-    spread at all, 1 for a zero mean and 0 otherwise."""
+def cluster_standard_error(values: np.ndarray, clusters: np.ndarray) -> tuple[float, int]:
+    """(SE, G): the cluster-robust (CR1) standard error of the mean of per-item ``values``
+    grouped by ``clusters`` (one label per item), and the number of clusters G. SE is NaN with
+    fewer than two clusters."""
     values = np.asarray(values, dtype=float).reshape(-1)
     labels, index = np.unique(np.asarray(clusters).reshape(-1), return_inverse=True)
     if len(values) != len(index):
         raise ValueError(f"clusters: {len(index)} labels for {len(values)} values")
     groups = len(labels)
     if groups < 2:
-        return float("nan")
-    mean = values.mean()
-    per_cluster = np.bincount(index, weights=values - mean, minlength=groups)
+        return float("nan"), groups
+    per_cluster = np.bincount(index, weights=values - values.mean(), minlength=groups)
     se = np.sqrt((per_cluster**2).sum() * groups / (groups - 1)) / len(values)
+    return float(se), groups
+
+
+def t_p_value(values: np.ndarray, clusters: np.ndarray) -> float:
+    """Two-sided p-value of "the mean of ``values`` is 0" with the cluster-robust standard error
+    and G − 1 degrees of freedom of :func:`t_interval` (the test its interval inverts: p < 1 −
+    level exactly when the interval excludes 0). NaN with fewer than two clusters; with no
+    spread at all, 1 for a zero mean and 0 otherwise."""
+    se, groups = cluster_standard_error(values, clusters)
+    if groups < 2:
+        return float("nan")
+    mean = float(np.asarray(values, dtype=float).mean())
     if se == 0:
         return 1.0 if mean == 0 else 0.0
     return float(2 * student_t.sf(abs(mean) / se, groups - 1))

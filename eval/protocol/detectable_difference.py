@@ -21,24 +21,10 @@ from __future__ import annotations
 import numpy as np
 from scipy.stats import t as student_t
 
+from eval.protocol.cluster_interval import cluster_standard_error
+
 LEVEL = 0.95
 POWER = 0.80
-
-
-def cluster_standard_error(values: np.ndarray, clusters: np.ndarray) -> tuple[float, int]:
-    """(SE, G): the cluster-robust (CR1) standard error of the mean of per-item ``values``
-    grouped by ``clusters`` (one label per item), and the number of clusters G. SE is NaN with
-    fewer than two clusters."""
-    values = np.asarray(values, dtype=float).reshape(-1)
-    labels, index = np.unique(np.asarray(clusters).reshape(-1), return_inverse=True)
-    if len(values) != len(index):
-        raise ValueError(f"clusters: {len(index)} labels for {len(values)} values")
-    groups = len(labels)
-    if groups < 2:
-        return float("nan"), groups
-    per_cluster = np.bincount(index, weights=values - values.mean(), minlength=groups)
-    se = np.sqrt((per_cluster**2).sum() * groups / (groups - 1)) / len(values)
-    return float(se), groups
 
 
 def mdd_factor(clusters: int, level: float = LEVEL, power: float = POWER) -> float:
