@@ -65,7 +65,7 @@ from eval.studies.temporal import readme_part as temporal_readme
 from eval.studies.transfer import readme_part as transfer_readme
 from eval.studies.v2x_boxes import readme_part as v2x_boxes_readme
 from eval.studies.v2x_lidar import readme_part as v2x_lidar_readme
-from eval.studies.v2x_table import readme_part as v2x_readme
+from eval.studies.v2x_report import readme_part as v2x_readme
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
 __all__ = [

@@ -54,6 +54,7 @@ import pandas as pd
 from eval.core.result_files import write_csv, write_text
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
+from eval.engine.result_table import read_result
 from eval.protocol.claims import measurement_line
 from eval.protocol.cluster_interval import t_interval
 from eval.protocol.goal_verdict import goal_line
@@ -775,11 +776,8 @@ def readme_part(
     results: Path, rel: str, stage_s: float | None = None, computed: int | None = None
 ) -> list[str]:
     """README lines "Does simulation transfer?" (none without ``table_transfer.csv``)."""
-    path = Path(results) / "table_transfer.csv"
-    if not path.is_file():
-        return []
-    table = pd.read_csv(path, keep_default_na=False, na_values=[""])
-    if table.empty:
+    table = read_result(results, "table_transfer.csv")
+    if table is None:
         return []
     table = table.reindex(columns=list(dict.fromkeys([*COLUMNS, *table.columns])))  # older files
     external = table[table["test"] == EXTERNAL_TEST]
