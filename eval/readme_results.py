@@ -58,7 +58,7 @@ from eval.report.site import headings, write_site
 from eval.report.summary_captions import SUMMARIES
 from eval.studies.agreement import readme_part as agreement_readme
 from eval.studies.external import readme_part as external_readme
-from eval.studies.multiagent import readme_part as multiagent_readme
+from eval.studies.multiagent_report import readme_part as multiagent_readme
 from eval.studies.prior_defaults import readme_part as prior_sensitivity_readme
 from eval.studies.regime_cards import regime_markdown
 from eval.studies.temporal import readme_part as temporal_readme

@@ -139,6 +139,7 @@ def test_a_prior_reader_under_denied_gets_no_number_in_the_multiagent_table():
     from test_multiagent_study import snapshot_row
 
     from eval.studies import multiagent as ma
+    from eval.studies import multiagent_report as mar
 
     rows = []
     for matcher in ("maximin", "pose_refine"):
@@ -157,5 +158,5 @@ def test_a_prior_reader_under_denied_gets_no_number_in_the_multiagent_table():
     assert mine[figures].isna().all().all()
     fused = table[(table["matcher"] == "maximin") & (table["fusion"] == "clear")]
     assert (fused["gain_family"] == 1).all()  # the reader's gain is in no Holm family
-    md = ma.to_markdown(table)
+    md = mar.to_markdown(table, ma.LABEL)
     assert f"| denied | 4 | pose_refine | clear | {NO_NUMBER} |" in md

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 
@@ -28,3 +29,10 @@ def read_result(
 def bullets(lines: list[str]) -> list[str]:
     """Report lines as Markdown bullets, each closed with a full stop."""
     return [f"- {line}." for line in lines]
+
+
+def numeric_column(table: pd.DataFrame, name: str) -> pd.Series:
+    """Column ``name`` as floats, NaN where missing (a table written before the column)."""
+    if name not in table:
+        return pd.Series(np.nan, index=table.index)
+    return pd.to_numeric(table[name], errors="coerce").astype(float)
