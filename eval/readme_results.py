@@ -62,7 +62,7 @@ from eval.studies.multiagent_report import readme_part as multiagent_readme
 from eval.studies.prior_defaults import readme_part as prior_sensitivity_readme
 from eval.studies.regime_cards import regime_markdown
 from eval.studies.temporal import readme_part as temporal_readme
-from eval.studies.transfer import readme_part as transfer_readme
+from eval.studies.transfer_report import readme_part as transfer_readme
 from eval.studies.v2x_boxes import readme_part as v2x_boxes_readme
 from eval.studies.v2x_lidar import readme_part as v2x_lidar_readme
 from eval.studies.v2x_report import readme_part as v2x_readme

@@ -34,7 +34,7 @@ from eval.studies.external import readme_part as external_part
 from eval.studies.multiagent_report import readme_part as multiagent_part
 from eval.studies.prior_defaults import readme_part as prior_part
 from eval.studies.temporal import readme_part as temporal_part
-from eval.studies.transfer import readme_part as transfer_part
+from eval.studies.transfer_report import readme_part as transfer_part
 from eval.studies.v2x_boxes import readme_part as v2x_boxes_part
 from eval.studies.v2x_lidar import readme_part as v2x_lidar_part
 from eval.studies.v2x_report import readme_part as v2x_part
