@@ -5,6 +5,7 @@ in a table built in memory without validation figures (then no verdict is stated
 
 from __future__ import annotations
 
+import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -12,6 +13,9 @@ import numpy as np
 import pandas as pd
 
 from eval.core.abstention import cannot_run
+from eval.core.tasks import MatcherSpec
+from eval.engine.named_runs import as_named
+from eval.engine.splits import Named
 
 
 def runnable(names: Sequence[str], condition: str) -> list[str]:
@@ -58,3 +62,24 @@ def ranked_on_validation(group: pd.DataFrame, validation: Mapping[str, float] | 
         return sorted(names, key=lambda m: -validation.get(m, -np.inf))
     test = group.groupby("matcher", sort=False)["f1"].mean()
     return list(test.sort_values(ascending=False, kind="stable").index)
+
+
+def chosen_specs(
+    out_dir: str | Path, label: str, matchers: Sequence[MatcherSpec]
+) -> tuple[Named, dict[str, float | None]]:
+    """The spec (tuned parameters included) and τ of each matcher on dataset `label`, as the
+    main variant's ``thresholds.csv`` in `out_dir` records them; a matcher it lacks runs as
+    requested with no τ (None)."""
+    named, taus = as_named(matchers), {}
+    path = Path(out_dir) / "thresholds.csv"
+    if not path.is_file():
+        return named, {m: None for m in named}
+    table = pd.read_csv(path, keep_default_na=False, na_values=[""])
+    table = table[table["dataset"] == label]
+    for row in table.itertuples(index=False):
+        if row.matcher not in named:
+            continue
+        params = json.loads(row.params) if "params" in table.columns and row.params else {}
+        named[row.matcher] = MatcherSpec.of(named[row.matcher].name, **params)
+        taus[row.matcher] = None if pd.isna(row.tau) else float(row.tau)
+    return named, {m: taus.get(m) for m in named}
