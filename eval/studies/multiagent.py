@@ -11,8 +11,8 @@ roadside unit, a third vehicle, all six) each snapshot's pairwise matchings with
 scores and the pairs kept at τ — go to every fusion method of the registry
 (:mod:`matchers.fusion`), on the test *and* the validation snapshots; the result is scored by
 :mod:`eval.protocol.multiway_metrics`. The table's figures are the test snapshots'; the
-``val_*`` columns are the validation snapshots', on which every "best" of :func:`goals` is chosen
-before it is reported on test.
+``val_*`` columns are the validation snapshots', on which every "best" of the goals
+(:func:`eval.studies.multiagent_report.goals`) is chosen before it is reported on test.
 ``ms_per_snapshot``: the matcher's time on the subset's pairs plus the fusion's, per snapshot.
 ``f1_gain``: the pooled F1 of the fused result minus that of ``independent`` (same matcher,
 preset, N) — pooled over every view pair of every snapshot and run, the same numbers as the
@@ -22,7 +22,7 @@ that p Holm-adjusted over every gain of the table (``gain_p_holm``, family size
 ``gain_family``; :mod:`eval.protocol.holm`). ``count_error_ci_*``: the count error's episode-
 bootstrap interval. ``time_ratio``: ms per snapshot over that of the same matcher, fusion and
 preset at the smallest N, with its interval. The cycle-violation rate is 0 for every fused
-output by construction: :func:`goals` checks it as an invariant, not as a goal.
+output by construction: the report checks it as an invariant, not as a goal.
 A two-view matcher that cannot run under a preset (a prior reader under ``denied``,
 :mod:`eval.core.abstention`) keeps its rows with no number: it enters no bootstrap, no Holm
 family and no "best".

@@ -32,8 +32,8 @@ linearised per frame pair (delta method), then
 :func:`eval.protocol.cluster_interval.t_interval` over clusters — simulation episodes on cadsim,
 blocks of :data:`eval.studies.agreement.EXTERNAL_BLOCK` consecutive pairs of one sequence on
 DMGM (its test pairs come from only two sequences, too few clusters). The goals
-(:func:`goals`) read these intervals through :mod:`eval.protocol.goal_verdict`: "met" only when
-the whole interval clears the bar.
+(:func:`eval.studies.transfer_report.goals`) read these intervals through
+:mod:`eval.protocol.goal_verdict`: "met" only when the whole interval clears the bar.
 """
 
 from __future__ import annotations
