@@ -42,6 +42,8 @@ from eval.core.abstention import cannot_run
 from eval.core.result_files import write_csv, write_text
 from eval.core.runner import Runner, requests_for
 from eval.core.tasks import MatcherSpec, PairOutcome
+from eval.engine.named_runs import as_named
+from eval.engine.splits import open_entry
 from eval.protocol.calibration import calibrate, predictions
 from eval.protocol.multiway_metrics import (
     MultiwayCounts,
@@ -53,7 +55,6 @@ from eval.protocol.pooled_bootstrap import (
     RESAMPLES,
     SEED,
 )
-from eval.studies.evaluation import as_named, open_entry
 from eval.studies.multiagent_gains import (
     BY,
     INTERVAL_COLUMNS,

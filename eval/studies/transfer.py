@@ -50,11 +50,13 @@ import pandas as pd
 from eval.core.result_files import write_csv, write_text
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
+from eval.engine.protocol_run import evaluate
+from eval.engine.splits import open_entry
+from eval.engine.validation_choice import chosen_specs
 from eval.protocol.model_options import with_model
 from eval.protocol.variants import MAIN, variant_path
 from eval.report.tables import build_table
 from eval.report.threshold_format import rounded
-from eval.studies.evaluation import chosen_specs, evaluate, open_entry
 from eval.studies.transfer_gap import paired_interval, pooled_f1_terms
 from eval.studies.transfer_matrix import COLUMNS, GAP_COLUMNS, to_markdown
 from eval.studies.transfer_reference import LEARNED, reference_for, validation_pooled_f1

@@ -15,10 +15,11 @@ import pandas as pd
 
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
+from eval.engine.named_runs import run_named, score_runs
+from eval.engine.validation_choice import chosen_specs
 from eval.protocol.metrics import summarise_pooled
 from eval.protocol.variants import MAIN, variant_path
 from eval.report.tables import build_table
-from eval.studies.evaluation import chosen_specs, run_named, score_runs
 from eval.studies.transfer_sets import TestSet
 
 log = logging.getLogger("eval.studies.transfer")

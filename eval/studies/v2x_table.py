@@ -45,10 +45,16 @@ from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
 from eval.engine.comparison import INTERVAL_COLUMNS, best_against_runner_up
 from eval.engine.episode_interval import column_interval
-from eval.engine.validation_choice import ranked_on_validation, runnable, validation_f1
+from eval.engine.protocol_run import evaluate
+from eval.engine.splits import open_entry
+from eval.engine.validation_choice import (
+    chosen_specs,
+    ranked_on_validation,
+    runnable,
+    validation_f1,
+)
 from eval.protocol import tuning
 from eval.protocol.metrics import summarise_pooled, summarise_runs
-from eval.studies.evaluation import chosen_specs, evaluate, open_entry
 from eval.studies.v2x_markdown import to_markdown
 
 log = logging.getLogger(__name__)
