@@ -78,3 +78,16 @@ def test_result_files_read_back(tmp_path):
         "preset,matcher,val_f1\ndenied,pose,0.9\ndenied,sm,0.5\nexact,pose,0.8\n"
     )
     assert recorded_validation(tmp_path, "v2x") == {"denied": {"sm": 0.5}, "exact": {"pose": 0.8}}
+
+
+def test_a_declared_goal_is_met_only_when_its_interval_clears_the_bar():
+    from eval.engine.goal import Goal
+
+    goal = Goal("gnss-urban", "F1 ≥ 90", ("f1_mean", "f1_low", "f1_high"), 0.9)
+    row = pd.Series({"f1_mean": 0.95, "f1_low": 0.92, "f1_high": 0.97})
+    assert goal.line(row, "`x`").startswith("F1 ≥ 90: met — 95.0 [92.0, 97.0]")
+    crossing = row.copy()
+    crossing["f1_low"] = 0.88
+    assert "not shown" in goal.line(crossing, "`x`")
+    at_most = Goal("denied", "error ≤ 10", ("f1_mean", "f1_low", "f1_high"), 0.99, at_least=False)
+    assert ": met" in at_most.line(row, "`x`")

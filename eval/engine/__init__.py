@@ -6,7 +6,8 @@ data, methods, conditions, metrics and comparisons.
   executor scored at τ, the files of each protocol variant (:mod:`eval.engine.protocol_run`,
   :mod:`eval.engine.named_runs`, :mod:`eval.engine.variant_files`, AP and PR curves in
   :mod:`eval.engine.ranking_quality`);
-- choices on validation (:mod:`eval.engine.validation_choice`);
+- choices on validation (:mod:`eval.engine.validation_choice`) and goals as declared
+  (:mod:`eval.engine.goal`);
 - episode-level intervals of per-pair values (:mod:`eval.engine.episode_interval`) and the
   best-against-runner-up comparison with its MDD (:mod:`eval.engine.comparison`);
 - a study's result files read back and the Markdown cells of its tables

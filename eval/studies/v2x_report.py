@@ -12,10 +12,10 @@ import pandas as pd
 
 from eval.engine.cells import cell, has_interval, ranged
 from eval.engine.comparison import INTERVAL_COLUMNS
+from eval.engine.goal import Goal
 from eval.engine.result_table import bullets, read_result
 from eval.engine.validation_choice import recorded_validation, runnable
 from eval.protocol.claims import difference_verdict
-from eval.protocol.goal_verdict import goal_line
 from eval.studies.v2x_markdown import to_markdown
 from eval.studies.v2x_realism import realism_check
 from eval.studies.v2x_table import (
@@ -131,15 +131,14 @@ def findings(
     return out
 
 
+F1 = ("f1_mean", "f1_low", "f1_high")
+SUCCESS = ("success_1m_2deg", "success_low", "success_high")
 GOALS = (
-    # (preset, goal, metric column, bar, detail beyond "`name`")
-    ("gnss-urban", "`gnss-urban` F1 ≥ 90", "f1", 0.9, None),
-    ("gnss-urban", "`gnss-urban` success@(1 m, 2°) ≥ 90", "success", 0.9, "share_of_oracle"),
-    ("denied", "`denied` F1 ≥ 80", "f1", 0.8, None),
+    Goal("gnss-urban", "`gnss-urban` F1 ≥ 90", F1, 0.9),
+    Goal("gnss-urban", "`gnss-urban` success@(1 m, 2°) ≥ 90", SUCCESS, 0.9),
+    Goal("denied", "`denied` F1 ≥ 80", F1, 0.8),
 )
 """The V2X goals: each read off the matcher chosen on validation under its preset."""
-_METRIC = {"f1": ("f1_mean", "f1_low", "f1_high")}
-_METRIC["success"] = ("success_1m_2deg", "success_low", "success_high")
 
 
 def goals(
@@ -148,16 +147,15 @@ def goals(
     """The :data:`GOALS` lines, each with its interval and a verdict that reads it
     (:mod:`eval.protocol.goal_verdict`); the method is the one chosen on validation."""
     out = []
-    chosen = chosen_by_preset(table, {g[0]: None for g in GOALS}, validation)
-    for preset, goal, metric, bar, extra in (g for g in GOALS if g[0] in chosen):
-        name, row = chosen[preset]
+    chosen = chosen_by_preset(table, {g.condition: None for g in GOALS}, validation)
+    for goal in (g for g in GOALS if g.condition in chosen):
+        name, row = chosen[goal.condition]
         detail = (
             f"`{name}`; {cell(row.share_of_oracle, digits=0)} % of the oracle's"
-            if extra == "share_of_oracle"
+            if goal.metric == SUCCESS
             else f"`{name}`, chosen on validation"
         )
-        value, low, high = (getattr(row, c) for c in _METRIC[metric])
-        out.append(goal_line(goal, value, low, high, bar, detail=detail))
+        out.append(goal.line(row, detail))
     return out
 
 
