@@ -10,6 +10,7 @@ import pytest
 
 from eval.protocol.holm import holm
 from eval.studies import multiagent as ma
+from eval.studies import multiagent_report as mar
 
 FIELDS = (
     "true_positives",
@@ -87,7 +88,7 @@ def test_gain_p_values_are_holm_adjusted_over_every_gain_of_the_table():
     np.testing.assert_allclose(fused["gain_p_holm"], holm(fused["gain_p"]))
     assert (fused["gain_p_holm"] >= fused["gain_p"]).all()
     assert (fused.loc[fused["fusion"] == "spectral", "gain_p"] == 1.0).all()  # no difference
-    md = ma.to_markdown(table)
+    md = mar.to_markdown(table, ma.LABEL)
     assert "Holm-adjusted p, m = 12" in md and "family-wise" in md
 
 
@@ -143,9 +144,9 @@ def planted_table(**columns) -> pd.DataFrame:
 def test_every_best_is_chosen_on_validation_and_reported_on_test():
     table = planted_table()
     fused = table[table["fusion"] != "independent"]
-    assert ma.best_on_validation(fused, "val_f1_gain", lowest=False).fusion == "a"
-    assert ma.best_on_validation(table, "val_count_error", lowest=True).fusion == "a"
-    gain, count = ma.goals(table)[1:3]
+    assert mar.best_on_validation(fused, "val_f1_gain", lowest=False).fusion == "a"
+    assert mar.best_on_validation(table, "val_count_error", lowest=True).fusion == "a"
+    gain, count = mar.goals(table)[1:3]
     # a's test gain 1 point [-1, 3]: not met, although b's test gain would meet it
     assert "not met — 1.0 points [-1.0, 3.0] (m + a," in gain
     # a's test count error 9.0 % [8.5, 9.5]: met, reported with a's test figure, not b's 1 %
@@ -157,17 +158,19 @@ def test_every_best_is_chosen_on_validation_and_reported_on_test():
 
 def test_goal_verdicts_follow_the_interval():
     crossing = planted_table(count_error_ci_high=0.12)
-    assert "at N = 6 with the best method: not shown — 9.0 % [8.5, 12.0]" in ma.goals(crossing)[2]
+    assert "at N = 6 with the best method: not shown — 9.0 % [8.5, 12.0]" in mar.goals(crossing)[2]
     stale = planted_table().drop(columns=["val_f1_gain", "val_count_error", "val_f1_pooled"])
-    assert all("not shown — no validation figures" in line for line in ma.goals(stale)[1:3])
+    assert all("not shown — no validation figures" in line for line in mar.goals(stale)[1:3])
 
 
 def test_cycle_consistency_is_an_invariant_line():
     table = planted_table()
     table.loc[table["fusion"] == "independent", "cycle_violation_rate"] = 0.4
-    assert ma.goals(table)[0].startswith("invariant: fused outputs have no cycle violation — holds")
+    assert mar.goals(table)[0].startswith(
+        "invariant: fused outputs have no cycle violation — holds"
+    )
     table.loc[table["fusion"] == "b", "cycle_violation_rate"] = 0.1
-    assert "— violated (rate 10.0 % for m + b" in ma.goals(table)[0]
+    assert "— violated (rate 10.0 % for m + b" in mar.goals(table)[0]
 
 
 def test_the_time_ratio_is_against_the_smallest_n_of_the_same_method():
@@ -181,7 +184,7 @@ def test_the_time_ratio_is_against_the_smallest_n_of_the_same_method():
     assert table.loc[6, "time_ratio_ci_low"] == pytest.approx(5.0)
     assert table.loc[2, "time_ratio"] == pytest.approx(1.0)
     assert "≤ 15 × the two-view time (N = 2) for every matcher and fusion: met — 5.0×" in "\n".join(
-        ma.goals(table.reset_index().assign(val_f1_pooled=0.5))
+        mar.goals(table.reset_index().assign(val_f1_pooled=0.5))
     )
 
 

@@ -12,7 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from eval.studies import transfer
+from eval.studies import transfer, transfer_report
 from eval.studies.external import CALIBRATION_DIR, TEST_DIR
 
 # --- intervals -------------------------------------------------------------------------------
@@ -265,7 +265,7 @@ def test_the_matrix_on_dmgm_end_to_end(dmgm_model, main_tables, runner, monkeypa
     assert math.isnan(sim["diff_sim_only"])
     written = pd.read_csv(out / "table_transfer.csv")
     assert len(written) == 2 and "Δ F1 [95 % CI]" in (out / "table_transfer.md").read_text()
-    lines = transfer.goals(written)
+    lines = transfer_report.goals(written)
     assert lines[0].startswith("trained on cadsim only, no prior") and " [" in lines[0]
 
 
@@ -295,29 +295,31 @@ def _goal_table(diff, low, high, gap=(0.01, -0.02, 0.04), pose=(0.98, 0.975, 0.9
 
 
 def test_a_goal_is_met_only_when_its_whole_interval_clears_the_bar(tmp_path):
-    lines = transfer.goals(_goal_table(0.005, -0.05, 0.06))  # 61.2 against 60.7, ± 5.5
+    lines = transfer_report.goals(_goal_table(0.005, -0.05, 0.06))  # 61.2 against 60.7, ± 5.5
     assert lines[0].startswith("trained on cadsim only, no prior, beats")
     assert ": not shown — 0.5 points [-5.0, 6.0]" in lines[0]
     assert "Freealign chosen on the validation split (its pooled F1 there 70.0)" in lines[0]
     assert "12 blocks" in lines[0]
     assert ": met — 98.0 [97.5, 99.0]" in lines[1] and "learned − Freealign" in lines[1]
     assert ": met — 1.0 points [-2.0, 4.0]" in lines[2]  # gap ≤ 5: the whole interval below
-    assert transfer.goals(_goal_table(0.05, 0.01, 0.09))[0].split(" — ")[0].endswith(": met")
-    assert ": not met —" in transfer.goals(_goal_table(-0.08, -0.12, -0.03))[0]
-    crossing = transfer.goals(_goal_table(0, 0, 0, gap=(0.04, 0.01, 0.07), pose=(0.98, 0.96, 1)))
+    assert transfer_report.goals(_goal_table(0.05, 0.01, 0.09))[0].split(" — ")[0].endswith(": met")
+    assert ": not met —" in transfer_report.goals(_goal_table(-0.08, -0.12, -0.03))[0]
+    crossing = transfer_report.goals(
+        _goal_table(0, 0, 0, gap=(0.04, 0.01, 0.07), pose=(0.98, 0.96, 1))
+    )
     assert ": not shown —" in crossing[1] and ": not shown —" in crossing[2]
-    no_interval = transfer.goals(_goal_table(0.1, np.nan, np.nan))
+    no_interval = transfer_report.goals(_goal_table(0.1, np.nan, np.nan))
     assert ": not shown — 10.0 points (no interval)" in no_interval[0]
     # a measured time has no sampling interval: a point measurement, never "met" / "not met"
     for seconds in (90, 130):
-        timed = transfer.goals(_goal_table(0, 0, 0), stage_s=seconds, computed=3)[-1]
+        timed = transfer_report.goals(_goal_table(0, 0, 0), stage_s=seconds, computed=3)[-1]
         assert f": {seconds} s (" in timed and timed.endswith("no interval, so no verdict)")
         assert " met" not in timed
 
 
 def test_the_readme_part_reads_the_goals_from_the_csv(tmp_path):
     _goal_table(0.005, -0.05, 0.06).to_csv(tmp_path / "table_transfer.csv", index=False)
-    text = "\n".join(transfer.readme_part(tmp_path, "results"))
+    text = "\n".join(transfer_report.readme_part(tmp_path, "results"))
     assert "### Does simulation transfer?" in text and "not shown — 0.5 points" in text
     assert "Δ F1 [95 % CI]" in text and "+0.5 [-5.0, +6.0]" in text
 
@@ -325,7 +327,7 @@ def test_the_readme_part_reads_the_goals_from_the_csv(tmp_path):
 def test_the_blocks_are_named_in_the_table_and_the_goal_lines(tmp_path):
     table = _goal_table(0.005, -0.05, 0.06)
     assert "(109 frame pairs in 12 blocks of 10 pairs)" in transfer.to_markdown(table)
-    assert "t-interval over 12 blocks of 10 pairs" in transfer.goals(table)[0]
+    assert "t-interval over 12 blocks of 10 pairs" in transfer_report.goals(table)[0]
 
 
 def test_a_table_written_before_the_intervals_reads_as_not_shown(tmp_path):
@@ -333,7 +335,7 @@ def test_a_table_written_before_the_intervals_reads_as_not_shown(tmp_path):
     old += ["handcrafted", "handcrafted_f1_pooled", "handcrafted_ap", "model_sha256"]
     table = _goal_table(0.005, -0.05, 0.06)[old]
     table.to_csv(tmp_path / "table_transfer.csv", index=False)
-    lines = transfer.readme_part(tmp_path, "results")
+    lines = transfer_report.readme_part(tmp_path, "results")
     goals = [line for line in lines if line.startswith("- ")]
     assert len(goals) == 4 and all(": not shown —" in line for line in goals)
     assert "Freealign not chosen on validation" in goals[0]  # an older table says so

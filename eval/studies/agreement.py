@@ -26,6 +26,7 @@ import pandas as pd
 from scipy.stats import rankdata
 
 from eval.core.result_files import write_csv
+from eval.engine.result_table import read_result
 from eval.report.tables import PAPER_CSV, PAPER_NAMES, dataset_order, load_paper
 
 REFERENCE = "DMGM CAD 069+071"
@@ -191,11 +192,8 @@ def to_markdown(table: pd.DataFrame) -> str:
 
 def readme_part(results: Path, rel: str) -> list[str]:
     """README lines for ``agreement.csv`` (none without it or when it is empty)."""
-    path = Path(results) / "agreement.csv"
-    if not path.is_file():
-        return []
-    table = pd.read_csv(path, keep_default_na=False, na_values=[""])
-    if table.empty:
+    table = read_result(results, "agreement.csv")
+    if table is None:
         return []
     return [
         "### Do these rankings hold on external data?",

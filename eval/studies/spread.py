@@ -17,7 +17,8 @@ from pathlib import Path
 import pandas as pd
 
 from eval.core.runner import Runner
-from eval.studies.evaluation import Named, run_named, score_runs
+from eval.engine.named_runs import run_named, score_runs
+from eval.engine.splits import Named
 
 COLUMNS = (
     "dataset",

@@ -112,30 +112,25 @@ def evaluate_boxes(
 
 def _delta_line(results: Path) -> list[str]:
     """Per preset: the validation-chosen matcher's test F1 with boxes against with cameras."""
-    from eval.studies.v2x_table import _ranged, _validation, chosen_row
+    from eval.engine.cells import ranged
+    from eval.engine.result_table import read_result
+    from eval.engine.validation_choice import recorded_validation
+    from eval.studies.v2x_report import chosen_by_preset, chosen_row
 
     out = []
     boxes = pd.read_csv(results / f"table_{NAME}.csv", keep_default_na=False, na_values=[""])
-    full_path = results / "table_v2x.csv"
-    full = (
-        pd.read_csv(full_path, keep_default_na=False, na_values=[""])
-        if full_path.is_file()
-        else None
-    )
-    val_boxes, val_full = _validation(results, NAME), _validation(results)
-    for preset in dict.fromkeys(boxes["preset"]):
-        found = chosen_row(boxes, preset, val_boxes)
-        if found is None:
-            continue
-        name, row = found
+    full = read_result(results, "table_v2x.csv", allow_empty=True)
+    val_boxes, val_full = recorded_validation(results, NAME), recorded_validation(results, "v2x")
+    presets = dict.fromkeys(boxes["preset"])
+    for preset, (name, row) in chosen_by_preset(boxes, presets, val_boxes).items():
         text = (
             f"`{preset}`: with boxes only, `{name}` (chosen on validation) "
-            f"{_ranged(row.f1_mean, row.f1_low, row.f1_high)} F1, success@(1 m, 2°) "
-            f"{_ranged(row.success_1m_2deg, row.success_low, row.success_high)}"
+            f"{ranged(row.f1_mean, row.f1_low, row.f1_high)} F1, success@(1 m, 2°) "
+            f"{ranged(row.success_1m_2deg, row.success_low, row.success_high)}"
         )
         other = chosen_row(full, preset, val_full) if full is not None else None
         if other is not None:
-            text += f"; with cameras `{other[0]}` {_ranged(other[1].f1_mean, other[1].f1_low, other[1].f1_high)} F1"
+            text += f"; with cameras `{other[0]}` {ranged(other[1].f1_mean, other[1].f1_low, other[1].f1_high)} F1"
         out.append(text)
     return out
 
@@ -143,42 +138,45 @@ def _delta_line(results: Path) -> list[str]:
 def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[str]:
     """Report lines for the box-only table (none without ``table_v2x_boxes.md``); ``seconds``:
     the stage's time in the last cold run (export, import and evaluation)."""
-    from eval.studies.v2x_table import compact_markdown
+    from eval.engine.result_table import bullets
+    from eval.studies.v2x_report import compact_markdown
 
     results = Path(results)
     markdown = compact_markdown(results, NAME, LABEL)
-    if markdown is None:
-        return []
-    return [
-        "### The V2X task with boxes only",
-        "",
-        "`cad-v2x` exported in the OPV2V layout and imported back as 3-D boxes — what a "
-        "LiDAR-box method sees: the same detections (positions as the cameras measured them), "
-        "ground truth and priors, each object's true size and heading — label-quality boxes — "
-        "instead of image appearance, no pixels (docs/external-data.md). "
-        "Every matcher that runs without pixels, under the full table's protocol (equal tuning "
-        "budget, τ and parameters on validation, oracle and prior rows). Per preset the best "
-        f"by validation F1, the best without a prior and the reference rows; every matcher: "
-        f"[{rel}/table_{NAME}.md]({rel}/table_{NAME}.md).",
-        "",
-        markdown,
-        "",
-        *[f"- {line}." for line in _delta_line(results)],
-        *(
-            [
-                "- "
-                + measurement_line(
-                    "stage time (export, import, evaluation)", seconds, 120.0, "last cold run"
-                )
-                + "."
-            ]
-            if seconds is not None
-            else []
-        ),
-        "",
-        f"(`{rel}/table_{NAME}.csv`, `{rel}/table_{NAME}_intervals.csv`, `{rel}/{NAME}/`.)",
-        "",
-    ]
+    return (
+        []
+        if markdown is None
+        else [
+            "### The V2X task with boxes only",
+            "",
+            "`cad-v2x` exported in the OPV2V layout and imported back as 3-D boxes — what a "
+            "LiDAR-box method sees: the same detections (positions as the cameras measured them), "
+            "ground truth and priors, each object's true size and heading — label-quality boxes — "
+            "instead of image appearance, no pixels (docs/external-data.md). "
+            "Every matcher that runs without pixels, under the full table's protocol (equal tuning "
+            "budget, τ and parameters on validation, oracle and prior rows). Per preset the best "
+            f"by validation F1, the best without a prior and the reference rows; every matcher: "
+            f"[{rel}/table_{NAME}.md]({rel}/table_{NAME}.md).",
+            "",
+            markdown,
+            "",
+            *bullets(_delta_line(results)),
+            *(
+                [
+                    "- "
+                    + measurement_line(
+                        "stage time (export, import, evaluation)", seconds, 120.0, "last cold run"
+                    )
+                    + "."
+                ]
+                if seconds is not None
+                else []
+            ),
+            "",
+            f"(`{rel}/table_{NAME}.csv`, `{rel}/table_{NAME}_intervals.csv`, `{rel}/{NAME}/`.)",
+            "",
+        ]
+    )
 
 
 __all__ = ["LABEL", "NAME", "as_boxes", "box_matchers", "evaluate_boxes", "readme_part"]

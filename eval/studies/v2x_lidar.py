@@ -131,10 +131,13 @@ def _camera_runs_cover(folder: Path, matchers: Sequence[MatcherSpec], seeds: Seq
 def goal_line(results: Path) -> list[str]:
     """Under ``gnss-urban``: the validation-chosen matcher's F1 and success@(1 m, 2°) on LiDAR
     boxes against the oracle's success, with intervals."""
-    from eval.studies.v2x_table import ORACLE_ROW, _ranged, _validation, chosen_row
+    from eval.engine.cells import ranged
+    from eval.engine.validation_choice import recorded_validation
+    from eval.studies.v2x_report import chosen_row
+    from eval.studies.v2x_table import ORACLE_ROW
 
     table = pd.read_csv(Path(results) / f"table_{NAME}.csv", keep_default_na=False, na_values=[""])
-    found = chosen_row(table, "gnss-urban", _validation(Path(results), NAME))
+    found = chosen_row(table, "gnss-urban", recorded_validation(Path(results), NAME))
     oracle = table[(table["preset"] == "gnss-urban") & (table["matcher"] == ORACLE_ROW)]
     if found is None or oracle.empty:
         return []
@@ -142,23 +145,23 @@ def goal_line(results: Path) -> list[str]:
     o = oracle.iloc[0]
     return [
         f"Under `gnss-urban` on LiDAR boxes the matcher chosen on validation, `{name}`, reaches "
-        f"F1 {_ranged(row.f1_mean, row.f1_low, row.f1_high)} and success@(1 m, 2°) "
-        f"{_ranged(row.success_1m_2deg, row.success_low, row.success_high)}; the oracle "
-        f"(true matches) {_ranged(o.success_1m_2deg, o.success_low, o.success_high)}"
+        f"F1 {ranged(row.f1_mean, row.f1_low, row.f1_high)} and success@(1 m, 2°) "
+        f"{ranged(row.success_1m_2deg, row.success_low, row.success_high)}; the oracle "
+        f"(true matches) {ranged(o.success_1m_2deg, o.success_low, o.success_high)}"
     ]
 
 
 def readme_part(results: Path, rel: str) -> list[str]:
     """Report lines for the LiDAR table (none without ``table_v2x_lidar.md``)."""
+    from eval.engine.result_table import bullets
+    from eval.studies.v2x_report import compact_markdown
     from eval.studies.v2x_sensors import NAME as SENSORS
     from eval.studies.v2x_sensors import sensor_lines
-    from eval.studies.v2x_table import compact_markdown
 
-    results = Path(results)
-    markdown = compact_markdown(results, NAME, LABEL)
+    markdown = compact_markdown(Path(results), NAME, LABEL)
     if markdown is None:
         return []
-    return [
+    lines = [
         "### The V2X task on LiDAR boxes",
         "",
         "`cad-v2x-both`: the cad-v2x frames sensed by each vehicle's camera and a 64-channel roof "
@@ -170,7 +173,7 @@ def readme_part(results: Path, rel: str) -> list[str]:
         "",
         markdown,
         "",
-        *[f"- {line}." for line in goal_line(results)],
+        *bullets(goal_line(results)),
         "",
         "LiDAR against camera on the same frames, per preset and matcher family (the matcher "
         "chosen on validation, the same on both sensors): mean per-frame-pair difference of F1 "
@@ -178,12 +181,13 @@ def readme_part(results: Path, rel: str) -> list[str]:
         "difference stays beyond 0 after Holm's adjustment over every comparison of "
         f"[{rel}/table_{SENSORS}.csv]({rel}/table_{SENSORS}.csv):",
         "",
-        *[f"- {line}." for line in sensor_lines(results)],
+        *bullets(sensor_lines(results)),
         "",
         f"(`{rel}/table_{NAME}.csv`, `{rel}/table_{NAME}_intervals.csv`, `{rel}/{NAME}/`, "
         f"`{rel}/table_{SENSORS}.csv`.)",
         "",
     ]
+    return lines
 
 
 __all__ = ["LABEL", "NAME", "SCENARIO", "evaluate_lidar", "generate_lidar_splits", "readme_part"]

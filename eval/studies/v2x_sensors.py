@@ -176,13 +176,13 @@ def write_sensor_table(
 ) -> pd.DataFrame:
     """``out_dir/table_v2x_sensors.csv`` from the LiDAR and camera evaluation folders of the same
     split (each holding ``metrics_per_pair.csv`` and ``validation_f1.csv``); returns the table."""
-    from eval.studies.v2x_table import _validation
+    from eval.engine.validation_choice import recorded_validation
 
     lidar_dir, camera_dir = Path(lidar_dir), Path(camera_dir)
     read = lambda d: pd.read_csv(d / "metrics_per_pair.csv", keep_default_na=False, na_values=[""])  # noqa: E731
     validation = mean_validation(
-        _validation(lidar_dir.parent, lidar_dir.name),
-        _validation(camera_dir.parent, camera_dir.name),
+        recorded_validation(lidar_dir.parent, lidar_dir.name),
+        recorded_validation(camera_dir.parent, camera_dir.name),
     )
     table = sensor_differences(read(lidar_dir), read(camera_dir), validation)
     write_csv(table.round(6), Path(out_dir) / f"table_{NAME}.csv")
