@@ -138,11 +138,13 @@ def _delta_line(results: Path) -> list[str]:
 def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[str]:
     """Report lines for the box-only table (none without ``table_v2x_boxes.md``); ``seconds``:
     the stage's time in the last cold run (export, import and evaluation)."""
+    from eval.engine.power import power_line
     from eval.engine.result_table import bullets
     from eval.studies.v2x_report import compact_markdown
 
     results = Path(results)
     markdown = compact_markdown(results, NAME, LABEL)
+    power = [line for line in (power_line(results, NAME),) if line]
     return (
         []
         if markdown is None
@@ -151,8 +153,8 @@ def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[s
             "",
             "`cad-v2x` exported in the OPV2V layout and imported back as 3-D boxes — what a "
             "LiDAR-box method sees: the same detections (positions as the cameras measured them), "
-            "ground truth and priors, each object's true size and heading — label-quality boxes — "
-            "instead of image appearance, no pixels (docs/external-data.md). "
+            "ground truth and priors, each view's reported size (the detector's noisy estimate) "
+            "and heading instead of image appearance, no pixels (docs/external-data.md). "
             "Every matcher that runs without pixels, under the full table's protocol (equal tuning "
             "budget, τ and parameters on validation, oracle and prior rows). Per preset the best "
             f"by validation F1, the best without a prior and the reference rows; every matcher: "
@@ -160,7 +162,7 @@ def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[s
             "",
             markdown,
             "",
-            *bullets(_delta_line(results)),
+            *bullets(_delta_line(results) + power),
             *(
                 [
                     "- "

@@ -153,6 +153,7 @@ def goal_line(results: Path) -> list[str]:
 
 def readme_part(results: Path, rel: str) -> list[str]:
     """Report lines for the LiDAR table (none without ``table_v2x_lidar.md``)."""
+    from eval.engine.power import power_line
     from eval.engine.result_table import bullets
     from eval.studies.v2x_report import compact_markdown
     from eval.studies.v2x_sensors import NAME as SENSORS
@@ -173,7 +174,7 @@ def readme_part(results: Path, rel: str) -> list[str]:
         "",
         markdown,
         "",
-        *bullets(goal_line(results)),
+        *bullets(goal_line(results) + [line for line in (power_line(results, NAME),) if line]),
         "",
         "LiDAR against camera on the same frames, per preset and matcher family (the matcher "
         "chosen on validation, the same on both sensors): mean per-frame-pair difference of F1 "

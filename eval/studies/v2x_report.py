@@ -13,6 +13,7 @@ import pandas as pd
 from eval.engine.cells import cell, has_interval, ranged
 from eval.engine.comparison import INTERVAL_COLUMNS
 from eval.engine.goal import Goal
+from eval.engine.power import power_line
 from eval.engine.result_table import bullets, read_result
 from eval.engine.validation_choice import recorded_validation, runnable
 from eval.protocol.claims import difference_verdict
@@ -187,6 +188,7 @@ def readme_part(results: Path, rel: str) -> list[str]:
     validation = recorded_validation(results, SUBDIR)
     intervals = read_intervals(results, SUBDIR)
     lines = goals(table, validation) + runner_up_lines(intervals)
+    lines += [line for line in (power_line(results, SUBDIR),) if line]
     lines += realism_check(results)
     episodes = int(intervals["episodes"].max()) if len(intervals) else 0
     return [
