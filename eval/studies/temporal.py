@@ -6,7 +6,7 @@ Protocol. Each sequence (10 frames, 0.2 s apart, of the same two vehicles) becom
 :class:`~matchers.core.sequence_problem.SequenceProblem`: its odometry drift redrawn for the run
 (:func:`cadsim.dataset.sequence_odometry.redraw_odometry`), every frame's pair redrawn under the
 preset (``pair.localise_preset(preset, seed=run)``) and its ``.problem()``; each agent's own
-tracks from its own detections and odometry (:func:`matchers.tracking.hungarian.with_own_tracks`,
+tracks from its own detections and odometry (:func:`matchers.tracking.own_tracks.with_own_tracks`,
 never a true id); odometry and camera mounts from the pairs. Methods (:data:`METHODS`):
 ``windowed:<m>`` for the two-view matchers ``consistency`` and ``pose_refine`` at W in
 {1, 3, 10} and ``temporal_pose`` at W in {1, 10}. A method that reads the localisation prior
@@ -183,7 +183,7 @@ def _true_ids(object_ids: Sequence[str], names: dict[str, int]) -> np.ndarray:
 def sequence_problem(frames, preset: str, seed: int, index: int = 0) -> Sequenced:
     """The :class:`Sequenced` of one sequence's ``frames`` (FramePairs in time order) under
     ``preset``, localisation drawn with ``seed``; own tracks from :func:`with_own_tracks`."""
-    from matchers.tracking.hungarian import tracked_sequence
+    from matchers.tracking.own_tracks import tracked_sequence
 
     pairs = [f.localise_preset(preset, seed=seed) for f in frames]
     problems = [p.problem() for p in pairs]
@@ -198,7 +198,9 @@ def sequence_problem(frames, preset: str, seed: int, index: int = 0) -> Sequence
         f.points1.shape[1] == 3 and f.points2.shape[1] == 3 for f in problems
     ):
         mounts = (np.asarray(extrinsics[0][0]), np.asarray(extrinsics[0][1]))
-    seq = tracked_sequence(problems, odo[0], odo[1], *mounts)  # each agent's own tracks
+    times = np.array([float(f.time) for f in frames])
+    meta = {"interval_s": round(float(np.median(np.diff(times))), 6)} if len(times) > 1 else {}
+    seq = tracked_sequence(problems, odo[0], odo[1], *mounts, meta=meta)  # own tracks
     names: dict[str, int] = {}
     true1 = [_true_ids(p.view1.object_ids, names) for p in pairs]
     true2 = [_true_ids(p.view2.object_ids, names) for p in pairs]
