@@ -93,6 +93,7 @@ METHODS: tuple[tuple[str, tuple[int, ...]], ...] = (
     ("windowed:consistency", (1, 3, 10)),
     ("windowed:pose_refine", (1, 3, 10)),
     ("temporal_pose", (1, 10)),
+    ("trajectory_pose", (1, 10)),
 )
 RUNS = (0,)
 ORACLE_ROW = "oracle"
