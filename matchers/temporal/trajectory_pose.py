@@ -14,10 +14,13 @@ s = t - W + 1 .. t (dt seconds apart):
     hypotheses   (1) every pair (a, b) of *moving* tracks (|v| >= min_speed in both, speeds
                  within speed_tol · max(|v_a|, |v_b|) + 1 m/s, same class) proposes its own
                  motion:  θ = ∠v_a - ∠v_b,  s = p_a(t) - R(θ) p_b(t);
-                 (2) ``samples`` random pairs of track pairs ((a1, b1), (a2, b2)) whose lengths
-                 agree (| |p_a1 - p_a2| - |p_b1 - p_b2| | <= cutoff / 2, >= 2 m) propose the
-                 motion aligning the two segments (static scenes, W = 1);
+                 (2) every pair of track pairs ((a1, b1), (a2, b2)) whose lengths agree
+                 (| |p_a1 - p_a2| - |p_b1 - p_b2| | <= cutoff / 2, both >= 2 m) proposes the
+                 motion aligning the two segments (static scenes, W = 1); at most ``samples``
+                 of them (a random subset beyond);
                  (3) with a GNSS prior: the prior's mean motion.
+                 A Hough vote over the motions (cells of 2° x cutoff / 2) keeps the
+                 ``hypotheses`` most voted cells, each as the mean of its voters.
     support      of T: sum over frames s and detections i of agent 1 of
                  max_j c_ij · biweight(|q1_si - T q2_sj|, cutoff)   (a vote: look-alikes and
                  clutter tracks propose motions the rest of the scene does not support);
@@ -101,6 +104,12 @@ def _apply(yaw, shift, xy):
     return np.stack([c * xy[:, 0] - s * xy[:, 1], s * xy[:, 0] + c * xy[:, 1]], -1) + shift[:, None]
 
 
+def _turn(yaw, xy):
+    """(H, 2): each of the (H, 2) points ``xy`` turned by its own ``yaw`` (H,)."""
+    c, s = np.cos(yaw), np.sin(yaw)
+    return np.stack([c * xy[:, 0] - s * xy[:, 1], s * xy[:, 0] + c * xy[:, 1]], 1)
+
+
 def _moving_hypotheses(tr1, tr2, min_speed, speed_tol, other_class):
     _, p1, v1, c1 = tr1
     _, p2, v2, c2 = tr2
@@ -115,27 +124,54 @@ def _moving_hypotheses(tr1, tr2, min_speed, speed_tol, other_class):
     ia, ib = np.nonzero(ok)
     a, b = a[ia], b[ib]
     yaw = np.arctan2(v1[a, 1], v1[a, 0]) - np.arctan2(v2[b, 1], v2[b, 0])
-    turned = _apply(yaw, np.zeros((len(yaw), 2)), p2[b])[np.arange(len(yaw)), np.arange(len(yaw))]
-    return yaw, p1[a] - turned
+    return yaw, p1[a] - _turn(yaw, p2[b])
 
 
 def _segment_hypotheses(tr1, tr2, samples, cutoff, rng):
+    """Every pair of track pairs ((a1, b1), (a2, b2)) whose segments agree in length (module
+    docstring); beyond ``samples`` of them, a random subset of that many (drawn from ``rng``)."""
     p1, p2 = tr1[1], tr2[1]
     if len(p1) < 2 or len(p2) < 2 or samples == 0:
         return np.zeros(0), np.zeros((0, 2))
-    i = np.stack([rng.integers(0, len(p1), samples), rng.integers(0, len(p1) - 1, samples)], 1)
-    j = np.stack([rng.integers(0, len(p2), samples), rng.integers(0, len(p2) - 1, samples)], 1)
-    i[:, 1] += i[:, 1] >= i[:, 0]  # two distinct tracks of each view
-    j[:, 1] += j[:, 1] >= j[:, 0]
+    i = np.stack(np.triu_indices(len(p1), 1), 1)  # unordered in view 1
+    j = np.stack(np.nonzero(~np.eye(len(p2), dtype=bool)), 1)  # ordered in view 2
+    l1 = np.linalg.norm(p1[i[:, 1]] - p1[i[:, 0]], axis=1)
+    l2 = np.linalg.norm(p2[j[:, 1]] - p2[j[:, 0]], axis=1)
+    ia, jb = np.nonzero(
+        (np.abs(l1[:, None] - l2[None, :]) <= cutoff / 2)
+        & (np.minimum(l1[:, None], l2[None, :]) >= MIN_SEGMENT_M)
+    )
+    if len(ia) > samples:
+        keep = np.sort(rng.choice(len(ia), samples, replace=False))
+        ia, jb = ia[keep], jb[keep]
+    i, j = i[ia], j[jb]
     d1, d2 = p1[i[:, 1]] - p1[i[:, 0]], p2[j[:, 1]] - p2[j[:, 0]]
-    l1, l2 = np.linalg.norm(d1, axis=1), np.linalg.norm(d2, axis=1)
-    ok = (np.abs(l1 - l2) <= cutoff / 2) & (np.minimum(l1, l2) >= MIN_SEGMENT_M)
-    i, j, d1, d2 = i[ok], j[ok], d1[ok], d2[ok]
     yaw = np.arctan2(d1[:, 1], d1[:, 0]) - np.arctan2(d2[:, 1], d2[:, 0])
     mid1 = (p1[i[:, 0]] + p1[i[:, 1]]) / 2
     mid2 = (p2[j[:, 0]] + p2[j[:, 1]]) / 2
-    turned = _apply(yaw, np.zeros((len(yaw), 2)), mid2)[np.arange(len(yaw)), np.arange(len(yaw))]
-    return yaw, mid1 - turned
+    return yaw, mid1 - _turn(yaw, mid2)
+
+
+def _shortlist(yaw, shift, keep, yaw_bin, shift_bin):
+    """(yaw (k,), shift (k, 2)) of the ``keep`` most voted cells of a Hough grid over motions
+    (``yaw_bin`` radians x ``shift_bin`` metres): each hypothesis votes once for its cell, a
+    cell's motion is the mean of its voters (yaw as a circular mean). Ties in the count go to
+    the smaller cell key."""
+    if len(yaw) <= keep:
+        return yaw, shift
+    wrapped = np.mod(yaw + np.pi, 2 * np.pi) - np.pi
+    cells = np.stack(
+        [np.floor(wrapped / yaw_bin), np.floor(shift[:, 0] / shift_bin),
+         np.floor(shift[:, 1] / shift_bin)], 1,
+    ).astype(np.int64)  # fmt: skip
+    unique, cell, count = np.unique(cells, axis=0, return_inverse=True, return_counts=True)
+    cell = cell.reshape(-1)
+    top = np.argsort(-count, kind="stable")[:keep]
+    k = len(unique)
+    c = np.bincount(cell, np.cos(wrapped), k)[top]
+    s = np.bincount(cell, np.sin(wrapped), k)[top]
+    mean_shift = np.stack([np.bincount(cell, shift[:, d], k) for d in (0, 1)], 1)
+    return np.arctan2(s, c), (mean_shift / count[:, None])[top]
 
 
 def estimate(
@@ -152,6 +188,7 @@ def estimate(
     moving = _moving_hypotheses(tr1, tr2, o["min_speed"], o["speed_tol"], other_class)
     segments = _segment_hypotheses(tr1, tr2, o["samples"], cutoff, rng)
     yaw, shift = np.r_[moving[0], segments[0]], np.r_[moving[1], segments[1]]
+    yaw, shift = _shortlist(yaw, shift, o["hypotheses"], np.radians(2.0), cutoff / 2)
     used = [p for p in priors if p is not None]
     if used:
         yaw0 = float(np.arctan2(*np.sum([[r[1, 0], r[0, 0]] for _, (r, _) in used], axis=0)))
@@ -241,7 +278,8 @@ def trajectory_pose(
     width: float = 1.0,
     min_speed: float = 3.0,
     speed_tol: float = 0.3,
-    samples: int = 256,
+    samples: int = 20000,
+    hypotheses: int = 64,
     other_class: float = 0.5,
     prior_weight: float = 1.0,
     spread: float = 2.0,
@@ -251,8 +289,8 @@ def trajectory_pose(
     """One matching per frame (module docstring). Options: ``window`` (5 frames, causal),
     ``cutoff`` (3 m: the support's biweight and the association's gate), ``width`` (1 m: the
     association likelihood's), ``min_speed`` (3 m/s: a track that proposes from its velocity),
-    ``speed_tol`` (0.3: relative speed agreement of such a pair), ``samples`` (256 random
-    segment pairs), ``other_class`` (0.5: weight of a pair of different reported classes),
+    ``speed_tol`` (0.3: relative speed agreement of such a pair), ``samples`` (20000: at most
+    that many segment pairs, a random subset beyond), ``hypotheses`` (64 kept by the Hough vote), ``other_class`` (0.5: weight of a pair of different reported classes),
     ``prior_weight`` (1) and ``spread`` (2, × world_sigma) of the GNSS prior's soft term where
     there is one, ``max_iter`` (10) refinement rounds, ``interval_s`` (s between frames; else
     ``seq.meta["interval_s"]``, else 0.2). Scores: the aligned likelihood accumulated along the
@@ -268,6 +306,7 @@ def trajectory_pose(
         "min_speed": check_range("min_speed", min_speed, 0.0, 1e6, open_low=True),
         "speed_tol": check_range("speed_tol", speed_tol, 0.0, 10.0),
         "samples": check_count("samples", samples) if samples else 0,
+        "hypotheses": check_count("hypotheses", hypotheses),
         "other_class": check_range("other_class", other_class, 0.0, 1.0),
         "prior_weight": check_range("prior_weight", prior_weight, 0.0, 1e6),
         "spread": check_range("spread", spread, 0.0, 1e6, open_low=True),
