@@ -16,11 +16,13 @@ s = t - W + 1 .. t (dt seconds apart):
                  motion:  θ = ∠v_a - ∠v_b,  s = p_a(t) - R(θ) p_b(t);
                  (2) every pair of track pairs ((a1, b1), (a2, b2)) whose lengths agree
                  (| |p_a1 - p_a2| - |p_b1 - p_b2| | <= cutoff / 2, both >= 2 m) proposes the
-                 motion aligning the two segments (static scenes, W = 1); at most ``samples``
-                 of them (a random subset beyond);
+                 motion aligning the two segments (static scenes, W = 1), among the 24 tracks
+                 of each view seen most often; at most ``samples`` of them (a random subset
+                 beyond);
                  (3) with a GNSS prior: the prior's mean motion.
-                 A Hough vote over the motions (cells of 2° x cutoff / 2) keeps the
-                 ``hypotheses`` most voted cells, each as the mean of its voters.
+                 A Hough vote over the motions of (2) (cells of 2° x cutoff / 2) keeps the
+                 ``hypotheses`` most voted cells, each as the mean of its voters; every
+                 hypothesis of (1) and (3) is kept.
     support      of T: sum over frames s and detections i of agent 1 of
                  max_j c_ij · biweight(|q1_si - T q2_sj|, cutoff)   (a vote: look-alikes and
                  clutter tracks propose motions the rest of the scene does not support);
@@ -60,11 +62,13 @@ from matchers.temporal.windowed import accumulate, check_sequence
 
 MIN_SEGMENT_M = 2.0
 MIN_TRACK_FRAMES = 3
+SEGMENT_TRACKS = 24
 
 
 def _tracks(q, ids, classes, dt):
     """Per own track of one view over the window: (ids (K,), position at the last frame (K, 2),
-    velocity (K, 2) m/s (0 below MIN_TRACK_FRAMES observations), class (K,) object array)."""
+    velocity (K, 2) m/s (0 below MIN_TRACK_FRAMES observations), class (K,) object array,
+    observations (K,))."""
     frames = np.concatenate([np.full(len(x), f, dtype=float) for f, x in enumerate(q)])
     xy = np.concatenate(q).reshape(-1, 2)
     tid = np.concatenate(ids)
@@ -87,7 +91,7 @@ def _tracks(q, ids, classes, dt):
     position = mean_p + vel * ((last - mean_f) * dt)[:, None]
     last_class = np.empty(k, dtype=object)
     last_class[inv] = cls  # later observations overwrite earlier ones: the last one stays
-    return uniq, position, vel, last_class
+    return uniq, position, vel, last_class, count
 
 
 def _class_weight(c1, c2, other_class):
@@ -111,8 +115,8 @@ def _turn(yaw, xy):
 
 
 def _moving_hypotheses(tr1, tr2, min_speed, speed_tol, other_class):
-    _, p1, v1, c1 = tr1
-    _, p2, v2, c2 = tr2
+    _, p1, v1, c1, _ = tr1
+    _, p2, v2, c2, _ = tr2
     s1, s2 = np.linalg.norm(v1, axis=1), np.linalg.norm(v2, axis=1)
     a, b = np.flatnonzero(s1 >= min_speed), np.flatnonzero(s2 >= min_speed)
     if not (len(a) and len(b)):
@@ -127,10 +131,17 @@ def _moving_hypotheses(tr1, tr2, min_speed, speed_tol, other_class):
     return yaw, p1[a] - _turn(yaw, p2[b])
 
 
+def _longest(count: np.ndarray, keep: int) -> np.ndarray:
+    """Indices of the ``keep`` tracks seen most often (ties: the earlier track), in order."""
+    return np.sort(np.argsort(-count, kind="stable")[:keep])
+
+
 def _segment_hypotheses(tr1, tr2, samples, cutoff, rng):
     """Every pair of track pairs ((a1, b1), (a2, b2)) whose segments agree in length (module
-    docstring); beyond ``samples`` of them, a random subset of that many (drawn from ``rng``)."""
-    p1, p2 = tr1[1], tr2[1]
+    docstring), among the SEGMENT_TRACKS tracks of each view seen most often (a clutter box is
+    seen once); beyond ``samples`` of them, a random subset of that many (drawn from ``rng``)."""
+    p1 = tr1[1][_longest(tr1[4], SEGMENT_TRACKS)]
+    p2 = tr2[1][_longest(tr2[4], SEGMENT_TRACKS)]
     if len(p1) < 2 or len(p2) < 2 or samples == 0:
         return np.zeros(0), np.zeros((0, 2))
     i = np.stack(np.triu_indices(len(p1), 1), 1)  # unordered in view 1
@@ -187,8 +198,8 @@ def estimate(
         return None
     moving = _moving_hypotheses(tr1, tr2, o["min_speed"], o["speed_tol"], other_class)
     segments = _segment_hypotheses(tr1, tr2, o["samples"], cutoff, rng)
-    yaw, shift = np.r_[moving[0], segments[0]], np.r_[moving[1], segments[1]]
-    yaw, shift = _shortlist(yaw, shift, o["hypotheses"], np.radians(2.0), cutoff / 2)
+    voted = _shortlist(*segments, o["hypotheses"], np.radians(2.0), cutoff / 2)
+    yaw, shift = np.r_[moving[0], voted[0]], np.r_[moving[1], voted[1]]
     used = [p for p in priors if p is not None]
     if used:
         yaw0 = float(np.arctan2(*np.sum([[r[1, 0], r[0, 0]] for _, (r, _) in used], axis=0)))
