@@ -49,7 +49,7 @@ def test_a_wrong_prior_does_not_pull_the_motion_far():
     """With a GNSS prior (σ 1.2 m, 2° per frame) the prior is one hypothesis and a soft term:
     the motion stays within 0.5 m of the truth."""
     planted = planted_sequence(seed=5, frames=8, moving=0.5, speed_sigma=6.0, gnss_sigma=1.2)
-    out = get_temporal("trajectory_pose")(planted.seq, threshold=0.3, window=8)
+    out = get_temporal("trajectory_pose")(planted.seq, threshold=0.3, window=8, prior_weight=1.0)
     assert out[-1].info["prior"]
     assert _motion_error(out[-1], planted.relative)[1] < 0.5
 
