@@ -55,6 +55,11 @@ def test_the_study_writes_the_table_with_its_columns(study):
     assert list(gain.columns) == list(temporal.GAIN_COLUMNS)
     assert list(gain["preset"]) == [p for p in PRESETS for _ in range(2)]
     assert list(gain["parameters"]) == [temporal.TUNED, temporal.FIXED] * len(PRESETS)
+    continuity = pd.read_csv(out / temporal.CONTINUITY_FILE)
+    assert list(continuity.columns) == list(temporal.CONTINUITY_COLUMNS)
+    assert list(continuity["band"]) == ["static", "slow", "fast"] * len(PRESETS)
+    assert (continuity["kept"] <= continuity["links"]).all()
+    assert continuity["links"].sum() > 0
     ran = csv.dropna(subset=["f1_pooled"])  # all but the prior reader under denied
     assert len(ran) == len(csv) - 2
     assert (ran["frames"] == 16).all() and (ran["sequences"] == 4).all()

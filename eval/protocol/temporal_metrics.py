@@ -247,3 +247,32 @@ def time_offset_error(estimates: Sequence[float | None], true_s: float) -> dict:
         "max_abs_s": float(np.round(error.max(), 12)),
         "frames": int(found.size),
     }
+
+
+SPEED_BANDS = (("static", 0.0, 0.5), ("slow", 0.5, 10.0), ("fast", 10.0, np.inf))  # m/s
+
+
+def track_continuity(tracks, true, speeds, bands=SPEED_BANDS) -> dict:
+    """One agent's own tracker against the truth: per speed band (name, low, high m/s) the
+    links kept, ``{"band": (kept, links)}``. A *link* is a true object detected in two
+    consecutive frames t, t + 1 of the view (``true[t]`` ids, -1 clutter); it is *kept* when both
+    detections carry the same own track id (``tracks[t]``). The band is the object's true speed
+    at t (``speeds[t]``, m/s, per detection).
+
+    >>> track_continuity([np.array([3]), np.array([3]), np.array([4])],
+    ...                  [np.array([0])] * 3, [np.array([12.0])] * 3)["fast"]
+    (1, 2)
+    """
+    out = {name: [0, 0] for name, _, _ in bands}
+    for t in range(len(tracks) - 1):
+        a, b = np.asarray(true[t]), np.asarray(true[t + 1])
+        common, i, j = np.intersect1d(a, b, assume_unique=True, return_indices=True)
+        keep = common >= 0
+        i, j = i[keep], j[keep]
+        same = np.asarray(tracks[t])[i] == np.asarray(tracks[t + 1])[j]
+        speed = np.asarray(speeds[t], dtype=float)[i]
+        for name, low, high in bands:
+            inside = (speed >= low) & (speed < high)
+            out[name][0] += int(same[inside].sum())
+            out[name][1] += int(inside.sum())
+    return {name: (kept, links) for name, (kept, links) in out.items()}

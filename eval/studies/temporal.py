@@ -69,11 +69,13 @@ from eval.protocol.cluster_interval import t_interval
 from eval.protocol.goal_verdict import goal_line
 from eval.protocol.metrics import RankedAssignments, pair_metrics
 from eval.protocol.temporal_metrics import (
+    SPEED_BANDS,
     combine_sequences,
     correspondence_hota,
     cross_agent_idsw,
     frames_to_first_correct,
     partner_changes,
+    track_continuity,
 )
 from eval.protocol.tuning import (
     Candidate,
@@ -156,6 +158,11 @@ GAIN_COLUMNS = (
 COUNT_COLUMNS = ("never_matched", "frames", "sequences", "episodes")  # integers, or no number
 TABLE, GAIN = "table_temporal", "table_temporal_gain"
 TUNING_FILE = "temporal/tuning.csv"
+CONTINUITY_FILE = "temporal/continuity.csv"
+CONTINUITY_COLUMNS = (
+    "preset", "band", "low_m_s", "high_m_s", "kept", "links", "continuity",
+    "continuity_low", "continuity_high",
+)  # fmt: skip
 TUNING_COLUMNS = ("preset", "window", "matcher", "config", "params", "val_f1", "tau", "chosen")
 
 
@@ -171,6 +178,16 @@ class Sequenced:
     truth: list[np.ndarray | None]
     episode: int
     sequence: int
+    speed1: list[np.ndarray] | None = None  # per frame, true speed (m/s) per detection; NaN clutter
+    speed2: list[np.ndarray] | None = None
+
+
+def _true_speeds(pair, object_ids: Sequence[str]) -> np.ndarray:
+    """The true ground speed (m/s) of each detection's object (NaN: clutter): metrics only."""
+    by_id = {
+        str(o.id): float(np.hypot(*np.asarray(o.velocity, dtype=float)[:2])) for o in pair.objects
+    }
+    return np.array([by_id.get(str(oid), np.nan) for oid in object_ids], dtype=float)
 
 
 def abstains(method: str, preset: str) -> bool:
@@ -223,6 +240,8 @@ def sequence_problem(frames, preset: str, seed: int, index: int = 0) -> Sequence
         [p.true_relative_pose() for p in pairs],
         int(frames[0].episode),
         index,
+        [_true_speeds(p, p.view1.object_ids) for p in pairs],
+        [_true_speeds(p, p.view2.object_ids) for p in pairs],
     )
 
 
@@ -494,6 +513,47 @@ def summarise(per_frame: pd.DataFrame, temporal: list[dict]) -> dict:
     }
 
 
+def continuity_rows(items: list[tuple[int, Sequenced]], preset: str) -> list[dict]:
+    """The own tracker's continuity per speed band over ``items`` (both views, every run):
+    :func:`~eval.protocol.temporal_metrics.track_continuity` summed, ``continuity`` = kept /
+    links (NaN without a link) with its episode-level t-interval (each link an item, 1 when
+    kept, clustered by episode)."""
+    values: dict[str, list[float]] = {name: [] for name, _, _ in SPEED_BANDS}
+    episodes: dict[str, list[int]] = {name: [] for name, _, _ in SPEED_BANDS}
+    for _, item in items:
+        if item.speed1 is None:
+            continue
+        for tracks, true, speeds in (
+            (item.seq.tracks1, item.true1, item.speed1),
+            (item.seq.tracks2, item.true2, item.speed2),
+        ):
+            for name, (kept, links) in track_continuity(tracks, true, speeds).items():
+                values[name] += [1.0] * kept + [0.0] * (links - kept)
+                episodes[name] += [item.episode] * links
+    rows = []
+    for name, low, high in SPEED_BANDS:
+        kept, links = int(sum(values[name])), len(values[name])
+        share, c_low, c_high = np.nan, np.nan, np.nan
+        if links:
+            share, c_low, c_high, _ = t_interval(
+                np.array(values[name]), np.array(episodes[name]), bounds=(0.0, 1.0)
+            )
+        rows.append(
+            {
+                "preset": preset,
+                "band": name,
+                "low_m_s": low,
+                "high_m_s": high,
+                "kept": kept,
+                "links": links,
+                "continuity": share,
+                "continuity_low": c_low,
+                "continuity_high": c_high,
+            }  # fmt: skip
+        )
+    return rows
+
+
 def _oracle(items: list[tuple[int, Sequenced]], preset: str) -> tuple[dict, pd.DataFrame]:
     rows, temporal = [], []
     for seed, item in items:
@@ -516,6 +576,7 @@ class PresetOutcome:
     gain: list[dict]
     per_frame: list[pd.DataFrame]
     tuned: list[dict]
+    continuity: list[dict]
 
 
 def evaluate_preset(task: tuple) -> PresetOutcome:
@@ -525,6 +586,7 @@ def evaluate_preset(task: tuple) -> PresetOutcome:
     test = load_split(Path(test_dir), preset, seeds)
     val = load_split(Path(val_dir), preset, seeds)
     oracle_row, oracle_frames = _oracle(test, preset)
+    continuity = continuity_rows(test, preset)
     rows, tuned = [], []
     per_frame_all = [oracle_frames.assign(method=ORACLE_ROW, window=0, preset=preset)]
     frames_by: dict[tuple[str, int], pd.DataFrame] = {}
@@ -573,7 +635,7 @@ def evaluate_preset(task: tuple) -> PresetOutcome:
                 row["f1_mean"],
             )
     rows.append(oracle_row)
-    return PresetOutcome(rows, _gains(preset, rows, frames_by), per_frame_all, tuned)
+    return PresetOutcome(rows, _gains(preset, rows, frames_by), per_frame_all, tuned, continuity)
 
 
 def evaluate_temporal(
@@ -608,6 +670,9 @@ def evaluate_temporal(
     gains = [g for o in outcomes for g in o.gain]
     per_frame_all = [f for o in outcomes for f in o.per_frame]
     tuned = [t for o in outcomes for t in o.tuned]
+    continuity = pd.DataFrame(
+        [c for o in outcomes for c in o.continuity], columns=list(CONTINUITY_COLUMNS)
+    )
     table = pd.DataFrame(rows, columns=list(COLUMNS))
     table[list(COUNT_COLUMNS)] = table[list(COUNT_COLUMNS)].astype("Int64")  # empty: no number
     oracle = table[table["method"] == ORACLE_ROW].set_index("preset")["success_1m_2deg"]
@@ -636,6 +701,7 @@ def evaluate_temporal(
     write_csv(table.round(6), out / f"{TABLE}.csv")
     write_csv(gain.round(6), out / f"{GAIN}.csv")
     write_csv(pd.DataFrame(tuned, columns=list(TUNING_COLUMNS)).round(6), out / TUNING_FILE)
+    write_csv(continuity.round(6), out / CONTINUITY_FILE)
     if per_frame_all:
         write_csv(
             pd.concat(per_frame_all, ignore_index=True).round(6), out / "temporal" / "per_frame.csv"
@@ -848,6 +914,23 @@ def goals(table: pd.DataFrame, results: Path) -> list[str]:
                 detail=f"`{urban}`",
             )
         )
+    continuity = Path(results) / CONTINUITY_FILE
+    if continuity.is_file():
+        c = pd.read_csv(continuity)
+        c = c[(c["preset"] == "gnss-urban") & (c["band"] == "fast") & (c["links"] > 0)]
+        if len(c):
+            c = c.iloc[0]
+            lines.append(
+                goal_line(
+                    "own tracker: ≥ 90 % of consecutive detections on one track for objects "
+                    "moving ≥ 10 m/s",
+                    c.continuity,
+                    c.continuity_low,
+                    c.continuity_high,
+                    0.90,
+                    detail=f"{int(c.kept)} of {int(c.links)} links, `gnss-urban` test split",
+                )
+            )
     gain = Path(results) / f"{GAIN}.csv"
     if gain.is_file():
         every = pd.read_csv(gain)
