@@ -159,6 +159,16 @@ COUNT_COLUMNS = ("never_matched", "frames", "sequences", "episodes")  # integers
 TABLE, GAIN = "table_temporal", "table_temporal_gain"
 TUNING_FILE = "temporal/tuning.csv"
 CONTINUITY_FILE = "temporal/continuity.csv"
+LIDAR_TABLE, LIDAR_LABEL = "table_temporal_lidar", "CAD-V2X-Seq-LiDAR"
+LIDAR_SCENARIO = "scenarios/cad-v2x-seq-lidar.toml"
+
+
+def folder_of(name: str) -> str:
+    """The folder of table ``name``'s side files: ``temporal`` for the camera table,
+    ``temporal_lidar`` for ``table_temporal_lidar``."""
+    return "temporal" if name == TABLE else name.removeprefix("table_")
+
+
 CONTINUITY_COLUMNS = (
     "preset", "band", "low_m_s", "high_m_s", "kept", "links", "continuity",
     "continuity_low", "continuity_high",
@@ -647,14 +657,17 @@ def evaluate_temporal(
     seeds: Sequence[int] = RUNS,
     tune: bool = True,
     executor=None,
+    name: str = TABLE,
+    label: str = LABEL,
 ) -> pd.DataFrame:
     """Run the study (module docstring) and write ``out/table_temporal.{md,csv}``,
     ``out/table_temporal_gain.csv``, the per-frame scores ``out/temporal/per_frame.csv`` and
     every tuning candidate ``out/temporal/tuning.csv`` (``tune=False``: defaults only, no
     candidates). One :func:`evaluate_preset` task per preset on ``executor``
     (:class:`eval.core.executor.Executor`; None or one worker: in this process, in order);
-    the outputs are assembled in preset order, whatever the completion order. Returns the
-    table."""
+    the outputs are assembled in preset order, whatever the completion order. ``name`` /
+    ``label``: the files' stem and the caption's dataset (:func:`evaluate_temporal_lidar`: the
+    LiDAR table, side files under :func:`folder_of`). Returns the table."""
     out = Path(out)
     methods = tuple((m, tuple(int(w) for w in ws)) for m, ws in methods)
     tasks = [(str(test_dir), str(val_dir), p, methods, tuple(seeds), bool(tune)) for p in presets]
@@ -697,19 +710,38 @@ def evaluate_temporal(
             oracle_assa > 0, table["assa"].to_numpy(float) / oracle_assa, np.nan
         )
     gain = pd.DataFrame([g for g in gains if g], columns=list(GAIN_COLUMNS))
-    (out / "temporal").mkdir(parents=True, exist_ok=True)
-    write_csv(table.round(6), out / f"{TABLE}.csv")
-    write_csv(gain.round(6), out / f"{GAIN}.csv")
-    write_csv(pd.DataFrame(tuned, columns=list(TUNING_COLUMNS)).round(6), out / TUNING_FILE)
-    write_csv(continuity.round(6), out / CONTINUITY_FILE)
+    side = out / folder_of(name)
+    side.mkdir(parents=True, exist_ok=True)
+    write_csv(table.round(6), out / f"{name}.csv")
+    write_csv(gain.round(6), out / f"{name}_gain.csv")
+    write_csv(pd.DataFrame(tuned, columns=list(TUNING_COLUMNS)).round(6), side / "tuning.csv")
+    write_csv(continuity.round(6), side / "continuity.csv")
     if per_frame_all:
-        write_csv(
-            pd.concat(per_frame_all, ignore_index=True).round(6), out / "temporal" / "per_frame.csv"
-        )
-    write_text(out / f"{TABLE}.md", to_markdown(table, gain) + "\n\n" + "\n".join(
-        f"- {line}." for line in goals(table, out)
+        write_csv(pd.concat(per_frame_all, ignore_index=True).round(6), side / "per_frame.csv")
+    write_text(out / f"{name}.md", to_markdown(table, gain, label) + "\n\n" + "\n".join(
+        f"- {line}." for line in goals(table, out, name)
     ) + "\n")  # fmt: skip
     return table
+
+
+def evaluate_temporal_lidar(
+    test_dir: Path,
+    val_dir: Path,
+    out: Path,
+    methods: Sequence[tuple[str, Sequence[int]]] = METHODS,
+    presets: Sequence[str] = PRESETS,
+    seeds: Sequence[int] = RUNS,
+    tune: bool = True,
+    executor=None,
+) -> pd.DataFrame:
+    """The temporal study on LiDAR boxes (``scenarios/cad-v2x-seq-lidar.toml``'s test and
+    validation splits at ``test_dir`` / ``val_dir``), the same protocol as
+    :func:`evaluate_temporal`: ``out/table_temporal_lidar.{md,csv}``,
+    ``out/table_temporal_lidar_gain.csv`` and ``out/temporal_lidar/`` (per-frame scores, tuning
+    candidates, the own tracker's continuity). Returns the table."""
+    return evaluate_temporal(
+        test_dir, val_dir, out, methods, presets, seeds, tune, executor, LIDAR_TABLE, LIDAR_LABEL
+    )
 
 
 def best_long(table: pd.DataFrame, preset: str) -> str | None:
@@ -787,10 +819,10 @@ def _num(value: float, digits: int = 2) -> str:
     return "–" if not np.isfinite(value) else f"{value:.{digits}f}"
 
 
-def to_markdown(table: pd.DataFrame, gain: pd.DataFrame | None = None) -> str:
+def to_markdown(table: pd.DataFrame, gain: pd.DataFrame | None = None, label: str = LABEL) -> str:
     """The table as markdown: per preset every (method, W) and the oracle row."""
     lines = [
-        f"**{LABEL}** — temporal matchers × window W × localisation preset; pooled F1 (the "
+        f"**{label}** — temporal matchers × window W × localisation preset; pooled F1 (the "
         "headline: frames without a true pair are common in a sequence), mean per-frame F1 and "
         "success in percent with episode-level 95 % intervals; parameters "
         f"({TUNING_BUDGET} configurations each) and τ per "
@@ -850,14 +882,14 @@ def to_markdown(table: pd.DataFrame, gain: pd.DataFrame | None = None) -> str:
     return "\n".join(lines)
 
 
-def _per_frame(results: Path) -> pd.DataFrame | None:
-    path = Path(results) / "temporal" / "per_frame.csv"
+def _per_frame(results: Path, name: str = TABLE) -> pd.DataFrame | None:
+    path = Path(results) / folder_of(name) / "per_frame.csv"
     return pd.read_csv(path) if path.is_file() else None
 
 
-def goals(table: pd.DataFrame, results: Path) -> list[str]:
-    """The issue's goal lines (each through :func:`goal_line`)."""
-    per_frame = _per_frame(results)
+def goals(table: pd.DataFrame, results: Path, name: str = TABLE) -> list[str]:
+    """The issue's goal lines (each through :func:`goal_line`) of table ``name``."""
+    per_frame = _per_frame(results, name)
     lines = []
     denied = best_long(table, "denied")
     if denied is not None:
@@ -914,7 +946,7 @@ def goals(table: pd.DataFrame, results: Path) -> list[str]:
                 detail=f"`{urban}`",
             )
         )
-    continuity = Path(results) / CONTINUITY_FILE
+    continuity = Path(results) / folder_of(name) / "continuity.csv"
     if continuity.is_file():
         c = pd.read_csv(continuity)
         c = c[(c["preset"] == "gnss-urban") & (c["band"] == "fast") & (c["links"] > 0)]
@@ -931,7 +963,7 @@ def goals(table: pd.DataFrame, results: Path) -> list[str]:
                     detail=f"{int(c.kept)} of {int(c.links)} links, `gnss-urban` test split",
                 )
             )
-    gain = Path(results) / f"{GAIN}.csv"
+    gain = Path(results) / f"{name}_gain.csv"
     if gain.is_file():
         every = pd.read_csv(gain)
         fixed = every[(every["preset"] == "gnss-urban") & (every["parameters"] == FIXED)]
