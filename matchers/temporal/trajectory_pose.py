@@ -171,12 +171,12 @@ def _shortlist(yaw, shift, keep, yaw_bin, shift_bin):
     if len(yaw) <= keep:
         return yaw, shift
     wrapped = np.mod(yaw + np.pi, 2 * np.pi) - np.pi
-    cells = np.stack(
-        [np.floor(wrapped / yaw_bin), np.floor(shift[:, 0] / shift_bin),
-         np.floor(shift[:, 1] / shift_bin)], 1,
-    ).astype(np.int64)  # fmt: skip
-    unique, cell, count = np.unique(cells, axis=0, return_inverse=True, return_counts=True)
-    cell = cell.reshape(-1)
+    span = 1 << 20  # cells per axis: shifts within ±2^19 cells (cutoff / 2 each)
+    cells = (
+        (np.floor(wrapped / yaw_bin).astype(np.int64) + span // 2) * span
+        + np.clip(np.floor(shift[:, 0] / shift_bin).astype(np.int64) + span // 2, 0, span - 1)
+    ) * span + np.clip(np.floor(shift[:, 1] / shift_bin).astype(np.int64) + span // 2, 0, span - 1)
+    unique, cell, count = np.unique(cells, return_inverse=True, return_counts=True)
     top = np.argsort(-count, kind="stable")[:keep]
     k = len(unique)
     c = np.bincount(cell, np.cos(wrapped), k)[top]
