@@ -51,3 +51,7 @@ def test_the_lidar_study_writes_its_own_files(tmp_path):
     assert list(gain["parameters"]) == [temporal.TUNED, temporal.FIXED]
     for side in ("per_frame.csv", "continuity.csv", "tuning.csv"):
         assert (out / "temporal_lidar" / side).is_file(), side
+    part = temporal.readme_part_lidar(out, "results")
+    assert part[0] == "### The temporal table on LiDAR boxes"
+    assert "results/table_temporal_lidar.md" in "\n".join(part)
+    assert temporal.readme_part(out, "results") == []  # no camera table there

@@ -1015,21 +1015,25 @@ def _frames(per_frame: pd.DataFrame, method: str, window: int, preset: str) -> p
     return rows.sort_values(["seed", "sequence", "frame"]).reset_index(drop=True)
 
 
-def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[str]:
+def readme_part(
+    results: Path, rel: str, seconds: float | None = None, name: str = TABLE
+) -> list[str]:
     """README lines for the temporal table (none without ``table_temporal.csv``): per preset
     what accumulation buys (one row each) and the issue's goal lines; ``seconds``: the last cold
-    run's generation + study time (a "≤ 2 min cold" line), None: not measured cold."""
+    run's generation + study time (a "≤ 2 min cold" line), None: not measured cold. ``name``
+    :data:`LIDAR_TABLE`: the same for the LiDAR table (:func:`readme_part_lidar`)."""
     results = Path(results)
-    path = results / f"{TABLE}.csv"
+    lidar = name == LIDAR_TABLE
+    path = results / f"{name}.csv"
     if not path.is_file():
         return []
     table = pd.read_csv(path, keep_default_na=False, na_values=[""])
-    gain_path = results / f"{GAIN}.csv"
+    gain_path = results / f"{name}_gain.csv"
     gain = pd.read_csv(gain_path) if gain_path.is_file() else pd.DataFrame(columns=GAIN_COLUMNS)
     lines = [
-        "### The temporal table",
+        "### The temporal table on LiDAR boxes" if lidar else "### The temporal table",
         "",
-        f"`{SCENARIO}`: sequences of 10 frames 0.2 s apart of the same two vehicles; each "
+        f"`{LIDAR_SCENARIO if lidar else SCENARIO}`: sequences of 10 frames 0.2 s apart of the same two vehicles; each "
         "agent's own tracks from its detections and odometry (never a true id); "
         "`windowed:<m>` (a two-view matcher's scores averaged along the own tracks over W "
         "frames), `temporal_pose` (one planar motion per window from the GNSS prior and the "
@@ -1039,7 +1043,7 @@ def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[s
         "test pooled F1 at W = 10 and W = 1 and their difference (episode-level bootstrap 95 % "
         "interval) with W = 1 tuned on its own or at W = 10's parameters and τ (the window "
         "alone), the per-frame mean's difference, success@(1 m, 2°) at W = 10 and the "
-        f"oracle's. Every row: [{rel}/{TABLE}.md]({rel}/{TABLE}.md).",
+        f"oracle's. Every row: [{rel}/{name}.md]({rel}/{name}.md).",
         "",
         "| Preset | Method | parameters | F1 pooled W = 10 | F1 pooled W = 1 "
         "| W = 10 − W = 1 [95 % CI] "
@@ -1097,7 +1101,7 @@ def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[s
         if seconds is not None
         else []
     )
-    lines += ["", *[f"- {line}." for line in findings + goals(table, results) + timing], ""]
+    lines += ["", *[f"- {line}." for line in findings + goals(table, results, name) + timing], ""]
     return lines
 
 
@@ -1114,3 +1118,8 @@ def temporal_tuning_record(table: pd.DataFrame) -> dict:
             "val_f1": round(float(row.val_f1), 6) if ran else None,
         }
     return record
+
+
+def readme_part_lidar(results: Path, rel: str, seconds: float | None = None) -> list[str]:
+    """README lines for ``table_temporal_lidar`` (none without it): :func:`readme_part`'s."""
+    return readme_part(results, rel, seconds, LIDAR_TABLE)
