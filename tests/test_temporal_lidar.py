@@ -1,6 +1,7 @@
 """LiDAR sequences: the ``cad-v2x-seq-lidar`` scenario (``[sequence]`` with ``sensor = "lidar"``)
 loads, ``sensor = "both"`` with a ``[sequence]`` is still refused in one line, and the temporal
-study's LiDAR entry point writes its own files beside the camera table's."""
+study's LiDAR entry point writes its own files beside the camera table's; a sequence dataset's
+regime card states the own tracker's continuity."""
 
 from __future__ import annotations
 
@@ -55,3 +56,12 @@ def test_the_lidar_study_writes_its_own_files(tmp_path):
     assert part[0] == "### The temporal table on LiDAR boxes"
     assert "results/table_temporal_lidar.md" in "\n".join(part)
     assert temporal.readme_part(out, "results") == []  # no camera table there
+
+
+def test_the_regime_card_states_the_own_trackers_continuity_of_a_sequence_dataset(tmp_path):
+    from eval.studies.regime_cards import continuity_text, regime_of
+
+    seqs._generate(tmp_path / "seq", seqs._scenario(frames=3), pairs=2)
+    text = continuity_text(tmp_path / "seq")
+    assert [part.split()[0] for part in text.split(", ")] == ["static", "slow", "fast"]
+    assert regime_of(tmp_path / "seq")["continuity"] == text
