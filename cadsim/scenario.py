@@ -627,19 +627,20 @@ def _check_shared_area(observers: dict, camera: CameraConfig, ctx) -> None:
 
 def _check_sensor(sensor: str, has_lidar: bool, views: int, sequence, ctx) -> None:
     """A ``[lidar]`` table only with a LiDAR (``sensor`` "lidar" or "both"), and LiDAR records
-    are frame pairs without a ``[sequence]`` (the record formats that carry points)."""
+    are frame pairs (two views); a ``[sequence]`` of them only with ``sensor = "lidar"`` (boxes
+    and points per frame; "both" is not written as sequences)."""
     if has_lidar and sensor == "camera":
         raise ctx.error(
             "lidar",
             'is given but sensor is "camera"',
             'sensor = "lidar" or "both" (or no [lidar] table)',
         )
-    if sensor != "camera" and (views != 2 or sequence is not None):
+    if sensor != "camera" and (views != 2 or (sequence is not None and sensor != "lidar")):
         key = "sequence" if sequence is not None else "observers"
         raise ctx.error(
             key,
             f'is set with sensor = "{sensor}"',
-            "frame pairs without [sequence] (LiDAR records are two-view records)",
+            'frame pairs (LiDAR records are two-view records; sequences with sensor = "lidar")',
         )
 
 

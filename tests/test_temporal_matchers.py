@@ -13,7 +13,7 @@ from matchers.core.temporal_registry import get_temporal, register_temporal, tem
 
 
 def test_registry_family_and_builtin():
-    assert temporal_available() == ["temporal_pose"]
+    assert temporal_available() == ["temporal_pose", "trajectory_pose"]
     assert "temporal_pose" not in available()  # two-view harnesses never see them
     assert get_temporal("windowed:pose").requires == get("pose").requires
     with pytest.raises(ValueError, match="nosuch"):
@@ -93,7 +93,9 @@ def test_temporal_pose_beats_the_raw_prior():
     assert correct["temporal_pose"] > correct["windowed:pose"]
 
 
-@pytest.mark.parametrize("name", ["temporal_pose", "windowed:sm", "windowed:pose"])
+@pytest.mark.parametrize(
+    "name", ["temporal_pose", "trajectory_pose", "windowed:sm", "windowed:pose"]
+)
 def test_degenerate_sequences(name):
     fn = get_temporal(name)
     assert fn(SequenceProblem([], [], [], np.zeros((0, 3)), np.zeros((0, 3)))) == []

@@ -53,7 +53,13 @@ def test_the_study_writes_the_table_with_its_columns(study):
     assert "| Preset | Method | W |" in md and "What accumulation buys" in md
     gain = pd.read_csv(out / "table_temporal_gain.csv")
     assert list(gain.columns) == list(temporal.GAIN_COLUMNS)
-    assert list(gain["preset"]) == list(PRESETS)
+    assert list(gain["preset"]) == [p for p in PRESETS for _ in range(2)]
+    assert list(gain["parameters"]) == [temporal.TUNED, temporal.FIXED] * len(PRESETS)
+    continuity = pd.read_csv(out / temporal.CONTINUITY_FILE)
+    assert list(continuity.columns) == list(temporal.CONTINUITY_COLUMNS)
+    assert list(continuity["band"]) == ["static", "slow", "fast"] * len(PRESETS)
+    assert (continuity["kept"] <= continuity["links"]).all()
+    assert continuity["links"].sum() > 0
     ran = csv.dropna(subset=["f1_pooled"])  # all but the prior reader under denied
     assert len(ran) == len(csv) - 2
     assert (ran["frames"] == 16).all() and (ran["sequences"] == 4).all()
@@ -78,7 +84,7 @@ def test_a_prior_reader_under_denied_gets_no_number(study):
     assert f"| `denied` | `temporal_pose` | 10 | n/a | n/a | {NO_NUMBER} |" in md
     assert temporal.best_long(table, "denied") == "windowed:consistency"
     gain = pd.read_csv(out / "table_temporal_gain.csv").set_index("preset")
-    assert gain.loc["denied", "method"] == "windowed:consistency"
+    assert set(gain.loc["denied", "method"]) == {"windowed:consistency"}
     per_frame = pd.read_csv(out / "temporal" / "per_frame.csv")
     assert not ((per_frame["method"] == "temporal_pose") & (per_frame["preset"] == "denied")).any()
     part = "\n".join(temporal.readme_part(out, "results"))
@@ -195,7 +201,8 @@ def _table(f1_low: float, f1_high: float) -> pd.DataFrame:
                 | {"f1_mean": 0.85, "f1_low": f1_low, "f1_high": f1_high}
                 | {"f1_pooled": 0.85, "f1_pooled_low": f1_low, "f1_pooled_high": f1_high}
                 | {"success_1m_2deg": 0.7, "success_low": 0.65, "success_high": 0.75}
-                | {"switches_per_100": 0.5, "switches_low": 0.2, "switches_high": 0.9}
+                | {"partner_changes_per_100": 0.5, "partner_changes_low": 0.2}
+                | {"partner_changes_high": 0.9}
                 | {"share_of_oracle": 0.9}
             )
     return pd.DataFrame(rows)
@@ -214,7 +221,7 @@ def test_goal_lines_go_through_goal_verdict(monkeypatch, tmp_path):
     assert len(lines) == len(calls) == 3  # no per-frame or gain files: those goals left out
     assert lines[0].startswith("`denied`, W = 10: best pooled F1 ≥ 80: met")
     assert ": met" in lines[1]  # success [65, 75] ≥ 60
-    assert ": met" in lines[2]  # switches [0.2, 0.9] ≤ 1
+    assert ": met" in lines[2]  # partner changes [0.2, 0.9] ≤ 1
     crossing = temporal.goals(_table(0.79, 0.9), tmp_path)
     assert crossing[0].startswith("`denied`, W = 10: best pooled F1 ≥ 80: not shown")
 

@@ -31,6 +31,7 @@ COLUMNS = (
     "same_class_auc",
     "position_error_median_m",
     "lidar_false_positive_sources",
+    "continuity",
 )
 TITLES = {
     "objects_per_view": "objects / view",
@@ -42,6 +43,7 @@ TITLES = {
     "same_class_auc": "AUC vs same-class false pairs",
     "position_error_median_m": "position error (m, median)",
     "lidar_false_positive_sources": "LiDAR false positives by source (% of boxes)",
+    "continuity": "own-tracker continuity by speed (% of links)",
 }
 
 
@@ -54,7 +56,24 @@ def regime_of(path: str | Path) -> dict:
     dataset = Dataset(path, verify=True)
     card = lidar_regime.lidar_detector_card(dataset)
     sources = None if card is None else lidar_regime.sources_text(card["false_positive_sources"])
-    return regime.dataset_regime(dataset) | {"lidar_false_positive_sources": sources}
+    return regime.dataset_regime(dataset) | {
+        "lidar_false_positive_sources": sources,
+        "continuity": continuity_text(path) if len(dataset) > dataset.sequences else None,
+    }
+
+
+def continuity_text(path: str | Path) -> str:
+    """The own tracker's continuity per speed band on the sequences at ``path`` (run 0's
+    odometry, :func:`eval.studies.temporal.continuity_rows`): "static 96.1 % of 1276, slow …,
+    fast …" (percent of consecutive detections of one object kept on one own track)."""
+    from eval.studies.temporal import continuity_rows, load_split
+
+    rows = continuity_rows(load_split(Path(path), "exact", (0,)), "exact")
+    return ", ".join(
+        f"{r['band']} {100 * r['continuity']:.1f} % of {r['links']}" if r["links"] else
+        f"{r['band']} – of 0"
+        for r in rows
+    )  # fmt: skip
 
 
 AUC_FILE = "regime_auc_intervals.csv"

@@ -6,7 +6,7 @@ Protocol. Each sequence (10 frames, 0.2 s apart, of the same two vehicles) becom
 :class:`~matchers.core.sequence_problem.SequenceProblem`: its odometry drift redrawn for the run
 (:func:`cadsim.dataset.sequence_odometry.redraw_odometry`), every frame's pair redrawn under the
 preset (``pair.localise_preset(preset, seed=run)``) and its ``.problem()``; each agent's own
-tracks from its own detections and odometry (:func:`matchers.tracking.hungarian.with_own_tracks`,
+tracks from its own detections and odometry (:func:`matchers.tracking.own_tracks.with_own_tracks`,
 never a true id); odometry and camera mounts from the pairs. Methods (:data:`METHODS`):
 ``windowed:<m>`` for the two-view matchers ``consistency`` and ``pose_refine`` at W in
 {1, 3, 10} and ``temporal_pose`` at W in {1, 10}. A method that reads the localisation prior
@@ -34,7 +34,8 @@ declared pairs at τ against ``pair.gt_pairs`` (``f1_mean``);
 success@(1 m, 2°) of the planar fit of those pairs (:func:`eval.core.pose_metrics.
 matched_planar_error`, extrinsics ``pair.camera_extrinsics``, truth
 ``pair.true_relative_pose()``); the ``oracle`` row is the same fit of the true pairs. Over time
-(:mod:`eval.protocol.temporal_metrics`): association switches per 100 covisible object-frames,
+(:mod:`eval.protocol.temporal_metrics`): partner changes and the cross-agent links' CLEAR-MOT
+IDSW per 100 covisible object-frames,
 mean frames to the first correct association (objects never matched counted apart), HOTA and
 AssA of the declared pairs named by their own track ids (mean over sequences). Intervals are
 episode-level cluster t-intervals (:func:`eval.protocol.cluster_interval.t_interval`; a
@@ -68,9 +69,13 @@ from eval.protocol.cluster_interval import t_interval
 from eval.protocol.goal_verdict import goal_line
 from eval.protocol.metrics import RankedAssignments, pair_metrics
 from eval.protocol.temporal_metrics import (
-    association_switches,
+    SPEED_BANDS,
+    combine_sequences,
     correspondence_hota,
+    cross_agent_idsw,
     frames_to_first_correct,
+    partner_changes,
+    track_continuity,
 )
 from eval.protocol.tuning import (
     Candidate,
@@ -93,6 +98,7 @@ METHODS: tuple[tuple[str, tuple[int, ...]], ...] = (
     ("windowed:consistency", (1, 3, 10)),
     ("windowed:pose_refine", (1, 3, 10)),
     ("temporal_pose", (1, 10)),
+    ("trajectory_pose", (1, 10)),
 )
 RUNS = (0,)
 ORACLE_ROW = "oracle"
@@ -116,13 +122,18 @@ COLUMNS = (
     "success_low",
     "success_high",
     "share_of_oracle",
-    "switches_per_100",
-    "switches_low",
-    "switches_high",
+    "partner_changes_per_100",
+    "partner_changes_low",
+    "partner_changes_high",
+    "idsw_per_100",
     "frames_to_first",
     "never_matched",
     "hota",
+    "deta",
     "assa",
+    "oracle_hota",
+    "oracle_assa",
+    "assa_share_of_oracle",
     "frames",
     "sequences",
     "episodes",
@@ -131,6 +142,7 @@ COLUMNS = (
 GAIN_COLUMNS = (
     "preset",
     "method",
+    "parameters",
     "f1_pooled_w10",
     "f1_pooled_w1",
     "pooled_diff",
@@ -146,6 +158,21 @@ GAIN_COLUMNS = (
 COUNT_COLUMNS = ("never_matched", "frames", "sequences", "episodes")  # integers, or no number
 TABLE, GAIN = "table_temporal", "table_temporal_gain"
 TUNING_FILE = "temporal/tuning.csv"
+CONTINUITY_FILE = "temporal/continuity.csv"
+LIDAR_TABLE, LIDAR_LABEL = "table_temporal_lidar", "CAD-V2X-Seq-LiDAR"
+LIDAR_SCENARIO = "scenarios/cad-v2x-seq-lidar.toml"
+
+
+def folder_of(name: str) -> str:
+    """The folder of table ``name``'s side files: ``temporal`` for the camera table,
+    ``temporal_lidar`` for ``table_temporal_lidar``."""
+    return "temporal" if name == TABLE else name.removeprefix("table_")
+
+
+CONTINUITY_COLUMNS = (
+    "preset", "band", "low_m_s", "high_m_s", "kept", "links", "continuity",
+    "continuity_low", "continuity_high",
+)  # fmt: skip
 TUNING_COLUMNS = ("preset", "window", "matcher", "config", "params", "val_f1", "tau", "chosen")
 
 
@@ -161,6 +188,16 @@ class Sequenced:
     truth: list[np.ndarray | None]
     episode: int
     sequence: int
+    speed1: list[np.ndarray] | None = None  # per frame, true speed (m/s) per detection; NaN clutter
+    speed2: list[np.ndarray] | None = None
+
+
+def _true_speeds(pair, object_ids: Sequence[str]) -> np.ndarray:
+    """The true ground speed (m/s) of each detection's object (NaN: clutter): metrics only."""
+    by_id = {
+        str(o.id): float(np.hypot(*np.asarray(o.velocity, dtype=float)[:2])) for o in pair.objects
+    }
+    return np.array([by_id.get(str(oid), np.nan) for oid in object_ids], dtype=float)
 
 
 def abstains(method: str, preset: str) -> bool:
@@ -183,7 +220,7 @@ def _true_ids(object_ids: Sequence[str], names: dict[str, int]) -> np.ndarray:
 def sequence_problem(frames, preset: str, seed: int, index: int = 0) -> Sequenced:
     """The :class:`Sequenced` of one sequence's ``frames`` (FramePairs in time order) under
     ``preset``, localisation drawn with ``seed``; own tracks from :func:`with_own_tracks`."""
-    from matchers.tracking.hungarian import tracked_sequence
+    from matchers.tracking.own_tracks import tracked_sequence
 
     pairs = [f.localise_preset(preset, seed=seed) for f in frames]
     problems = [p.problem() for p in pairs]
@@ -198,7 +235,9 @@ def sequence_problem(frames, preset: str, seed: int, index: int = 0) -> Sequence
         f.points1.shape[1] == 3 and f.points2.shape[1] == 3 for f in problems
     ):
         mounts = (np.asarray(extrinsics[0][0]), np.asarray(extrinsics[0][1]))
-    seq = tracked_sequence(problems, odo[0], odo[1], *mounts)  # each agent's own tracks
+    times = np.array([float(f.time) for f in frames])
+    meta = {"interval_s": round(float(np.median(np.diff(times))), 6)} if len(times) > 1 else {}
+    seq = tracked_sequence(problems, odo[0], odo[1], *mounts, meta=meta)  # own tracks
     names: dict[str, int] = {}
     true1 = [_true_ids(p.view1.object_ids, names) for p in pairs]
     true2 = [_true_ids(p.view2.object_ids, names) for p in pairs]
@@ -211,6 +250,8 @@ def sequence_problem(frames, preset: str, seed: int, index: int = 0) -> Sequence
         [p.true_relative_pose() for p in pairs],
         int(frames[0].episode),
         index,
+        [_true_speeds(p, p.view1.object_ids) for p in pairs],
+        [_true_speeds(p, p.view2.object_ids) for p in pairs],
     )
 
 
@@ -374,9 +415,12 @@ def score_test(item: Sequenced, frames: list, tau: float, seed: int) -> tuple[li
                 "success": _pose_success(item, t, pairs),
             }
         )
-    switches = association_switches(declared, item.true1, item.true2)
+    switches = partner_changes(declared, item.true1, item.true2)
+    idsw = cross_agent_idsw(declared, item.true1, item.true2, item.seq.tracks1, item.seq.tracks2)
     first = frames_to_first_correct(declared, item.true1, item.true2)
-    h = correspondence_hota(declared, item.true1, item.true2, item.seq.tracks1, item.seq.tracks2)
+    h = correspondence_hota(
+        declared, item.true1, item.true2, item.seq.tracks1, item.seq.tracks2, arrays=True
+    )
     temporal = {
         "seed": seed,
         "sequence": item.sequence,
@@ -386,8 +430,8 @@ def score_test(item: Sequenced, frames: list, tau: float, seed: int) -> tuple[li
         "first": [v for v in first["per_object"].values() if v is not None],
         "never": first["never"],
         "objects": len(first["per_object"]),
-        "hota": h["HOTA"],
-        "assa": h["AssA"],
+        "idsw": idsw["idsw"],
+        "hota": h,
     }
     return rows, temporal
 
@@ -451,6 +495,9 @@ def summarise(per_frame: pd.DataFrame, temporal: list[dict]) -> dict:
     success, s_low, s_high, _ = _interval(per_frame["success"], per_frame["episode"])
     sw, sw_low, sw_high = _switch_interval(temporal)
     first = [v for s in temporal for v in s["first"]]
+    combined = combine_sequences([s["hota"] for s in temporal])
+    object_frames = sum(s["object_frames"] for s in temporal)
+    idsw = sum(s["idsw"] for s in temporal)
     return {
         "f1_pooled": pooled,
         "f1_pooled_low": pooled_low,
@@ -461,17 +508,60 @@ def summarise(per_frame: pd.DataFrame, temporal: list[dict]) -> dict:
         "success_1m_2deg": success,
         "success_low": s_low,
         "success_high": s_high,
-        "switches_per_100": 100 * sw,
-        "switches_low": 100 * sw_low,
-        "switches_high": 100 * sw_high,
+        "partner_changes_per_100": 100 * sw,
+        "partner_changes_low": 100 * sw_low,
+        "partner_changes_high": 100 * sw_high,
+        "idsw_per_100": 100 * idsw / object_frames if object_frames else float("nan"),
         "frames_to_first": float(np.mean(first)) if first else float("nan"),
         "never_matched": int(sum(s["never"] for s in temporal)),
-        "hota": float(np.mean([s["hota"] for s in temporal])) if temporal else float("nan"),
-        "assa": float(np.mean([s["assa"] for s in temporal])) if temporal else float("nan"),
+        "hota": combined["HOTA"],
+        "deta": combined["DetA"],
+        "assa": combined["AssA"],
         "frames": len(per_frame),
         "sequences": len({(s["seed"], s["sequence"]) for s in temporal}),
         "episodes": episodes,
     }
+
+
+def continuity_rows(items: list[tuple[int, Sequenced]], preset: str) -> list[dict]:
+    """The own tracker's continuity per speed band over ``items`` (both views, every run):
+    :func:`~eval.protocol.temporal_metrics.track_continuity` summed, ``continuity`` = kept /
+    links (NaN without a link) with its episode-level t-interval (each link an item, 1 when
+    kept, clustered by episode)."""
+    values: dict[str, list[float]] = {name: [] for name, _, _ in SPEED_BANDS}
+    episodes: dict[str, list[int]] = {name: [] for name, _, _ in SPEED_BANDS}
+    for _, item in items:
+        if item.speed1 is None:
+            continue
+        for tracks, true, speeds in (
+            (item.seq.tracks1, item.true1, item.speed1),
+            (item.seq.tracks2, item.true2, item.speed2),
+        ):
+            for name, (kept, links) in track_continuity(tracks, true, speeds).items():
+                values[name] += [1.0] * kept + [0.0] * (links - kept)
+                episodes[name] += [item.episode] * links
+    rows = []
+    for name, low, high in SPEED_BANDS:
+        kept, links = int(sum(values[name])), len(values[name])
+        share, c_low, c_high = np.nan, np.nan, np.nan
+        if links:
+            share, c_low, c_high, _ = t_interval(
+                np.array(values[name]), np.array(episodes[name]), bounds=(0.0, 1.0)
+            )
+        rows.append(
+            {
+                "preset": preset,
+                "band": name,
+                "low_m_s": low,
+                "high_m_s": high,
+                "kept": kept,
+                "links": links,
+                "continuity": share,
+                "continuity_low": c_low,
+                "continuity_high": c_high,
+            }  # fmt: skip
+        )
+    return rows
 
 
 def _oracle(items: list[tuple[int, Sequenced]], preset: str) -> tuple[dict, pd.DataFrame]:
@@ -489,13 +579,14 @@ def _oracle(items: list[tuple[int, Sequenced]], preset: str) -> tuple[dict, pd.D
 
 @dataclass
 class PresetOutcome:
-    """One preset's part of the study: its table rows (the oracle's last), its gain row (None:
-    no W = 10 / W = 1 pair), its per-frame tables and its tuning candidates."""
+    """One preset's part of the study: its table rows (the oracle's last), its gain rows (none
+    without a W = 10 / W = 1 pair), its per-frame tables and its tuning candidates."""
 
     rows: list[dict]
-    gain: dict | None
+    gain: list[dict]
     per_frame: list[pd.DataFrame]
     tuned: list[dict]
+    continuity: list[dict]
 
 
 def evaluate_preset(task: tuple) -> PresetOutcome:
@@ -505,6 +596,7 @@ def evaluate_preset(task: tuple) -> PresetOutcome:
     test = load_split(Path(test_dir), preset, seeds)
     val = load_split(Path(val_dir), preset, seeds)
     oracle_row, oracle_frames = _oracle(test, preset)
+    continuity = continuity_rows(test, preset)
     rows, tuned = [], []
     per_frame_all = [oracle_frames.assign(method=ORACLE_ROW, window=0, preset=preset)]
     frames_by: dict[tuple[str, int], pd.DataFrame] = {}
@@ -536,6 +628,12 @@ def evaluate_preset(task: tuple) -> PresetOutcome:
             row |= summarise(table, temporal)
             row["ms_per_frame"] = 1000 * seconds / max(len(table), 1)
             rows.append(row)
+            if window == LONG and SHORT in windows:  # W = 1 at W = 10's parameters and τ
+                fixed = []
+                for seed, item in test:
+                    frames, _ = run_method(method, SHORT, item, seed, preset, options)
+                    fixed += score_test(item, frames, tau, seed)[0]
+                frames_by[(method, "fixed")] = pd.DataFrame(fixed)
             log.info(
                 "[temporal] %s %s W=%d %s: τ %.3f, val F1 %.3f, test F1 %.3f",
                 preset,
@@ -547,7 +645,7 @@ def evaluate_preset(task: tuple) -> PresetOutcome:
                 row["f1_mean"],
             )
     rows.append(oracle_row)
-    return PresetOutcome(rows, _gain(preset, rows, frames_by), per_frame_all, tuned)
+    return PresetOutcome(rows, _gains(preset, rows, frames_by), per_frame_all, tuned, continuity)
 
 
 def evaluate_temporal(
@@ -559,14 +657,17 @@ def evaluate_temporal(
     seeds: Sequence[int] = RUNS,
     tune: bool = True,
     executor=None,
+    name: str = TABLE,
+    label: str = LABEL,
 ) -> pd.DataFrame:
     """Run the study (module docstring) and write ``out/table_temporal.{md,csv}``,
     ``out/table_temporal_gain.csv``, the per-frame scores ``out/temporal/per_frame.csv`` and
     every tuning candidate ``out/temporal/tuning.csv`` (``tune=False``: defaults only, no
     candidates). One :func:`evaluate_preset` task per preset on ``executor``
     (:class:`eval.core.executor.Executor`; None or one worker: in this process, in order);
-    the outputs are assembled in preset order, whatever the completion order. Returns the
-    table."""
+    the outputs are assembled in preset order, whatever the completion order. ``name`` /
+    ``label``: the files' stem and the caption's dataset (:func:`evaluate_temporal_lidar`: the
+    LiDAR table, side files under :func:`folder_of`). Returns the table."""
     out = Path(out)
     methods = tuple((m, tuple(int(w) for w in ws)) for m, ws in methods)
     tasks = [(str(test_dir), str(val_dir), p, methods, tuple(seeds), bool(tune)) for p in presets]
@@ -579,9 +680,12 @@ def evaluate_temporal(
                 raise done.error
             outcomes[done.index] = done.value
     rows = [r for o in outcomes for r in o.rows]
-    gains = [o.gain for o in outcomes]
+    gains = [g for o in outcomes for g in o.gain]
     per_frame_all = [f for o in outcomes for f in o.per_frame]
     tuned = [t for o in outcomes for t in o.tuned]
+    continuity = pd.DataFrame(
+        [c for o in outcomes for c in o.continuity], columns=list(CONTINUITY_COLUMNS)
+    )
     table = pd.DataFrame(rows, columns=list(COLUMNS))
     table[list(COUNT_COLUMNS)] = table[list(COUNT_COLUMNS)].astype("Int64")  # empty: no number
     oracle = table[table["method"] == ORACLE_ROW].set_index("preset")["success_1m_2deg"]
@@ -589,19 +693,55 @@ def evaluate_temporal(
     with np.errstate(invalid="ignore", divide="ignore"):
         share = np.where(ceiling > 0, table["success_1m_2deg"].to_numpy(float) / ceiling, np.nan)
     table["share_of_oracle"] = share
-    gain = pd.DataFrame([g for g in gains if g], columns=list(GAIN_COLUMNS))
-    (out / "temporal").mkdir(parents=True, exist_ok=True)
-    write_csv(table.round(6), out / f"{TABLE}.csv")
-    write_csv(gain.round(6), out / f"{GAIN}.csv")
-    write_csv(pd.DataFrame(tuned, columns=list(TUNING_COLUMNS)).round(6), out / TUNING_FILE)
-    if per_frame_all:
-        write_csv(
-            pd.concat(per_frame_all, ignore_index=True).round(6), out / "temporal" / "per_frame.csv"
+    declared_nothing = np.array(
+        [
+            m != ORACLE_ROW and abstains(m, p)
+            for m, p in zip(table["method"], table["preset"], strict=True)
+        ],
+        dtype=bool,
+    )
+    for column, source in (("oracle_hota", "hota"), ("oracle_assa", "assa")):
+        by_preset = table[table["method"] == ORACLE_ROW].set_index("preset")[source]
+        values = table["preset"].map(by_preset).to_numpy(dtype=float)
+        table[column] = np.where(declared_nothing, np.nan, values)  # no number beside none
+    oracle_assa = table["oracle_assa"].to_numpy(float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        table["assa_share_of_oracle"] = np.where(
+            oracle_assa > 0, table["assa"].to_numpy(float) / oracle_assa, np.nan
         )
-    write_text(out / f"{TABLE}.md", to_markdown(table, gain) + "\n\n" + "\n".join(
-        f"- {line}." for line in goals(table, out)
+    gain = pd.DataFrame([g for g in gains if g], columns=list(GAIN_COLUMNS))
+    side = out / folder_of(name)
+    side.mkdir(parents=True, exist_ok=True)
+    write_csv(table.round(6), out / f"{name}.csv")
+    write_csv(gain.round(6), out / f"{name}_gain.csv")
+    write_csv(pd.DataFrame(tuned, columns=list(TUNING_COLUMNS)).round(6), side / "tuning.csv")
+    write_csv(continuity.round(6), side / "continuity.csv")
+    if per_frame_all:
+        write_csv(pd.concat(per_frame_all, ignore_index=True).round(6), side / "per_frame.csv")
+    write_text(out / f"{name}.md", to_markdown(table, gain, label) + "\n\n" + "\n".join(
+        f"- {line}." for line in goals(table, out, name)
     ) + "\n")  # fmt: skip
     return table
+
+
+def evaluate_temporal_lidar(
+    test_dir: Path,
+    val_dir: Path,
+    out: Path,
+    methods: Sequence[tuple[str, Sequence[int]]] = METHODS,
+    presets: Sequence[str] = PRESETS,
+    seeds: Sequence[int] = RUNS,
+    tune: bool = True,
+    executor=None,
+) -> pd.DataFrame:
+    """The temporal study on LiDAR boxes (``scenarios/cad-v2x-seq-lidar.toml``'s test and
+    validation splits at ``test_dir`` / ``val_dir``), the same protocol as
+    :func:`evaluate_temporal`: ``out/table_temporal_lidar.{md,csv}``,
+    ``out/table_temporal_lidar_gain.csv`` and ``out/temporal_lidar/`` (per-frame scores, tuning
+    candidates, the own tracker's continuity). Returns the table."""
+    return evaluate_temporal(
+        test_dir, val_dir, out, methods, presets, seeds, tune, executor, LIDAR_TABLE, LIDAR_LABEL
+    )
 
 
 def best_long(table: pd.DataFrame, preset: str) -> str | None:
@@ -615,18 +755,32 @@ def best_long(table: pd.DataFrame, preset: str) -> str | None:
     return str(rows.sort_values(["val_f1", "method"], ascending=[False, True]).iloc[0]["method"])
 
 
-def _gain(preset: str, rows: list[dict], frames_by: dict) -> dict | None:
+TUNED, FIXED = "tuned per W", "fixed: W = 10's"
+
+
+def _gains(preset: str, rows: list[dict], frames_by: dict) -> list[dict]:
+    """The preset's gain rows for the best method at W = 10: W = 10 against W = 1 each with
+    its own tuned parameters and τ (``parameters`` = :data:`TUNED`), and against W = 1 run with
+    W = 10's parameters and τ (:data:`FIXED`: the window's effect alone)."""
     table = pd.DataFrame([r for r in rows if r["preset"] == preset])
     method = best_long(table, preset)
     if method is None or (method, SHORT) not in frames_by:
-        return None
-    long, short = frames_by[(method, LONG)], frames_by[(method, SHORT)]
+        return []
+    out = [_gain(preset, method, TUNED, frames_by[(method, LONG)], frames_by[(method, SHORT)])]
+    if (method, "fixed") in frames_by:
+        fixed = frames_by[(method, "fixed")]
+        out.append(_gain(preset, method, FIXED, frames_by[(method, LONG)], fixed))
+    return out
+
+
+def _gain(preset: str, method: str, parameters: str, long, short) -> dict:
     diff = long["f1"].to_numpy(float) - short["f1"].to_numpy(float)
     mean, low, high, episodes = t_interval(diff, long["episode"].to_numpy(), bounds=(-1.0, 1.0))
     pooled = pooled_bootstrap.f1_difference(_pooled_sums(long), _pooled_sums(short))
     return {
         "preset": preset,
         "method": method,
+        "parameters": parameters,
         "f1_pooled_w10": float(pooled_bootstrap.f1_of(_pooled_sums(long))[0]),
         "f1_pooled_w1": float(pooled_bootstrap.f1_of(_pooled_sums(short))[0]),
         "pooled_diff": float(pooled.point[0]),
@@ -665,30 +819,32 @@ def _num(value: float, digits: int = 2) -> str:
     return "–" if not np.isfinite(value) else f"{value:.{digits}f}"
 
 
-def to_markdown(table: pd.DataFrame, gain: pd.DataFrame | None = None) -> str:
+def to_markdown(table: pd.DataFrame, gain: pd.DataFrame | None = None, label: str = LABEL) -> str:
     """The table as markdown: per preset every (method, W) and the oracle row."""
     lines = [
-        f"**{LABEL}** — temporal matchers × window W × localisation preset; pooled F1 (the "
+        f"**{label}** — temporal matchers × window W × localisation preset; pooled F1 (the "
         "headline: frames without a true pair are common in a sequence), mean per-frame F1 and "
         "success in percent with episode-level 95 % intervals; parameters "
         f"({TUNING_BUDGET} configurations each) and τ per "
         "(method, W, preset) from validation; "
-        "switches per 100 covisible object-frames; frames to the first correct association "
+        "partner changes and CLEAR-MOT IDSW of the cross-agent links per 100 covisible "
+        "object-frames; frames to the first correct association "
         "(mean over objects matched at all; never: objects never matched correctly); HOTA/AssA "
-        f"of the declared pairs over the own tracks; {NO_NUMBER}: the method reads the "
+        "of the declared pairs over the own tracks, combined over sequences as TrackEval does, "
+        f"AssA also as a share of the oracle's; {NO_NUMBER}: the method reads the "
         "localisation prior, which the preset does not give (no number, in no comparison).",
         "",
         "| Preset | Method | W | τ | parameters | F1 pooled [95 % CI] | F1 per frame [95 % CI] "
-        "| success@(1 m, 2°) [95 % CI] | of oracle | switches/100 | frames to first | never "
-        "| HOTA | AssA |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| success@(1 m, 2°) [95 % CI] | of oracle | partner changes/100 | IDSW/100 "
+        "| frames to first | never | HOTA | AssA | AssA of oracle |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for row in table.itertuples(index=False):
         oracle = row.method == ORACLE_ROW
         if not oracle and abstains(row.method, row.preset):
             lines.append(
                 f"| `{row.preset}` | `{row.method}` | {row.window} | n/a | n/a | {NO_NUMBER} |"
-                + " n/a |" * 8
+                + " n/a |" * 10
             )
             continue
         lines.append(
@@ -697,38 +853,43 @@ def to_markdown(table: pd.DataFrame, gain: pd.DataFrame | None = None) -> str:
             f"| {_ranged(row.f1_pooled, row.f1_pooled_low, row.f1_pooled_high)} "
             f"| {_ranged(row.f1_mean, row.f1_low, row.f1_high)} "
             f"| {_ranged(row.success_1m_2deg, row.success_low, row.success_high)} "
-            f"| {_pct(row.share_of_oracle, 0)} | {_num(row.switches_per_100)} "
+            f"| {_pct(row.share_of_oracle, 0)} | {_num(row.partner_changes_per_100)} "
+            f"| {_num(row.idsw_per_100)} "
             f"| {_num(row.frames_to_first)} | {row.never_matched} | {_pct(row.hota)} "
-            f"| {_pct(row.assa)} |"
+            f"| {_pct(row.assa)} | {_pct(row.assa_share_of_oracle, 0)} |"
         )
     if gain is not None and len(gain):
         lines += [
             "",
             "What accumulation buys (best method at W = 10 by validation F1 among those that can "
             "run; test F1 at W = 10 minus W = 1: pooled, episode-level bootstrap 95 % interval; "
-            "per frame, paired per frame, episode-level t-interval):",
+            "per frame, paired per frame, episode-level t-interval; parameters: each W with its "
+            f"own tuned parameters and τ ({TUNED}), or W = 1 run with W = 10's ({FIXED}: the "
+            "window's effect alone)):",
             "",
-            "| Preset | Method | F1 pooled W = 10 | F1 pooled W = 1 | pooled difference [95 % CI] "
+            "| Preset | Method | parameters | F1 pooled W = 10 | F1 pooled W = 1 "
+            "| pooled difference [95 % CI] "
             "| F1 per frame W = 10 | F1 per frame W = 1 | per-frame difference [95 % CI] |",
-            "|---|---|---|---|---|---|---|---|",
+            "|---|---|---|---|---|---|---|---|---|",
         ]
         for g in gain.itertuples(index=False):
             lines.append(
-                f"| `{g.preset}` | `{g.method}` | {_pct(g.f1_pooled_w10)} | {_pct(g.f1_pooled_w1)} "
+                f"| `{g.preset}` | `{g.method}` | {g.parameters} | {_pct(g.f1_pooled_w10)} "
+                f"| {_pct(g.f1_pooled_w1)} "
                 f"| {_ranged(g.pooled_diff, g.pooled_low, g.pooled_high)} "
                 f"| {_pct(g.f1_w10)} | {_pct(g.f1_w1)} | {_ranged(g.diff, g.ci_low, g.ci_high)} |"
             )
     return "\n".join(lines)
 
 
-def _per_frame(results: Path) -> pd.DataFrame | None:
-    path = Path(results) / "temporal" / "per_frame.csv"
+def _per_frame(results: Path, name: str = TABLE) -> pd.DataFrame | None:
+    path = Path(results) / folder_of(name) / "per_frame.csv"
     return pd.read_csv(path) if path.is_file() else None
 
 
-def goals(table: pd.DataFrame, results: Path) -> list[str]:
-    """The issue's goal lines (each through :func:`goal_line`)."""
-    per_frame = _per_frame(results)
+def goals(table: pd.DataFrame, results: Path, name: str = TABLE) -> list[str]:
+    """The issue's goal lines (each through :func:`goal_line`) of table ``name``."""
+    per_frame = _per_frame(results, name)
     lines = []
     denied = best_long(table, "denied")
     if denied is not None:
@@ -774,10 +935,10 @@ def goals(table: pd.DataFrame, results: Path) -> list[str]:
                 )
         lines.append(
             goal_line(
-                "`gnss-urban`, W = 10: switches ≤ 1 per 100 object-frames",
-                row.switches_per_100,
-                row.switches_low,
-                row.switches_high,
+                "`gnss-urban`, W = 10: partner changes ≤ 1 per 100 object-frames",
+                row.partner_changes_per_100,
+                row.partner_changes_low,
+                row.partner_changes_high,
                 1.0,
                 at_least=False,
                 scale=1.0,
@@ -785,10 +946,40 @@ def goals(table: pd.DataFrame, results: Path) -> list[str]:
                 detail=f"`{urban}`",
             )
         )
-    gain = Path(results) / f"{GAIN}.csv"
+    continuity = Path(results) / folder_of(name) / "continuity.csv"
+    if continuity.is_file():
+        c = pd.read_csv(continuity)
+        c = c[(c["preset"] == "gnss-urban") & (c["band"] == "fast") & (c["links"] > 0)]
+        if len(c):
+            c = c.iloc[0]
+            lines.append(
+                goal_line(
+                    "own tracker: ≥ 90 % of consecutive detections on one track for objects "
+                    "moving ≥ 10 m/s",
+                    c.continuity,
+                    c.continuity_low,
+                    c.continuity_high,
+                    0.90,
+                    detail=f"{int(c.kept)} of {int(c.links)} links, `gnss-urban` test split",
+                )
+            )
+    gain = Path(results) / f"{name}_gain.csv"
     if gain.is_file():
-        g = pd.read_csv(gain)
-        g = g[g["preset"] == "denied"]
+        every = pd.read_csv(gain)
+        fixed = every[(every["preset"] == "gnss-urban") & (every["parameters"] == FIXED)]
+        if len(fixed):
+            f = fixed.iloc[0]
+            lines.append(
+                goal_line(
+                    "`gnss-urban`: W = 10 ≥ W = 1 at fixed parameters (pooled F1)",
+                    f.pooled_diff,
+                    f.pooled_low,
+                    f.pooled_high,
+                    0.0,
+                    detail=f"`{f.method}`, W = 10's parameters and τ at both",
+                )
+            )
+        g = every[(every["preset"] == "denied") & (every["parameters"] == TUNED)]
         if len(g):
             g = g.iloc[0]
             low = g.pooled_low
@@ -824,33 +1015,40 @@ def _frames(per_frame: pd.DataFrame, method: str, window: int, preset: str) -> p
     return rows.sort_values(["seed", "sequence", "frame"]).reset_index(drop=True)
 
 
-def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[str]:
+def readme_part(
+    results: Path, rel: str, seconds: float | None = None, name: str = TABLE
+) -> list[str]:
     """README lines for the temporal table (none without ``table_temporal.csv``): per preset
     what accumulation buys (one row each) and the issue's goal lines; ``seconds``: the last cold
-    run's generation + study time (a "≤ 2 min cold" line), None: not measured cold."""
+    run's generation + study time (a "≤ 2 min cold" line), None: not measured cold. ``name``
+    :data:`LIDAR_TABLE`: the same for the LiDAR table (:func:`readme_part_lidar`)."""
     results = Path(results)
-    path = results / f"{TABLE}.csv"
+    lidar = name == LIDAR_TABLE
+    path = results / f"{name}.csv"
     if not path.is_file():
         return []
     table = pd.read_csv(path, keep_default_na=False, na_values=[""])
-    gain_path = results / f"{GAIN}.csv"
+    gain_path = results / f"{name}_gain.csv"
     gain = pd.read_csv(gain_path) if gain_path.is_file() else pd.DataFrame(columns=GAIN_COLUMNS)
     lines = [
-        "### The temporal table",
+        "### The temporal table on LiDAR boxes" if lidar else "### The temporal table",
         "",
-        f"`{SCENARIO}`: sequences of 10 frames 0.2 s apart of the same two vehicles; each "
+        f"`{LIDAR_SCENARIO if lidar else SCENARIO}`: sequences of 10 frames 0.2 s apart of the same two vehicles; each "
         "agent's own tracks from its detections and odometry (never a true id); "
         "`windowed:<m>` (a two-view matcher's scores averaged along the own tracks over W "
-        "frames) and `temporal_pose` (one planar motion per window), parameters "
+        "frames), `temporal_pose` (one planar motion per window from the GNSS prior and the "
+        "tracks) and `trajectory_pose` (the same motion from the tracks alone), parameters "
         f"({TUNING_BUDGET} configurations each) and τ per (method, W, preset) on validation. Per preset the method with the best validation F1 "
         "at W = 10 (among those that can run there: a prior reader has no number under `denied`): "
         "test pooled F1 at W = 10 and W = 1 and their difference (episode-level bootstrap 95 % "
-        "interval), the per-frame mean's difference, success@(1 m, 2°) at W = 10 and the "
-        f"oracle's. Every row: [{rel}/{TABLE}.md]({rel}/{TABLE}.md).",
+        "interval) with W = 1 tuned on its own or at W = 10's parameters and τ (the window "
+        "alone), the per-frame mean's difference, success@(1 m, 2°) at W = 10 and the "
+        f"oracle's. Every row: [{rel}/{name}.md]({rel}/{name}.md).",
         "",
-        "| Preset | Method | F1 pooled W = 10 | F1 pooled W = 1 | W = 10 − W = 1 [95 % CI] "
+        "| Preset | Method | parameters | F1 pooled W = 10 | F1 pooled W = 1 "
+        "| W = 10 − W = 1 [95 % CI] "
         "| per-frame F1 W = 10 − W = 1 | success W = 10 | oracle success |",
-        "|---|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for g in gain.itertuples(index=False):
         mine = table[
@@ -862,7 +1060,8 @@ def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[s
         success = float(mine["success_1m_2deg"].iloc[0]) if len(mine) else float("nan")
         ceiling = float(oracle["success_1m_2deg"].iloc[0]) if len(oracle) else float("nan")
         lines.append(
-            f"| `{g.preset}` | `{g.method}` | {_pct(g.f1_pooled_w10)} | {_pct(g.f1_pooled_w1)} "
+            f"| `{g.preset}` | `{g.method}` | {g.parameters} | {_pct(g.f1_pooled_w10)} "
+            f"| {_pct(g.f1_pooled_w1)} "
             f"| {_ranged(g.pooled_diff, g.pooled_low, g.pooled_high)} "
             f"| {_ranged(g.diff, g.ci_low, g.ci_high)} | {_pct(success)} | {_pct(ceiling)} |"
         )
@@ -877,7 +1076,7 @@ def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[s
         else:
             verdict = "no measurable change, interval across 0"
         findings.append(
-            f"`{g.preset}`: W = 10 against W = 1 for `{g.method}`: "
+            f"`{g.preset}`: W = 10 against W = 1 ({g.parameters}) for `{g.method}`: "
             f"{100 * g.pooled_diff:+.1f} pooled F1 points — {verdict}"
         )
     abstained = table[
@@ -902,7 +1101,7 @@ def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[s
         if seconds is not None
         else []
     )
-    lines += ["", *[f"- {line}." for line in findings + goals(table, results) + timing], ""]
+    lines += ["", *[f"- {line}." for line in findings + goals(table, results, name) + timing], ""]
     return lines
 
 
@@ -919,3 +1118,8 @@ def temporal_tuning_record(table: pd.DataFrame) -> dict:
             "val_f1": round(float(row.val_f1), 6) if ran else None,
         }
     return record
+
+
+def readme_part_lidar(results: Path, rel: str, seconds: float | None = None) -> list[str]:
+    """README lines for ``table_temporal_lidar`` (none without it): :func:`readme_part`'s."""
+    return readme_part(results, rel, seconds, LIDAR_TABLE)

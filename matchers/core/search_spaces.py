@@ -110,6 +110,15 @@ TEMPORAL_SEARCH_SPACES: dict[str, list[dict]] = {
     + [{"spread": s} for s in (1.0, 3.0)]
     + [{"gate": 4.0}, {"gate": 12.0}, {"tighten": 0.25}, {"tighten": 1.0}]
     + [{"prior_weight": 4.0}],
+    # The pose-free one (matchers.temporal.trajectory_pose): the support's cutoff and the
+    # association's width (metres: camera depth error at 30-60 m is metres), the weight of a
+    # pair of different reported classes, and the GNSS prior as a light soft term (no effect
+    # where there is no prior).
+    "trajectory_pose": [{}]
+    + [{"cutoff": c} for c in (2.0, 5.0)]
+    + [{"width": w} for w in (0.5, 2.0)]
+    + [{"other_class": c} for c in (0.2, 1.0)]
+    + [{"prior_weight": 0.1}],
 }
 
 

@@ -159,3 +159,11 @@ def ground_positions(seq: SequenceProblem, view: int) -> list[np.ndarray]:
         to_frame0(body_positions(getattr(frame, field_name), mount), odometry[t])
         for t, frame in enumerate(seq.frames)
     ]
+
+
+def sensor_positions(seq: SequenceProblem, view: int) -> np.ndarray:
+    """(T, 2) where view ``view``'s (1 or 2) sensor sits in that agent's frame-0 ground plane at
+    each frame (the mount's origin, then odometry; the body origin without a mount)."""
+    mount, odometry = (seq.mount1, seq.odometry1) if view == 1 else (seq.mount2, seq.odometry2)
+    origin = np.zeros(2) if mount is None else mount[:2, 3]
+    return np.array([to_frame0(origin, pose)[0] for pose in odometry]).reshape(-1, 2)

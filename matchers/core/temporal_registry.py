@@ -8,7 +8,7 @@ apart from the two-view :func:`matchers.core.registry.available` on purpose: eve
 runs "all matchers" on one frame pair (the evaluation, the fuzz and budget tests) would
 otherwise hand them a Problem.
 
-Names: the built-in ``temporal_pose``, :func:`register_temporal`ed names, and the family
+Names: the built-ins ``temporal_pose`` and ``trajectory_pose``, :func:`register_temporal`ed names, and the family
 ``windowed:<name>`` — any two-view matcher ``<name>`` (built-in, registered, entry point or
 import path) lifted to a window of frames along the agents' own tracks
 (:mod:`matchers.temporal.windowed`), resolved through the ``families`` hook of
@@ -24,7 +24,10 @@ from matchers.core.search_spaces import TEMPORAL_SEARCH_SPACES, check_search_spa
 
 TemporalMatcher = Callable[..., list]
 
-_BUILTIN: dict[str, str] = {"temporal_pose": "matchers.temporal.temporal_pose:temporal_pose"}
+_BUILTIN: dict[str, str] = {
+    "temporal_pose": "matchers.temporal.temporal_pose:temporal_pose",
+    "trajectory_pose": "matchers.temporal.trajectory_pose:trajectory_pose",
+}
 _FAMILIES: dict[str, str] = {"windowed": "matchers.temporal.windowed:windowed"}
 _registered: dict[str, TemporalMatcher] = {}
 

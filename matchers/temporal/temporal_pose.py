@@ -55,8 +55,12 @@ from matchers.temporal.windowed import accumulate, check_sequence
 MIN_SPREAD_M = 0.5
 
 
-def _frame_prior(q1, q2, frame):
-    """(anchors (m, 2) of view 2 in agent 1's plane, prior motion (R, t)) or None."""
+def frame_prior(
+    q1: np.ndarray, q2: np.ndarray, frame
+) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]] | None:
+    """(anchors (m, 2) of view 2 in agent 1's frame-0 plane, the prior's motion (R, t) of agent
+    2's frame-0 plane into agent 1's) of one frame from each view's frame-0 positions ``q1``,
+    ``q2`` and the frame's GNSS world positions; None without a prior or with < 2 detections."""
     if frame.world1 is None or frame.n1 < 2 or frame.n2 < 2:
         return None
     r1, t1 = procrustes_2d(q1, ground_plane(frame.world1), np.ones(len(q1)))
@@ -91,7 +95,7 @@ def estimate(
     q1, q2, frames, ids1, ids2, sigma, spread, gate, tighten, prior_weight, hypotheses, max_iter
 ):
     """The window's motion (R, t) and info (module docstring); None without any candidate."""
-    priors = [_frame_prior(a, b, f) for a, b, f in zip(q1, q2, frames, strict=True)]
+    priors = [frame_prior(a, b, f) for a, b, f in zip(q1, q2, frames, strict=True)]
     cutoff = gate * tighten * sigma
     rows, cols, frame_of, lik = [], [], [], []
     for s, prior in enumerate(priors):
