@@ -62,6 +62,7 @@ from eval.studies.multiagent_report import readme_part as multiagent_readme
 from eval.studies.prior_defaults import readme_part as prior_sensitivity_readme
 from eval.studies.regime_cards import regime_markdown
 from eval.studies.temporal import readme_part as temporal_readme
+from eval.studies.temporal import readme_part_lidar as temporal_lidar_readme
 from eval.studies.transfer_report import readme_part as transfer_readme
 from eval.studies.v2x_boxes import readme_part as v2x_boxes_readme
 from eval.studies.v2x_lidar import readme_part as v2x_lidar_readme
@@ -127,6 +128,7 @@ def _sections(
     record = read_record(results)
     seconds = study_seconds(results, record)  # "≤ N min cold" goals: the last cold run's times
     multi_s, temporal_s, boxes_s = seconds["multiagent"], seconds["temporal"], seconds["v2x_boxes"]
+    temporal_lidar_s = seconds["temporal_lidar"]
     transfer_s, transfer_runs = seconds["transfer"], seconds["transfer_runs"]
 
     def part(name, build, heading=None, table=None):
@@ -203,7 +205,13 @@ def _sections(
                     lambda: temporal_readme(results, rel, temporal_s),
                     "The temporal table",
                     "table_temporal.md",
-                )
+                ),
+                part(
+                    "temporal_lidar",
+                    lambda: temporal_lidar_readme(results, rel, temporal_lidar_s),
+                    "The temporal table on LiDAR boxes",
+                    "table_temporal_lidar.md",
+                ),
             ],
         ),
         (

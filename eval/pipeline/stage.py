@@ -45,6 +45,7 @@ class RunState:
     multi_dirs: tuple[Path, Path] | None = None
     cad_train: Path | None = None
     temporal_dirs: tuple[Path, Path] | None = None
+    temporal_lidar_dirs: tuple[Path, Path] | None = None
     table1_markdown: str = ""
 
     @property

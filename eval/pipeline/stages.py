@@ -15,6 +15,7 @@ from eval.pipeline import (
 )
 from eval.pipeline.stage import Stage
 from eval.studies.prior_defaults import SENSITIVITY
+from eval.studies.temporal import LIDAR_SCENARIO as TEMPORAL_LIDAR_SCENARIO
 from eval.studies.temporal import SCENARIO as TEMPORAL_SCENARIO
 from eval.studies.v2x_lidar import SCENARIO as LIDAR_SCENARIO
 
@@ -197,6 +198,32 @@ STAGES: tuple[Stage, ...] = (
         skip="temporal",
         counts_runs=False,
         stale=("table_temporal.csv", "table_temporal.md", "table_temporal_gain.csv"),
+    ),
+    Stage(
+        name="temporal_lidar_generate",
+        reads=(TEMPORAL_LIDAR_SCENARIO,),
+        writes=("cad-v2x-seq-lidar", "cad-v2x-seq-lidar-val"),
+        run=temporal_stages.temporal_lidar_generate,
+        budget_s=240,
+        skip="temporal-lidar",
+        executor=False,
+        counts_runs=False,
+        about=f"the temporal table on LiDAR boxes, {TEMPORAL_LIDAR_SCENARIO} (also skipped "
+        "without the file)",
+    ),
+    Stage(
+        name="temporal_lidar",
+        reads=("cad-v2x-seq-lidar", "cad-v2x-seq-lidar-val"),
+        writes=("table_temporal_lidar.*", "temporal_lidar/"),
+        run=temporal_stages.temporal_lidar,
+        budget_s=240,
+        skip="temporal-lidar",
+        counts_runs=False,
+        stale=(
+            "table_temporal_lidar.csv",
+            "table_temporal_lidar.md",
+            "table_temporal_lidar_gain.csv",
+        ),
     ),
     Stage(
         name="tables_figures",

@@ -1,6 +1,7 @@
-"""The stages of the temporal study on cad-v2x-seq: its test and validation sequences, then
-every (method, window) under each preset (:mod:`eval.studies.temporal`). They fill the run
-record's ``temporal`` section; skipped without the scenario file."""
+"""The stages of the temporal study: cad-v2x-seq's test and validation sequences, then every
+(method, window) under each preset (:mod:`eval.studies.temporal`); the same on LiDAR boxes
+(cad-v2x-seq-lidar) under the presets its goals name. They fill the run record's ``temporal``
+section (LiDAR under ``temporal.lidar``); each is skipped without its scenario file."""
 
 from __future__ import annotations
 
@@ -10,39 +11,76 @@ from eval.pipeline.sizes import ROOT, VAL_SEED_OFFSET
 from eval.pipeline.stage import RunState, shown
 from eval.report.run_record import scenario_file
 from eval.studies.temporal import LABEL as TEMPORAL_LABEL
+from eval.studies.temporal import (
+    LIDAR_LABEL,
+    LIDAR_SCENARIO,
+    evaluate_temporal,
+    evaluate_temporal_lidar,
+    temporal_tuning_record,
+)
 from eval.studies.temporal import METHODS as TEMPORAL_METHODS
 from eval.studies.temporal import PRESETS as TEMPORAL_PRESETS
 from eval.studies.temporal import RUNS as TEMPORAL_RUNS
 from eval.studies.temporal import SCENARIO as TEMPORAL_SCENARIO
-from eval.studies.temporal import evaluate_temporal, temporal_tuning_record
 
 log = logging.getLogger("eval.reproduce")
 
 
-def temporal_generate(state: RunState) -> None:
-    """The test (scenario seed) and validation (seed + VAL_SEED_OFFSET) sequences."""
+LIDAR_PRESETS = ("gnss-urban", "denied")
+"""The LiDAR sequences' presets: the two its goals are read under (docs/evaluation.md)."""
+
+
+def _sequences(state: RunState, scenario: str, label: str, name: str, record: dict):
+    """Generate (or resume) ``scenario``'s test (scenario seed) and validation (seed +
+    VAL_SEED_OFFSET) sequences as ``data/<name>`` and ``data/<name>-val``, filling ``record``;
+    their folders, or None without the scenario file."""
     from cadsim.scenario import load_scenario
 
-    path = ROOT / TEMPORAL_SCENARIO
+    path = ROOT / scenario
     if not path.is_file():
-        log.warning("[temporal] skipped: no %s", TEMPORAL_SCENARIO)
-        return
-    record = state.record.setdefault("temporal", {})
-    scenario = load_scenario(path)
+        log.warning("[%s] skipped: no %s", label, scenario)
+        return None
+    seed = load_scenario(path).seed
     splits = {
-        "test": (state.data / "cad-v2x-seq", scenario.seed),
-        "val": (state.data / "cad-v2x-seq-val", scenario.seed + VAL_SEED_OFFSET),
+        "test": (state.data / name, seed),
+        "val": (state.data / f"{name}-val", seed + VAL_SEED_OFFSET),
     }
-    for split, (folder, seed) in splits.items():
+    for split, (folder, split_seed) in splits.items():
         n = state.sizes.temporal[split]
-        log.info(
-            "[temporal generate] %s %s: %d sequences (seed %d)", TEMPORAL_LABEL, split, n, seed
-        )
-        made = state.generate(path, folder, n, None if split == "test" else seed)
-        record[split] = {"dir": str(folder), "sequences": n, "seed": seed}
+        log.info("[temporal generate] %s %s: %d sequences (seed %d)", label, split, n, split_seed)
+        made = state.generate(path, folder, n, None if split == "test" else split_seed)
+        record[split] = {"dir": str(folder), "sequences": n, "seed": split_seed}
         record[split] |= {"new_records": made.new_records}
     record["scenario"] = scenario_file(path) | {"path": shown(path)}
-    state.temporal_dirs = splits["test"][0], splits["val"][0]
+    return splits["test"][0], splits["val"][0]
+
+
+def temporal_generate(state: RunState) -> None:
+    """The camera sequences (cad-v2x-seq)."""
+    record = state.record.setdefault("temporal", {})
+    state.temporal_dirs = _sequences(
+        state, TEMPORAL_SCENARIO, TEMPORAL_LABEL, "cad-v2x-seq", record
+    )
+
+
+def temporal_lidar_generate(state: RunState) -> None:
+    """The LiDAR sequences (cad-v2x-seq-lidar)."""
+    record = state.record.setdefault("temporal", {}).setdefault("lidar", {})
+    state.temporal_lidar_dirs = _sequences(
+        state, LIDAR_SCENARIO, LIDAR_LABEL, "cad-v2x-seq-lidar", record
+    )
+
+
+def temporal_lidar(state: RunState) -> None:
+    """The temporal table on LiDAR boxes under :data:`LIDAR_PRESETS`, the camera's protocol."""
+    if state.temporal_lidar_dirs is None:
+        return
+    evaluate_temporal_lidar(
+        *state.temporal_lidar_dirs, state.out, TEMPORAL_METHODS, LIDAR_PRESETS, TEMPORAL_RUNS,
+        tune=state.args.tune, executor=state.executor,
+    )  # fmt: skip
+    record = state.record.setdefault("temporal", {}).setdefault("lidar", {})
+    record |= {"presets": list(LIDAR_PRESETS), "seeds": list(TEMPORAL_RUNS)}
 
 
 def temporal(state: RunState) -> None:

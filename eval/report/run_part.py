@@ -44,6 +44,7 @@ def study_seconds(results: Path, record: dict) -> dict[str, float | int | None]:
         "transfer": total("transfer_generate", "transfer"),
         "transfer_runs": cold.get("runs", {}).get("transfer", {}).get("computed"),
         "temporal": total("temporal_generate", "temporal"),
+        "temporal_lidar": total("temporal_lidar_generate", "temporal_lidar"),
         "v2x_boxes": stages.get("v2x_boxes"),
     }
 
