@@ -197,14 +197,15 @@ def test_appearance_draws_one_light_per_episode_and_a_gain_per_camera():
 # images, depth, instance maps and detections of the record changed once; they are pinned again
 # here so that any later change shows. Detections' features and positions do not go through BLAS
 # (the same bytes on every CPU), and a two-view scenario's records are unchanged by N-view
-# snapshots (docs/multi-agent.md).
+# snapshots (docs/multi-agent.md). Re-pinned again for the demand drawn in process (demand model
+# 1, cadsim/sources/sumo/demand.py) and one pair per episode: other traffic, other images.
 CAD_FIRST_RECORD_SHA256 = {
-    "view1.png": "96d06a082a7f639ccdfddcc10dfb36aaf3252fed8f73211da0e050a826e202e3",
-    "view2.png": "f2c651886d7b1685d9cb50ad18dd84eb5ddb582dfdd78f76f0283fe67a34f12b",
-    "depth.npz": "267c98327ed0bd47c36a323e438c27d045097ae7d705de0b77a12d2cd3e7c8fe",
-    "instance.npz": "8c84616686465575c96da07163fe625a90a8359f20fbb317462943df34b9001b",
+    "view1.png": "a692230461442ca53755422788ece3d01c19cf0f63a692aff8f95694848ac7d9",
+    "view2.png": "1b8a4f9a68ab3e2bf60e3cc2ee5467087164abb5718a8c0a23cc0a8e92df067c",
+    "depth.npz": "5d0ac9c6677c33723c645824aadd502e47ca481810a4bbf76a34a28ad376b532",
+    "instance.npz": "c0b105fd9d6ef6d6ce8a62eb65030c05ce49db46057de8a982b61c6d7335cf06",
     # format 5 stores true_classes and reported_classes (was: classes)
-    "detections.npz": "921bc3d1031a86877467d1f6e9c7ba1dd01ec9fdbba37ae6bb59f10c6b347709",
+    "detections.npz": "c4609053974274b3ad892598a6b03c4c51afdc2a22519230a9cc03cc40df333f",
 }
 
 
