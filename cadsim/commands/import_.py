@@ -93,7 +93,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="V2V4Real labels as recorded (numpy-tagged yaml, ass_id links, right-handed poses)",
         description="Write V2V4Real's labels as box-only records: the OPV2V layout, yaml written "
         "by PyYAML from numpy values, objects linked across vehicles by ass_id.",
-        epilog="example:\n  cadsim import v2v4real path/to/V2V4Real/test --out data/v2v4real",
+        epilog="examples:\n  cadsim import v2v4real path/to/V2V4Real/test --out data/v2v4real\n"
+        "  cadsim import v2v4real path/to/V2V4Real/test --out data/v2v4real-noprior --no-prior",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     _opv2v_arguments(v2v4real)
@@ -185,7 +186,8 @@ def _dair_arguments(formats) -> None:
         description="Write DAIR-V2X-C's cooperative frames as box-only frame pairs; ground truth "
         "from the cooperative world boxes, else from the calibrated side boxes.",
         epilog="examples:\n  cadsim import dair-v2x path/to/cooperative-vehicle-infrastructure "
-        "--out data/dair-v2x-c\n  cadsim evaluate data/dair-v2x-c --localisation gnss-urban ...",
+        "--out data/dair-v2x-c\n  cadsim import dair-v2x path/to/cooperative-vehicle-infrastructure "
+        "--out data/dair-v2x-c-strict --link-gate 0.5",
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     dair.add_argument("src", metavar="SRC", help="folder holding cooperative/, vehicle-side/, ...")
