@@ -40,7 +40,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from scipy.optimize import linear_sum_assignment
 
 from matchers.blocks.prior import PRIOR_FIELDS, check_prior_options, ground_plane, prior_likelihood
 from matchers.blocks.rigid2d import biweight, procrustes_2d, rotation
@@ -50,6 +49,7 @@ from matchers.core.options import check_count, check_range, rng_from_seed
 from matchers.core.result import finish
 from matchers.core.sequence_problem import SequenceProblem, ground_positions
 from matchers.temporal.time_offset import compensated, offset_grid, track_velocities
+from matchers.temporal.track_motion import refine_motion
 from matchers.temporal.windowed import accumulate, check_sequence
 
 MIN_SPREAD_M = 0.5
@@ -135,27 +135,10 @@ def estimate(
     anchor_dst = np.concatenate([p[0] for p in used])
     anchor_w = np.concatenate([np.full(len(p[0]), prior_weight / len(p[0])) for p in used])
     width = spread * tighten * sigma
-    rounds = 0
-    for _ in range(max_iter):
-        rounds += 1
-        r = np.linalg.norm(src @ turn.T + move - dst, axis=1)
-        like = np.where(r <= cutoff, np.exp(-(r**2) / (4 * width**2)), 0.0)
-        pair = np.zeros((len(u1), len(u2)))
-        seen = np.zeros((len(u1), len(u2)))
-        np.add.at(pair, (a, b), like)
-        np.add.at(seen, (a, b), 1.0)
-        mean = pair / np.maximum(seen, 1.0)
-        ra, cb = linear_sum_assignment(mean, maximize=True)
-        chosen = np.zeros_like(mean, dtype=bool)
-        chosen[ra, cb] = mean[ra, cb] > 0
-        w = chosen[a, b] * biweight(r, cutoff)
-        new_turn, new_move = procrustes_2d(
-            np.r_[src, anchor_src], np.r_[dst, anchor_dst], np.r_[w, anchor_w]
-        )
-        change = np.abs(new_turn - turn).max() + np.abs(new_move - move).max()
-        turn, move = new_turn, new_move
-        if change < 1e-9:
-            break
+    turn, move, rounds = refine_motion(
+        turn, move, (src, dst, a, b), (len(u1), len(u2)), cutoff, width,
+        (anchor_src, anchor_dst, anchor_w), max_iter,
+    )  # fmt: skip
     info = {
         "hypotheses": len(yaw),
         "support": float(support[h]),
