@@ -116,6 +116,13 @@ class SequenceProblem:
     def num_frames(self) -> int:
         return len(self.frames)
 
+    def with_tracks(self, tracks1, tracks2) -> SequenceProblem:
+        """The same sequence with other per-frame track ids (an own tracker's)."""
+        return SequenceProblem(
+            self.frames, tracks1, tracks2, self.odometry1, self.odometry2,
+            self.mount1, self.mount2, dict(self.meta),
+        )  # fmt: skip
+
     def window(self, start: int, stop: int) -> SequenceProblem:
         """Frames [start, stop) as a sequence of their own (odometry kept as it is)."""
         part = slice(max(start, 0), max(stop, 0))

@@ -83,17 +83,7 @@ def track_views(
 
 def with_own_tracks(seq: SequenceProblem, gate: float = 2.0, max_age: int = 2) -> SequenceProblem:
     """``seq`` with its track ids replaced by :func:`track_views`'s."""
-    tracks1, tracks2 = track_views(seq, gate, max_age)
-    return SequenceProblem(
-        seq.frames,
-        tracks1,
-        tracks2,
-        seq.odometry1,
-        seq.odometry2,
-        seq.mount1,
-        seq.mount2,
-        dict(seq.meta),
-    )
+    return seq.with_tracks(*track_views(seq, gate, max_age))
 
 
 def tracked_sequence(

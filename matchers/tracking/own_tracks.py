@@ -26,17 +26,7 @@ def track_views(seq: SequenceProblem, **options) -> tuple[list[np.ndarray], list
 
 def with_own_tracks(seq: SequenceProblem, **options) -> SequenceProblem:
     """``seq`` with its track ids replaced by :func:`track_views`'s."""
-    tracks1, tracks2 = track_views(seq, **options)
-    return SequenceProblem(
-        seq.frames,
-        tracks1,
-        tracks2,
-        seq.odometry1,
-        seq.odometry2,
-        seq.mount1,
-        seq.mount2,
-        dict(seq.meta),
-    )
+    return seq.with_tracks(*track_views(seq, **options))
 
 
 def tracked_sequence(
