@@ -14,9 +14,10 @@ import pytest
 import test_sequences as seqs
 
 from cadsim.dataset import Dataset
+from eval.engine import goal
 from eval.protocol import goal_verdict
 from eval.protocol.metrics import pair_metrics
-from eval.studies import temporal
+from eval.studies import temporal, temporal_report, temporal_runs
 from matchers.core.registry import get
 
 METHODS = (("windowed:consistency", (1, 3, 10)), ("temporal_pose", (1, 10)))
@@ -183,7 +184,7 @@ def test_tau_comes_from_validation_only(dirs, study):
 def test_a_planted_validation_threshold_is_the_one_applied(monkeypatch, dirs):
     """Plant the τ calibration: the test F1 is then the F1 at the planted τ, whatever the test
     split would prefer."""
-    monkeypatch.setattr(temporal, "calibrate_tau", lambda outcomes: (1e9, 0.5))  # every config
+    monkeypatch.setattr(temporal_runs, "calibrate_tau", lambda outcomes: (1e9, 0.5))  # every config
     table = temporal.evaluate_temporal(
         dirs / "test", dirs / "val", dirs / "out-planted", METHODS[:1], PRESETS[:1]
     )
@@ -216,7 +217,8 @@ def test_goal_lines_go_through_goal_verdict(monkeypatch, tmp_path):
         calls.append((args, kwargs))
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(temporal, "goal_line", spy)
+    monkeypatch.setattr(temporal_report, "goal_line", spy)
+    monkeypatch.setattr(goal, "goal_line", spy)  # the declared goals' lines
     lines = temporal.goals(_table(0.81, 0.9), tmp_path)
     assert len(lines) == len(calls) == 3  # no per-frame or gain files: those goals left out
     assert lines[0].startswith("`denied`, W = 10: best pooled F1 ≥ 80: met")
