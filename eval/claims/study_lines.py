@@ -34,6 +34,7 @@ from eval.studies.external import readme_part as external_part
 from eval.studies.multiagent_report import readme_part as multiagent_part
 from eval.studies.prior_defaults import readme_part as prior_part
 from eval.studies.temporal import readme_part as temporal_part
+from eval.studies.temporal import readme_part_lidar as temporal_lidar_part
 from eval.studies.transfer_report import readme_part as transfer_part
 from eval.studies.v2x_boxes import readme_part as v2x_boxes_part
 from eval.studies.v2x_lidar import readme_part as v2x_lidar_part
@@ -70,6 +71,11 @@ def _parts(results: Path) -> list[tuple[str, str, Callable[[], list[str]]]]:
             "temporal",
             "table_temporal_gain.csv",
             lambda: temporal_part(results, ".", seconds["temporal"]),
+        ),  # fmt: skip
+        (
+            "temporal_lidar",
+            "table_temporal_lidar_gain.csv",
+            lambda: temporal_lidar_part(results, ".", seconds["temporal_lidar"]),
         ),  # fmt: skip
         (
             "transfer",
@@ -146,22 +152,32 @@ def _difference(study: str, source: str, line: str) -> Claim | None:
     )  # fmt: skip
 
 
-def _temporal_gain(results: Path, line: str) -> Claim | None:
-    """A temporal "W = 10 against W = 1" line, its numbers from ``table_temporal_gain.csv``."""
-    path = results / "table_temporal_gain.csv"
-    head = re.match(r"^`(?P<preset>[^`]+)`: W = 10 against W = 1 for `(?P<method>[^`]+)`", line)
+_GAIN = re.compile(
+    r"^`(?P<preset>[^`]+)`: W = 10 against W = 1 (?:\((?P<parameters>[^)]*)\) )?"
+    r"for `(?P<method>[^`]+)`"
+)
+
+
+def _temporal_gain(results: Path, study: str, source: str, line: str) -> Claim | None:
+    """A temporal "W = 10 against W = 1 (tuned per W | fixed: …)" line, its numbers from the
+    study's gain table ``source`` (``table_temporal_gain.csv`` or its LiDAR twin)."""
+    path = results / source
+    head = _GAIN.match(line)
     if head is None or not path.is_file():
         return None
     gain = pd.read_csv(path)
     row = gain[(gain["preset"] == head["preset"]) & (gain["method"] == head["method"])]
+    if head["parameters"] and "parameters" in gain.columns:
+        row = row[row["parameters"] == head["parameters"]]
     if row.empty:
         return None
     r = row.iloc[0]
+    fixed = f", {head['parameters']}" if head["parameters"] else ""
     return Claim(
-        "temporal", f"{head['method']} W = 10 ({head['preset']})", "W = 1", "pooled F1 points",
+        study, f"{head['method']} W = 10 ({head['preset']}{fixed})", "W = 1", "pooled F1 points",
         100 * r["pooled_diff"], 100 * r["pooled_low"], 100 * r["pooled_high"], 0.0, "diff",
         difference_verdict(r["pooled_low"], r["pooled_high"]), "validation",
-        f"{int(r['episodes'])} simulation episodes (bootstrap)", "table_temporal_gain.csv", line,
+        f"{int(r['episodes'])} simulation episodes (bootstrap)", source, line,
     )  # fmt: skip
 
 
@@ -187,7 +203,9 @@ def line_claim(results: Path, study: str, source: str, line: str) -> Claim | Non
         return _goal(study, source, parsed)
     for build in (
         lambda: _measurement(study, source, line),
-        lambda: _temporal_gain(results, line) if study == "temporal" else None,
+        lambda: (
+            _temporal_gain(results, study, source, line) if study.startswith("temporal") else None
+        ),
         lambda: _difference(study, source, line) if line.startswith("`") else None,
     ):
         claim = build()
