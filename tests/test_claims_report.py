@@ -10,6 +10,7 @@ import pytest
 from eval.claims import build_claims, write_claims
 from eval.claims.coverage import unbacked
 from eval.protocol.claims import COLUMNS, VERDICTS, read_claims
+from eval.protocol.goal_verdict import verdict
 from eval.readme_results import report_markdown, summary_section
 
 RESULTS = Path(__file__).resolve().parents[1] / "results"
@@ -27,13 +28,14 @@ def test_every_comparative_phrase_of_the_generated_report_is_a_claim():
     assert set(claims["verdict"]) <= set(VERDICTS)
     assert "test" not in set(claims["chosen_on"])
     # the findings: Table I's rival chosen on validation with its interval, Fig. 4's leaders
-    # labelled point values, the image-only AUC without an interval "not shown", timing goals
+    # labelled point values, the image-only AUC's verdict read off its interval, timing goals
     # point measurements, DMGM's blocks not independent
     rivals = claims[(claims["study"] == "table1") & (claims["direction"] == "diff")]
     assert set(rivals["chosen_on"]) == {"validation"} and rivals["ci_low"].notna().all()
     assert set(claims.loc[claims["study"] == "fig4", "verdict"]) == {"point value"}
-    image = claims[claims["metric"].str.contains("image-only AUC", regex=False)]
-    assert list(image["verdict"]) == ["not shown"]
+    image = claims[claims["metric"].str.contains("image-only AUC", regex=False)].iloc[0]
+    assert image["ci_low"] <= image["value"] <= image["ci_high"]  # an episode interval, and
+    assert image["verdict"] == verdict(image["ci_low"], image["ci_high"], image["bar"], False)
     timed = claims[claims["metric"] == "seconds (last cold run)"]
     assert len(timed) and set(timed["verdict"]) == {"point measurement"}
     dmgm = claims[(claims["study"] == "transfer") & claims["ci_low"].notna()]["clusters"]
