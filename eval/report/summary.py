@@ -245,7 +245,7 @@ def _boxes_best(results: Path) -> dict[str, str]:
     return out
 
 
-TEMPORAL_METHODS = ("windowed:consistency", "temporal_pose")
+TEMPORAL_METHODS = ("windowed:consistency", "trajectory_pose", "temporal_pose")
 
 
 def temporal(results: Path, claims: pd.DataFrame | None = None) -> list[str]:

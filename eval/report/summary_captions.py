@@ -64,8 +64,9 @@ SUMMARIES = (
         "The temporal table",
         "Pooled F1 in percent on CAD-V2X sequences (most frames of a sequence have no true pair, "
         "so the per-frame mean is secondary, in the report), one frame (W = 1) against a "
-        f"10-frame window along each agent's own tracks; {NO_NUMBER}: the method reads the "
-        "localisation prior, which `denied` does not give; the goals and their verdicts in the "
-        "report.",
+        f"10-frame window along each agent's own tracks (`trajectory_pose`: the window's motion "
+        f"from the tracks alone, no prior); {NO_NUMBER}: the method reads the localisation "
+        "prior, which `denied` does not give; the LiDAR sequences, the goals and their verdicts "
+        "in the report.",
     ),
 )
