@@ -134,7 +134,7 @@ def _live_vehicle(folder: str) -> dict:
 
 
 def test_live_libsumo_vehicle_centre_lies_half_a_length_back_on_its_lane(tmp_path: Path):
-    from cadsim.sources.sumo.build import sumo_home
+    from cadsim.sources.sumo.install import sumo_home
 
     (tmp_path / "line.nod.xml").write_text(NODES)
     (tmp_path / "line.edg.xml").write_text(EDGES)

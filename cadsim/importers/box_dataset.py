@@ -146,10 +146,10 @@ def _write_all(out: Path, ordered: Sequence[BoxRecord], sequential: bool) -> lis
         threading.Thread(target=work, daemon=True, name=f"cadsim-writer-{n}")
         for n in range(min(WRITER_THREADS, len(ordered)))
     ]
-    for worker in workers:
-        worker.start()
     entries: list[dict | None] = [None] * len(ordered)
-    try:
+    try:  # starting the workers is inside: a Ctrl-C while they start stops the started ones
+        for worker in workers:
+            worker.start()
         for _ in range(len(ordered)):
             while True:
                 try:
@@ -163,7 +163,8 @@ def _write_all(out: Path, ordered: Sequence[BoxRecord], sequential: bool) -> lis
     except BaseException:
         stop.set()
         for worker in workers:
-            worker.join(timeout=STOP_WAIT_S)
+            if worker.is_alive():
+                worker.join(timeout=STOP_WAIT_S)
         raise
     return entries
 
