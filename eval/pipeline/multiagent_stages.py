@@ -6,9 +6,7 @@ from __future__ import annotations
 
 import logging
 
-from eval.pipeline.sizes import ROOT, VAL_SEED_OFFSET
-from eval.pipeline.stage import RunState, shown
-from eval.report.run_record import scenario_file
+from eval.pipeline.stage import RunState, generate_splits
 from eval.studies.evaluation import chosen_specs, parse_matchers
 from eval.studies.multiagent import LABEL as MA_LABEL
 from eval.studies.multiagent import MATCHERS as MA_MATCHERS
@@ -27,25 +25,12 @@ def multiagent_seeds(state: RunState) -> list[int]:
 
 def multiagent_generate(state: RunState) -> None:
     """cad-multi's test and validation snapshots on disjoint scenario seeds."""
-    from cadsim.scenario import load_scenario
-
     if not multiagent_seeds(state):
         return
     record = state.record.setdefault("multiagent", {})
-    path = ROOT / MA_SCENARIO
-    scenario = load_scenario(path)
-    splits = {
-        "test": (state.data / "cad-multi", scenario.seed),
-        "val": (state.data / "cad-multi-val", scenario.seed + VAL_SEED_OFFSET),
-    }
-    for split, (folder, seed) in splits.items():
-        n = state.sizes.multiagent[split]
-        log.info("[multiagent generate] %s %s: %d snapshots (seed %d)", MA_LABEL, split, n, seed)
-        made = state.generate(path, folder, n, None if split == "test" else seed)
-        record[split] = {"dir": str(folder), "snapshots": n, "seed": seed}
-        record[split] |= {"new_records": made.new_records}
-    record["scenario"] = scenario_file(path) | {"path": shown(path)}
-    state.multi_dirs = splits["test"][0], splits["val"][0]
+    state.multi_dirs = generate_splits(
+        state, MA_SCENARIO, (MA_LABEL, "cad-multi"), state.sizes.multiagent, "snapshots", record
+    )
 
 
 def multiagent(state: RunState) -> None:

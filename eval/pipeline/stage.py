@@ -159,3 +159,37 @@ def walk(stages: Sequence[Stage], state: RunState, timer: StageTimer) -> dict[st
             if i == last:
                 open_executor.close()
     return runs
+
+
+def generate_splits(
+    state: RunState,
+    scenario: str,
+    names: tuple[str, str],
+    sizes: dict[str, int],
+    unit: str,
+    record: dict,
+) -> tuple[Path, Path] | None:
+    """Generate (or resume) ``scenario``'s test split (the scenario's seed) and validation split
+    (seed + VAL_SEED_OFFSET), ``sizes[split]`` records each, as ``data/<name>`` and
+    ``data/<name>-val`` (``names`` = (label for the log, folder name)), filling ``record`` (the
+    run record's section: per split its folder, size in ``unit``, seed and new records; the
+    scenario); the two folders, or None without the scenario file."""
+    from cadsim.scenario import load_scenario
+    from eval.pipeline.sizes import ROOT, VAL_SEED_OFFSET
+    from eval.report.run_record import scenario_file
+
+    label, name = names
+    path = ROOT / scenario
+    if not path.is_file():
+        log.warning("[%s] skipped: no %s", label, scenario)
+        return None
+    seed = load_scenario(path).seed
+    splits = {"test": (state.data / name, seed), "val": (state.data / f"{name}-val", seed + VAL_SEED_OFFSET)}  # fmt: skip
+    for split, (folder, split_seed) in splits.items():
+        n = sizes[split]
+        log.info("[generate] %s %s: %d %s (seed %d)", label, split, n, unit, split_seed)
+        made = state.generate(path, folder, n, None if split == "test" else split_seed)
+        record[split] = {"dir": str(folder), unit: n, "seed": split_seed}
+        record[split] |= {"new_records": made.new_records}
+    record["scenario"] = scenario_file(path) | {"path": shown(path)}
+    return splits["test"][0], splits["val"][0]

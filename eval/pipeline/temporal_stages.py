@@ -7,9 +7,7 @@ from __future__ import annotations
 
 import logging
 
-from eval.pipeline.sizes import ROOT, VAL_SEED_OFFSET
-from eval.pipeline.stage import RunState, shown
-from eval.report.run_record import scenario_file
+from eval.pipeline.stage import RunState, generate_splits
 from eval.studies.temporal import LABEL as TEMPORAL_LABEL
 from eval.studies.temporal import (
     LIDAR_LABEL,
@@ -30,45 +28,22 @@ LIDAR_PRESETS = ("gnss-urban", "denied")
 """The LiDAR sequences' presets: the two its goals are read under (docs/evaluation.md)."""
 
 
-def _sequences(state: RunState, scenario: str, label: str, name: str, record: dict):
-    """Generate (or resume) ``scenario``'s test (scenario seed) and validation (seed +
-    VAL_SEED_OFFSET) sequences as ``data/<name>`` and ``data/<name>-val``, filling ``record``;
-    their folders, or None without the scenario file."""
-    from cadsim.scenario import load_scenario
-
-    path = ROOT / scenario
-    if not path.is_file():
-        log.warning("[%s] skipped: no %s", label, scenario)
-        return None
-    seed = load_scenario(path).seed
-    splits = {
-        "test": (state.data / name, seed),
-        "val": (state.data / f"{name}-val", seed + VAL_SEED_OFFSET),
-    }
-    for split, (folder, split_seed) in splits.items():
-        n = state.sizes.temporal[split]
-        log.info("[temporal generate] %s %s: %d sequences (seed %d)", label, split, n, split_seed)
-        made = state.generate(path, folder, n, None if split == "test" else split_seed)
-        record[split] = {"dir": str(folder), "sequences": n, "seed": split_seed}
-        record[split] |= {"new_records": made.new_records}
-    record["scenario"] = scenario_file(path) | {"path": shown(path)}
-    return splits["test"][0], splits["val"][0]
-
-
 def temporal_generate(state: RunState) -> None:
     """The camera sequences (cad-v2x-seq)."""
     record = state.record.setdefault("temporal", {})
-    state.temporal_dirs = _sequences(
-        state, TEMPORAL_SCENARIO, TEMPORAL_LABEL, "cad-v2x-seq", record
-    )
+    state.temporal_dirs = generate_splits(
+        state, TEMPORAL_SCENARIO, (TEMPORAL_LABEL, "cad-v2x-seq"), state.sizes.temporal,
+        "sequences", record,
+    )  # fmt: skip
 
 
 def temporal_lidar_generate(state: RunState) -> None:
     """The LiDAR sequences (cad-v2x-seq-lidar)."""
     record = state.record.setdefault("temporal", {}).setdefault("lidar", {})
-    state.temporal_lidar_dirs = _sequences(
-        state, LIDAR_SCENARIO, LIDAR_LABEL, "cad-v2x-seq-lidar", record
-    )
+    state.temporal_lidar_dirs = generate_splits(
+        state, LIDAR_SCENARIO, (LIDAR_LABEL, "cad-v2x-seq-lidar"), state.sizes.temporal,
+        "sequences", record,
+    )  # fmt: skip
 
 
 def temporal_lidar(state: RunState) -> None:
