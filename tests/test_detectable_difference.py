@@ -100,3 +100,12 @@ def test_paired_differences_and_intervals_files_carry_mdd_and_clusters():
     intervals = best_against_runner_up(per_pair, {"rtk": {"maximin": 0.9, "mos": 0.8}})
     assert intervals.iloc[0]["clusters"] == 8
     assert intervals.iloc[0]["mdd"] == pytest.approx(expected)
+
+
+def test_the_mdd_of_a_bootstrap_interval_is_its_normal_standard_error_times_2_80():
+    from eval.studies.temporal_gain import bootstrap_mdd
+
+    # a 95 % interval of half-width 1.96 is a standard error of 1: MDD = 1.960 + 0.842
+    assert bootstrap_mdd(-1.96, 1.96) == pytest.approx(2.8016, abs=1e-4)
+    assert bootstrap_mdd(0.10, 0.10 + 2 * 1.96 * 0.05) == pytest.approx(0.05 * 2.8016, abs=1e-5)
+    assert np.isnan(bootstrap_mdd(float("nan"), 0.1))

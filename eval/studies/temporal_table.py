@@ -55,12 +55,15 @@ GAIN_COLUMNS = (
     "pooled_diff",
     "pooled_low",
     "pooled_high",
+    "pooled_mdd",
     "f1_w10",
     "f1_w1",
     "diff",
     "ci_low",
     "ci_high",
+    "mdd",
     "episodes",
+    "clusters",
 )
 COUNT_COLUMNS = ("never_matched", "frames", "sequences", "episodes")  # integers, or no number
 TABLE, GAIN = "table_temporal", "table_temporal_gain"
