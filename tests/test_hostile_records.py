@@ -423,9 +423,12 @@ def test_ctrl_c_during_import_is_one_line_and_leaves_no_records(tmp_path):
     src = write_v2x_seq(tmp_path / "spd")
     out = tmp_path / "out"
     env = os.environ | {"PYTHONPATH": str(ROOT)}
+    # the child gets the default Ctrl-C disposition: a library earlier in the suite may leave
+    # SIGINT ignored in this process, and an ignored signal stays ignored across exec
     proc = subprocess.Popen(
         [sys.executable, "-c", _SLOW_IMPORT, str(src), str(out)],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=ROOT,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )  # fmt: skip
     assert "wrote" in proc.stdout.readline()  # a record is on disk (writers print concurrently)
     proc.send_signal(signal.SIGINT)
