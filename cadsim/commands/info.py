@@ -11,6 +11,7 @@ from collections import Counter
 
 import numpy as np
 
+from cadsim.dataset.difficulty import LevelRule, level_counts
 from cadsim.dataset.lidar_regime import card_lines
 from cadsim.dataset.regime import dataset_regime
 
@@ -18,6 +19,12 @@ from cadsim.dataset.regime import dataset_regime
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("dataset", help="dataset folder written by `cadsim generate`")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument(
+        "--levels-from",
+        metavar="DATASET",
+        help="fit the difficulty-level rule on this dataset (the benchmark fits it on the "
+        "validation split: docs/evaluation.md, 'Difficulty levels'); default: on this dataset",
+    )
 
 
 def _range(values: np.ndarray) -> list[float] | None:
@@ -31,9 +38,29 @@ def _stats(values: list[int]) -> dict:
     return {"mean": float(a.mean()), "min": float(a.min()), "max": float(a.max())}
 
 
-def summarise(ds) -> dict:
+def difficulty_summary(frame_pairs: list, reference: list | None = None) -> dict:
+    """Per-pair difficulty factors and levels (:mod:`cadsim.dataset.difficulty`), the level rule
+    fitted on ``reference`` pairs (default: ``frame_pairs`` themselves), and the level counts."""
+    factors = [p.difficulty for p in frame_pairs]
+    if not factors:
+        return {"difficulty": None}
+    rule_on = [p.difficulty for p in reference] if reference else factors
+    rule = LevelRule.fit(rule_on)
+    levels = rule.levels(factors)
+    return {
+        "difficulty": {
+            "rule": rule.as_record() | {"fitted_on": "reference" if reference else "itself"},
+            "level_counts": level_counts(levels),
+            "levels": levels,
+            "factors": factors,
+        }
+    }
+
+
+def summarise(ds, reference=None) -> dict:
     """The dataset summary ``cadsim info --json`` prints. Depths are detections' z (metres along
-    each observer's optical axis, from the stored noisy positions)."""
+    each observer's optical axis, from the stored noisy positions). ``reference``: the dataset
+    the difficulty-level rule is fitted on (default: ``ds``)."""
     pairs, class_mix, depths, frame_pairs = [], Counter(), [], []
     for pair in ds:
         frame_pairs.append(pair)
@@ -83,6 +110,7 @@ def summarise(ds) -> dict:
             "regime": dataset_regime(frame_pairs),
             "pairs": pairs,
         }
+        | difficulty_summary(frame_pairs, list(reference) if reference is not None else None)
         | _lidar_card(frame_pairs)
         | ({"multi_view": multi_view_summary(ds)} if getattr(ds, "n_views", 2) > 2 else {})
         | (sequence_summary(ds, pairs) if getattr(ds, "is_sequential", False) else {})
@@ -225,6 +253,7 @@ def _text(s: dict) -> str:
         f"  regime                  {_regime_text(s['regime'])}",
         f"  cues for matchers       {s['regime'].get('cues') or '-'}",
         *(card_lines(s["lidar_detector"]) if "lidar_detector" in s else []),
+        *_difficulty_lines(s.get("difficulty")),
         "",
         f"  {'pair':>4}  {'name':<12} {'n1':>3} {'n2':>3} {'cov':>3}  {'depth1 (m)':>12}  {'depth2 (m)':>12}",
     ]
@@ -242,6 +271,14 @@ def _text(s: dict) -> str:
             + (f"  {p['sequence']:>4} {p['frame']:>5}" if "sequence" in p else "")
         )
     return "\n".join(lines)
+
+
+def _difficulty_lines(d: dict | None) -> list[str]:
+    if not d:
+        return []
+    counts = ", ".join(f"{level} {n}" for level, n in d["level_counts"].items())
+    where = "this dataset" if d["rule"]["fitted_on"] == "itself" else "--levels-from"
+    return [f"  difficulty levels       {counts} (terciles of the composite on {where})"]
 
 
 def _sequence_text(q: dict) -> str:
@@ -283,6 +320,7 @@ def run(args: argparse.Namespace) -> int:
     from cadsim.dataset import Dataset
 
     # Verified first (every record re-hashed against the manifest): what it prints is the data.
-    summary = summarise(Dataset(args.dataset, verify=True)) | {"verified": True}
+    reference = Dataset(args.levels_from) if args.levels_from else None
+    summary = summarise(Dataset(args.dataset, verify=True), reference) | {"verified": True}
     print(json.dumps(summary, indent=1) if args.json else _text(summary))
     return 0

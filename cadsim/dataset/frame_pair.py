@@ -249,6 +249,22 @@ class FramePair:
             return None
         return camera_to_world(self.cameras[0]), camera_to_world(self.cameras[1])
 
+    @cached_property
+    def difficulty(self) -> dict:
+        """The pair's difficulty factors (:mod:`cadsim.dataset.difficulty`; truth, never a
+        matcher's input): as the record stores them, else (imported records) what its truth
+        allows, computed here."""
+        from cadsim.dataset.difficulty import difficulty_factors
+
+        stored = self.record.get("difficulty")
+        if isinstance(stored, dict):
+            return dict(stored)
+        v1, v2 = self.view1, self.view2
+        return difficulty_factors(
+            v1.positions, v2.positions, v1.true_classes, v2.true_classes, self.gt_pairs,
+            self.camera_to_world,
+        )  # fmt: skip
+
     @property
     def observer_ids(self) -> tuple[str, str]:
         obs = self._observers

@@ -43,6 +43,7 @@ from eval.core.pose_metrics import SECONDARY, success_flags, summarise_pose
 from eval.core.result_files import write_csv, write_text
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
+from eval.engine.difficulty_levels import write_split_levels
 from eval.engine.comparison import INTERVAL_COLUMNS, best_against_runner_up
 from eval.engine.episode_interval import column_interval
 from eval.engine.protocol_run import evaluate
@@ -148,6 +149,7 @@ def evaluate_v2x(
     write_csv(val_table.round(6), base / "validation_f1.csv")
     intervals = best_against_runner_up(per_pair, validation)
     write_csv(intervals.round(6), out_dir / f"table_{name}_intervals.csv")
+    write_split_levels(out_dir, f"table_{name}", per_pair, test_dir, val_dir, ("preset",))
     write_text(out_dir / f"table_{name}.md", to_markdown(table, intervals, label) + "\n")
     return table
 
