@@ -43,8 +43,8 @@ from eval.core.pose_metrics import SECONDARY, success_flags, summarise_pose
 from eval.core.result_files import write_csv, write_text
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
-from eval.engine.difficulty_levels import write_split_levels
 from eval.engine.comparison import INTERVAL_COLUMNS, best_against_runner_up
+from eval.engine.difficulty_levels import write_split_levels
 from eval.engine.episode_interval import column_interval
 from eval.engine.protocol_run import evaluate
 from eval.engine.splits import open_entry
