@@ -145,3 +145,36 @@ def test_generated_records_store_their_factors_and_readers_recompute_the_same(tm
         assert recomputed == stored == pair.difficulty
         problem = pair.problem()
         assert not any("difficulty" in name for name in vars(problem))  # never a matcher's input
+
+
+def test_the_headline_leaves_a_dataset_at_the_ceiling_out_in_one_line(tmp_path):
+    from eval.engine.difficulty_levels import write_levels
+    from eval.report import levels_part
+
+    n = 12
+    levels = pd.DataFrame(
+        {"dataset": ["CAD"] * n + ["MRC"] * n, "pair": list(range(n)) * 2, "level": "hard"}
+    )
+    rng = np.random.default_rng(3)
+    cad = _per_pair(
+        [], {"maximin": list(rng.uniform(0.3, 0.9, n)), "rrwm": list(rng.uniform(0.2, 0.8, n))}
+    )
+    mrc = _per_pair([], {"maximin": [1.0] * n, "rrwm": [1.0] * (n - 1) + [0.5]}).assign(
+        dataset="MRC"
+    )
+    choice = {
+        "level": "hard",
+        "criterion": "test rule",
+        "spread": {"easy": 0, "medium": 0, "hard": 1},
+    }
+    write_levels(
+        tmp_path, "table1", pd.concat([cad, mrc]), levels, ["rrwm", "maximin"], extra=choice
+    )
+    lines = levels_part.table1(tmp_path)
+    assert lines[0].startswith("Level **hard**")
+    rows = [line for line in lines if line.startswith("| CAD")]
+    assert len(rows) == 1 and "MDD" in rows[0]
+    assert not any(line.startswith("| MRC") for line in lines)
+    assert any(
+        line.startswith("- MRC stays at the ceiling") and "100.0 %" in line for line in lines
+    )
