@@ -30,6 +30,10 @@ from cadsim.observer_pose import ObserverPose
 from cadsim.world import WorldObject
 
 NO_TRACK = "-1"
+MAX_BOXES = 1000
+"""Most boxes one side's label file may hold (checked before anything is built from them): the
+ground truth's assignment is a boxes × boxes matrix per frame (1000² float64: 8 MB). The real
+DAIR-V2X-C pair checked (docs/external-data.md) holds 23 and 8 boxes."""
 
 
 def _optional_id(obj: dict, key: str, path: Path, where: str) -> str | None:
@@ -52,6 +56,10 @@ def read_boxes(path: Path) -> list[dict]:
     objects = read_json(path)
     if not isinstance(objects, list):
         raise ImportFormatError(path, "top level: expected a list of objects")
+    if len(objects) > MAX_BOXES:
+        raise ImportFormatError(
+            path, f"{len(objects)} boxes, more than {MAX_BOXES} in one side's label file"
+        )
     out = []
     for k, obj in enumerate(objects):
         where = f"[{k}]"
@@ -110,4 +118,4 @@ def side_view(
     return view, objects
 
 
-__all__ = ["NO_TRACK", "read_boxes", "side_view"]
+__all__ = ["MAX_BOXES", "NO_TRACK", "read_boxes", "side_view"]
