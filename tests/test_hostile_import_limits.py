@@ -93,7 +93,14 @@ def test_a_v2v4real_import_runs_under_the_cap(tmp_path):
 
 
 @pytest.mark.parametrize(
-    "shape", [(65536, 65536, 0), (0, 65536, 65536), (65536, 2, 0), (300, 300, 0, 1)]
+    "shape",
+    [
+        (65536, 65536, 0),
+        (0, 65536, 65536),
+        (65536, 2, 0),
+        (300, 300, 0, 1),
+        (65536, 65536, 65536, 65536),  # 2⁶⁴: an int64 product wrapped to 0 ("cannot reshape")
+    ],
 )
 def test_an_empty_axis_cannot_build_billions_of_lists(tmp_path, shape):
     src = write_v2v4real(tmp_path / "src")

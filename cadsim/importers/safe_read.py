@@ -142,6 +142,10 @@ def read_yaml(path: Path, numpy_tags: bool = False):
         raise ImportFormatError(path, f"not safe YAML ({problem})") from None
     except RecursionError:
         raise ImportFormatError(path, f"nested deeper than {MAX_DEPTH} levels") from None
+    except ImportFormatError:
+        raise
+    except ValueError as exc:  # a value a constructor could not take: still name the file
+        raise ImportFormatError(path, f"not safe YAML ({str(exc).splitlines()[0][:80]})") from None
 
 
 def _check_yaml_events(events, path: Path) -> None:
