@@ -22,7 +22,7 @@ from format_fixtures import write_dair_v2x, write_v2v4real, write_v2x_seq
 
 from cadsim.cli import main
 from cadsim.dataset.encoding import load_npz
-from cadsim.importers.dair_side import MAX_BOXES
+from cadsim.importers.dair_side import MAX_BOXES, MAX_LABEL_BYTES
 from cadsim.importers.episode_names import episode_numbers
 from cadsim.importers.numpy_yaml import MAX_ARRAY_ITEMS
 from cadsim.sources.sumo.schema import MAX_CLUTTER_OBJECTS, MIN_CLUTTER_SPACING_M
@@ -147,20 +147,33 @@ def _boxes(n: int):
 
 
 @pytest.mark.parametrize(
-    "rel",
+    "rel, boxes",
     [
-        "vehicle-side/label/lidar/000010.json",
-        "infrastructure-side/label/virtuallidar/000021.json",
-        "cooperative/label_world/000010.json",
+        ("vehicle-side/label/lidar/000010.json", 12_000),
+        ("infrastructure-side/label/virtuallidar/000021.json", 12_000),
+        ("cooperative/label_world/000010.json", 5_000),  # 450 bytes a box: within 4 MiB
     ],
 )
-def test_dair_v2x_label_files_have_a_box_limit(tmp_path, rel):
+def test_dair_v2x_label_files_have_a_box_limit(tmp_path, rel, boxes):
     """12,000 boxes on one side (1.7 MB) once asked for 2.3 GB."""
     src = write_dair_v2x(tmp_path / "dair")
-    _json_edit(src / rel, _boxes(12_000))
+    _json_edit(src / rel, _boxes(boxes))
     done = _capped(["import", "dair-v2x", str(src), "--out", str(tmp_path / "out")], tmp_path)
     assert done.returncode == 2, done.stderr[-2000:]
-    _one_line(done.stderr, "import", rel, f"12000 boxes, more than {MAX_BOXES}")
+    _one_line(done.stderr, "import", rel, f"{boxes} boxes, more than {MAX_BOXES}")
+
+
+def test_dair_v2x_label_files_have_a_size_limit(tmp_path, capsys):
+    """A 64 MiB label would be parsed whole before its boxes are counted."""
+    src = write_dair_v2x(tmp_path / "dair")
+    rel = "infrastructure-side/label/virtuallidar/000020.json"
+    with open(src / rel, "r+b") as label:
+        label.truncate(64 * 2**20)  # sparse: no disk used
+    _refused(
+        capsys,
+        ["import", "dair-v2x", str(src), "--out", str(tmp_path / "out")],
+        f"{rel}: larger than {MAX_LABEL_BYTES / 2**20:g} MiB",
+    )
 
 
 def test_dair_v2x_boxes_up_to_the_limit_are_imported(tmp_path):

@@ -50,7 +50,7 @@ from cadsim import portable_math as pm
 from cadsim.importers import ImportFormatError
 from cadsim.importers.box_dataset import ImportResult, check_out, write_box_dataset
 from cadsim.importers.box_sequence import ImportedFrame, sequence_records
-from cadsim.importers.dair_side import MAX_BOXES, read_boxes, side_view
+from cadsim.importers.dair_side import MAX_BOXES, MAX_LABEL_BYTES, read_boxes, side_view
 from cadsim.importers.episode_names import episode_numbers
 from cadsim.importers.safe_read import (
     confined,
@@ -205,7 +205,7 @@ def _poses(reader: _Reader, veh: str, inf: str, offset, where: Path, key: str) -
 
 def _cooperative_boxes(path: Path) -> tuple[np.ndarray, list[str]]:
     """(k, 2) ground-plane centres (world, metres) and classes of a ``label_world`` file."""
-    labels = read_json(path)
+    labels = read_json(path, MAX_LABEL_BYTES)
     if not isinstance(labels, list):
         raise ImportFormatError(path, "top level: expected a list of objects")
     if len(labels) > MAX_BOXES:

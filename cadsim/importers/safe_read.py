@@ -114,9 +114,10 @@ def _refuse_constant(name: str):
     raise ValueError(f"non-finite number {name}")
 
 
-def read_json(path: Path):
-    """The parsed JSON file at ``path`` (limits of the module docstring)."""
-    text = _text(path)
+def read_json(path: Path, limit: int = MAX_BYTES):
+    """The parsed JSON file at ``path`` (limits of the module docstring; at most ``limit``
+    bytes)."""
+    text = _text(path, limit)
     if _json_depth(text) > MAX_DEPTH:
         raise ImportFormatError(path, f"nested deeper than {MAX_DEPTH} levels")
     try:
