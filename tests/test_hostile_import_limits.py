@@ -24,7 +24,7 @@ from cadsim.cli import main
 from cadsim.dataset.encoding import load_npz
 from cadsim.importers.dair_side import MAX_BOXES, MAX_LABEL_BYTES
 from cadsim.importers.episode_names import episode_numbers
-from cadsim.importers.numpy_yaml import MAX_ARRAY_ITEMS
+from cadsim.importers.numpy_yaml import MAX_ARRAY_ITEMS, MAX_FILE_ARRAY_ITEMS
 from cadsim.sources.sumo.schema import MAX_CLUTTER_OBJECTS, MIN_CLUTTER_SPACING_M
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -110,6 +110,22 @@ def test_an_empty_axis_cannot_build_billions_of_lists(tmp_path, shape):
     assert done.returncode == 2, done.stderr[-2000:]
     _one_line(done.stderr, "import", "0/000001.yaml", f"is more than {MAX_ARRAY_ITEMS} items")
     assert not (tmp_path / "out").exists()
+
+
+def test_many_empty_arrays_cannot_add_up_to_billions_of_lists(tmp_path):
+    """1,000 arrays of (256, 256, 0), each within the limit: 66 million lists together."""
+    src = write_v2v4real(tmp_path / "src")
+    path = next(src.rglob("0/000001.yaml"))
+    extra = "".join(f"extra{k}: {_array((256, 256, 0))}\n" for k in range(1000))
+    path.write_text(path.read_text() + extra)
+    done = _capped(["import", "v2v4real", str(src), "--out", str(tmp_path / "out")], tmp_path)
+    assert done.returncode == 2, done.stderr[-2000:]
+    _one_line(
+        done.stderr,
+        "import",
+        "0/000001.yaml",
+        f"more than {MAX_FILE_ARRAY_ITEMS} items in one file",
+    )
 
 
 def test_an_empty_array_within_the_limit_is_read(tmp_path):

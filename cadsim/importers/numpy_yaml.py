@@ -17,7 +17,8 @@ loader refuses every such file; a full loader would run any ``!!python/...`` tag
   ``(0,)``, ``b'b'``] and ``state`` (1, shape, dtype, fortran flag, ``!!binary`` of exactly the
   shape's bytes) → nested lists of Python numbers: the product of the sizes, each counted as at
   least 1, at most :data:`MAX_ARRAY_ITEMS` (so an empty axis cannot ask for billions of empty
-  lists: that product bounds both the numbers and the lists built);
+  lists: that product bounds both the numbers and the lists built), and at most
+  :data:`MAX_FILE_ARRAY_ITEMS` over all the arrays of one file;
 - ``python/tuple`` (a list) and ``python/name:numpy.ndarray`` (inert, only as that argument).
 
 Any other ``!!python/...`` tag is refused, naming it; nothing is imported or called by name.
@@ -41,6 +42,10 @@ DTYPES = frozenset(
 """Type codes a dtype may name: fixed-size numbers and booleans (never object, bytes, void)."""
 MAX_ARRAY_ITEMS = 65_536
 """Most items of one array (a pose is 16; a LiDAR point cloud is not stored in a label yaml)."""
+MAX_FILE_ARRAY_ITEMS = 1_000_000
+"""Most items of all the arrays of one file together (each size counted as at least 1): as many
+as the values its YAML may hold (``safe_read.MAX_YAML_NODES``), so thousands of small empty
+arrays cannot add up to billions of lists."""
 _BYTE_ORDERS = ("<", ">", "|", "=")
 _PY = "tag:yaml.org,2002:python/"
 _NUMPY = ("numpy.core.multiarray.", "numpy._core.multiarray.")
@@ -138,6 +143,12 @@ class NumpyTagLoader(UniqueKeyLoader):
         # what tolist() builds: a list per index of every leading axis, so an empty axis
         # bounds the numbers (0) but not the lists; each size counted as at least 1 bounds both
         cells = math.prod(max(s, 1) for s in shape)
+        self._array_items = getattr(self, "_array_items", 0) + min(cells, MAX_ARRAY_ITEMS + 1)
+        if self._array_items > MAX_FILE_ARRAY_ITEMS:
+            raise _error(
+                node,
+                f"numpy arrays: more than {MAX_FILE_ARRAY_ITEMS} items in one file (0 counts as 1)",
+            )
         if cells > MAX_ARRAY_ITEMS:
             raise _error(
                 node,
@@ -184,4 +195,4 @@ for _prefix in _NUMPY:
 NumpyTagLoader.add_multi_constructor(_PY, NumpyTagLoader.refuse_python)
 
 
-__all__ = ["DTYPES", "MAX_ARRAY_ITEMS", "NumpyTagLoader"]
+__all__ = ["DTYPES", "MAX_ARRAY_ITEMS", "MAX_FILE_ARRAY_ITEMS", "NumpyTagLoader"]
