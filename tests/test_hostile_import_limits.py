@@ -224,15 +224,16 @@ def _episodes(out: Path) -> dict[int, int]:
     [
         (["3", "3", "4"], {3: 2, 4: 1}),  # the fixture as written
         (["3", "3", "abc"], {3: 2, 4: 1}),  # once silently episode 0
-        (["abc", "x", "abc"], {0: 2, 1: 1}),  # once all episode 0, two batches merged
+        (["abc", "x", "abc"], {1: 2, 2: 1}),  # once all episode 0, two batches merged
         (["1", "abc", 7], {1: 1, 7: 1, 8: 1}),  # an integer batch_id is its number
+        (["abc", "abc", None], {0: 1, 1: 2}),  # a frame not listed: 0, never a named batch's
     ],
 )
 def test_dair_v2x_batch_ids_are_distinct_episodes(tmp_path, batches, episodes):
     src = write_dair_v2x(tmp_path / "dair")
     _json_edit(
         src / "vehicle-side/data_info.json",
-        lambda d: [e | {"batch_id": b} for e, b in zip(d, batches, strict=True)],
+        lambda d: [e | {"batch_id": b} for e, b in zip(d, batches, strict=True) if b is not None],
     )
     assert main(["import", "dair-v2x", str(src), "--out", str(tmp_path / "out")]) == 0
     assert _episodes(tmp_path / "out") == episodes

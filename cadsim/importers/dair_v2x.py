@@ -127,7 +127,8 @@ class _Reader:
     def side_info(self, side: str) -> dict[str, dict]:
         """{frame id: entry} of a side's optional ``data_info.json`` (by its pointcloud stem),
         each entry with ``_where`` (its index) and ``_episode`` (its ``batch_id``'s number,
-        :mod:`.episode_names`, over every entry of the file; 0 without a ``batch_id``)."""
+        :mod:`.episode_names`, over every entry of the file; 0 without a ``batch_id``, and 0 is
+        never a named batch's: a frame the file does not list is episode 0 too)."""
         path = self.optional(f"{_SIDES[side][0]}/data_info.json")
         if path is None:
             return {}
@@ -143,8 +144,8 @@ class _Reader:
                     f"[{k}].pointcloud_path: frame {frame!r} already at {out[frame]['_where']}",
                 )
             out[frame] = entry | {"_where": f"[{k}]", "_batch": _batch(entry, path, f"[{k}]")}
-        try:
-            episodes = episode_numbers(e["_batch"] for e in out.values())
+        try:  # "0" too: a frame this file does not list is episode 0, never a named batch's
+            episodes = episode_numbers([*(e["_batch"] for e in out.values()), "0"])
         except ValueError as exc:
             raise ImportFormatError(path, f"batch_id: {exc}") from None
         return {frame: e | {"_episode": episodes[e["_batch"]]} for frame, e in out.items()}
