@@ -24,8 +24,9 @@ Read (paths relative to the folder given; every one confined to it, :mod:`.safe_
   added to its translation, DAIR-V2X's ``calib_i2v.py``).
 
 Mapping: a cooperative sequence is an episode (its number, :mod:`.episode_names`), its frames
-in time order the slots; an object seen by both sides (both track ids given) has one object id, ``v<veh track>``,
-on both; one seen by one side ``v<track>`` or ``i<track>``; boxes become box-only detections in
+in time order the slots; an object seen by both sides (both track ids given) has one object
+id, ``v<veh track>``, on both; one seen by one side ``v<track>`` or ``i<track>``; boxes become
+box-only detections in
 each LiDAR's frame (:mod:`.sensor_frame`); the true relative pose is the calibration's; the
 vehicle's body is its NovAtel (GNSS/INS) unit, the roadside unit's its LiDAR; ``time`` is the
 vehicle's point-cloud time (s) counted from its sequence's first frame (the source's epoch time
