@@ -14,6 +14,7 @@ import numpy as np
 from cadsim.dataset.difficulty import LevelRule, level_counts
 from cadsim.dataset.lidar_regime import card_lines
 from cadsim.dataset.regime import dataset_regime
+from cadsim.terminal_text import display_name
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -212,7 +213,7 @@ def _import_notes(src: dict) -> list[str]:
     lines = []
     if src.get("agents_without_prior"):
         missing = src["agents_without_prior"]
-        shown = ", ".join(missing[:4]) + (
+        shown = ", ".join(display_name(m) for m in missing[:4]) + (
             f", … ({len(missing)} in all)" if len(missing) > 4 else ""
         )
         lines.append(f"  no stored prior for     {shown} (pairs with them have none)")
@@ -227,7 +228,9 @@ def _import_notes(src: dict) -> list[str]:
 
 def _text(s: dict) -> str:
     total = sum(s["class_mix"].values()) or 1
-    mix = ", ".join(f"{c} {n} ({100 * n / total:.0f}%)" for c, n in s["class_mix"].items())
+    mix = ", ".join(
+        f"{display_name(c)} {n} ({100 * n / total:.0f}%)" for c, n in s["class_mix"].items()
+    )
     d = s["depth"]
     depth = (
         "-"
@@ -235,12 +238,15 @@ def _text(s: dict) -> str:
         else f"min {d['min']:.1f}  median {d['median']:.1f}  max {d['max']:.1f}"
     )
     lines = [
-        f"{s['dataset']}: scenario {s['scenario']}, {s['n_pairs']} pairs, "
+        f"{s['dataset']}: scenario {display_name(s['scenario'])}, {s['n_pairs']} pairs, "
         + ("imported (no seed), " if s["seed"] is None else f"seed {s['seed']}, ")
         + f"checksum {s['checksum'][:16]}"
         + (" (every record verified against it)" if s.get("verified") else ""),
         *(
-            [f"  imported from           {src['repository']} @ {src['commit']} ({src['licence']})"]
+            [
+                f"  imported from           {display_name(src['repository'])} @ "
+                f"{display_name(src['commit'])} ({display_name(src['licence'])})"
+            ]
             if (src := s.get("source"))
             else []
         ),

@@ -23,9 +23,10 @@ Read (paths relative to the folder given; every one confined to it, :mod:`.safe_
   ``system_error_offset`` applied by the chosen convention (:data:`OFFSET_CONVENTIONS`; default:
   added to its translation, DAIR-V2X's ``calib_i2v.py``).
 
-Mapping: a cooperative sequence is an episode (its number), its frames in time order the
-slots; an object seen by both sides (both track ids given) has one object id, ``v<veh track>``,
-on both; one seen by one side ``v<track>`` or ``i<track>``; boxes become box-only detections in
+Mapping: a cooperative sequence is an episode (its number, :mod:`.episode_names`), its frames
+in time order the slots; an object seen by both sides (both track ids given) has one object
+id, ``v<veh track>``, on both; one seen by one side ``v<track>`` or ``i<track>``; boxes become
+box-only detections in
 each LiDAR's frame (:mod:`.sensor_frame`); the true relative pose is the calibration's; the
 vehicle's body is its NovAtel (GNSS/INS) unit, the roadside unit's its LiDAR; ``time`` is the
 vehicle's point-cloud time (s) counted from its sequence's first frame (the source's epoch time
@@ -49,6 +50,7 @@ from cadsim.importers import ImportFormatError
 from cadsim.importers.box_dataset import ImportResult, check_out, write_box_dataset
 from cadsim.importers.box_sequence import ImportedFrame, sequence_records
 from cadsim.importers.dair_side import read_boxes, side_view
+from cadsim.importers.episode_names import episode_numbers
 from cadsim.importers.safe_read import confined, field, number, read_bytes, read_json, rigid
 
 SCENARIO_NAME = "v2x-seq-spd"
@@ -312,13 +314,6 @@ def _frame(
     return sequence, ImportedFrame(t_veh, tuple(views), list(objects.values()), meta)
 
 
-def _episode(sequence: str, index: int) -> int:
-    """The episode of a sequence id: the id itself when it is ASCII digits ('0010' → 10;
-    '²' or '١٠' are names like any other), else its index."""
-    plain = sequence.isascii() and sequence.isdigit() and len(sequence) <= 9
-    return int(sequence) if plain else index
-
-
 def _digest(root: Path, files: Iterable[Path]) -> str:
     """SHA-256 over the files the import read (relative name and SHA-256 of each), each read
     again within the reader's size limit — never the rest of the folder."""
@@ -378,12 +373,13 @@ def import_v2x_seq(
             coop_path, f"no cooperative frames of sequences {sorted(wanted or [])}"
         )
     sequential = any(len(frames) > 1 for frames in grouped.values())
-    records, used = [], set()
-    for index, sequence in enumerate(sorted(grouped)):
-        episode = _episode(sequence, index)
-        if episode in used:
-            raise ImportFormatError(coop_path, f"sequence {sequence!r}: episode {episode} twice")
-        used.add(episode)
+    records = []
+    try:
+        episodes = episode_numbers(grouped)
+    except ValueError as exc:
+        raise ImportFormatError(coop_path, f"vehicle_sequence: {exc}") from None
+    for sequence in sorted(grouped):
+        episode = episodes[sequence]
         frames = sorted(grouped[sequence], key=lambda f: f.time)
         for a, b in itertools.pairwise(frames):
             if a.time == b.time:
