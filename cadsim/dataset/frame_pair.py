@@ -343,6 +343,7 @@ class FramePair:
                 "name": self.name,
                 "noise_rate": self.noise_rate,
                 "localisation": None if loc is None else dataclasses.asdict(loc[0]),
+                **_headings(self.view1, self.view2),
             },
             pixels1=_box_centres(self.view1.boxes) if pixels else None,
             pixels2=_box_centres(self.view2.boxes) if pixels else None,
@@ -691,6 +692,15 @@ class FramePair:
 def _reported(view: ViewDetections) -> tuple[str, ...] | None:
     """The classes a view's detector reported (None where the record does not say)."""
     return None if view.reported_classes is None else tuple(view.reported_classes)
+
+
+def _headings(view1, view2) -> dict:
+    """``{"headings": (h1, h2)}`` of two box-only views (radians, each view's frame; what a
+    box-level matcher such as ``v2x_reg`` aligns), {} when a view has none."""
+    h1, h2 = getattr(view1, "headings", None), getattr(view2, "headings", None)
+    if h1 is None or h2 is None:
+        return {}
+    return {"headings": (np.asarray(h1, dtype=float), np.asarray(h2, dtype=float))}
 
 
 def _box_centres(boxes: np.ndarray) -> np.ndarray:
