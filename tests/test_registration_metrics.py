@@ -80,3 +80,11 @@ def test_help_names_the_metrics_and_options_need_the_protocol(capsys, tmp_path):
     for part in ("--pose-metrics", "v2x-reg", "success@1/2/3 m", "mRTE/mRRE", "seconds per frame"):
         assert part in text, part
     assert main(["evaluate", str(tmp_path), "--top-k", "10", "--out", str(tmp_path / "o")]) == 2
+
+
+def test_the_v2x_tables_carry_the_protocol_columns_and_the_baseline_row():
+    from eval.studies.external import external_matchers
+    from eval.studies.v2x_table import COLUMNS
+
+    assert {"reg_success_1m", "reg_success_2m", "reg_success_3m"} <= set(COLUMNS)
+    assert "v2x_reg" in [m.name for m in external_matchers("all")]
