@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 import yaml
 from format_fixtures import write_dair_v2x, write_opv2v, write_v2v4real, write_v2x_seq
+from tumtraf_fixtures import write_tumtraf
 
 from cadsim.cli import main
 from cadsim.dataset import Dataset
@@ -60,7 +61,17 @@ def _v2x_seq(root: Path, epoch: bool) -> list[str]:
     return ["v2x-seq", str(write_v2x_seq(root / "src"))]
 
 
-IMPORTS = {"opv2v": _opv2v, "v2v4real": _v2v4real, "dair-v2x": _dair, "v2x-seq": _v2x_seq}
+def _tumtraf(root: Path, epoch: bool) -> list[str]:
+    return ["tumtraf-v2x", str(write_tumtraf(root / "src", timestamps=epoch))]
+
+
+IMPORTS = {
+    "opv2v": _opv2v,
+    "v2v4real": _v2v4real,
+    "dair-v2x": _dair,
+    "v2x-seq": _v2x_seq,
+    "tumtraf-v2x": _tumtraf,
+}
 CASES = [(name, epoch) for name in IMPORTS for epoch in (True, False) if epoch or name != "v2x-seq"]
 
 
