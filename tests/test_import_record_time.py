@@ -172,3 +172,15 @@ def test_a_timeless_sequence_steps_by_its_interval():
     out = relative_times(_frames(None, None, None), "f", "s", ordered=True, interval_s=0.2)
     assert [f.time for f in out] == pytest.approx([0.0, 0.2, 0.4])
     assert [f.time for f in relative_times(_frames(None, None), "f", "s", ordered=False)] == [0, 0]
+
+
+def test_v2x_seq_without_timestamps_is_refused_in_one_line(tmp_path, capsys):
+    """V2X-Seq orders a sequence's frames by their point-cloud times: without them there is no
+    order to keep, so the import refuses (every other importer gives such records 0)."""
+    src = write_v2x_seq(tmp_path / "src")
+    info = src / "vehicle-side" / "data_info.json"
+    entries = json.loads(info.read_text())
+    info.write_text(json.dumps([{k: v for k, v in e.items() if k != "pointcloud_timestamp"} for e in entries]))  # fmt: skip
+    assert main(["import", "v2x-seq", str(src), "--out", str(tmp_path / "d")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(info) in err[0] and "pointcloud_timestamp: missing" in err[0], err
