@@ -184,3 +184,20 @@ def test_v2x_seq_without_timestamps_is_refused_in_one_line(tmp_path, capsys):
     assert main(["import", "v2x-seq", str(src), "--out", str(tmp_path / "d")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and str(info) in err[0] and "pointcloud_timestamp: missing" in err[0], err
+
+
+def test_a_record_imported_without_a_time_names_itself_under_a_walking_preset(tmp_path):
+    """A dataset imported before every record had a time (``time: null``): presets without a
+    walk draw as at 0 s; one with a walk refuses, naming the record and what to do."""
+    data = _imported(tmp_path, "dair-v2x", False)
+    record = Path(Dataset(data)[0].path) / "record.json"
+    doc = json.loads(record.read_text())
+    doc["time"] = None
+    record.write_text(json.dumps(doc))
+    pair = Dataset(data)[0]
+    assert pair.localise_preset("exact", seed=0).prior() is not None
+    assert pair.localise_preset("rtk", seed=0).prior() is not None
+    with pytest.raises(
+        ValueError, match=r"e00000_s00/record.json: time: null.*import the source again"
+    ):
+        pair.localise_preset("gnss-urban", seed=0).prior()

@@ -422,6 +422,13 @@ class FramePair:
             else:
                 episode_seed = seeds[2] if len(seeds) > 2 else self.sim_seed
                 when = self.time - (latency if k else 0.0)
+                if not np.isfinite(self.time):  # imported before importers gave every record one
+                    if model.walk_m_per_sqrt_s > 0:
+                        raise ValueError(
+                            f"{self.path / layout.RECORD_JSON}: time: null, and a GNSS preset's walk needs it: import "
+                            "the source again (importers now give a record without a time 0 s)"
+                        )
+                    when = 0.0  # no walk: the time changes nothing
                 errors.append(draw_gnss_error(model, episode_seed, vehicle, when, seed))
         return errors[0], errors[1]
 
