@@ -52,6 +52,7 @@ from cadsim.importers.box_dataset import ImportResult, check_out, write_box_data
 from cadsim.importers.box_sequence import ImportedFrame, sequence_records
 from cadsim.importers.dair_side import MAX_BOXES, MAX_LABEL_BYTES, read_boxes, side_view
 from cadsim.importers.episode_names import episode_numbers
+from cadsim.importers.record_time import TimeNote, relative_times
 from cadsim.importers.safe_read import (
     confined,
     field,
@@ -343,16 +344,21 @@ def import_dair_v2x(
                 f"[{k}].vehicle_pointcloud_path: frame {frame.meta['vehicle_frame']!r} already at {first}",
             )
         by_episode.setdefault(episode, []).append(frame)
-    records = []
+    records, clock = [], TimeNote()
     for episode in sorted(by_episode):
-        records += sequence_records(episode, 0, episode, by_episode[episode], False)
+        frames = relative_times(
+            by_episode[episode], root / "vehicle-side" / "data_info.json", f"batch {episode}",
+            ordered=False, note=clock,
+        )  # fmt: skip
+        records += sequence_records(episode, 0, episode, frames, False)
     linked = sum(
         len({o.id for o in f.objects if o.id[0] in "cs"})
         for frames in by_episode.values()
         for f in frames
     )
     source = SOURCE | {"folder": root.name, "frame_pairs": len(entries), "linked_objects": linked}
-    source |= {"link_gate_m": gate, "sha256": _digest(root, reader.used)}
+    source |= {"link_gate_m": gate, "time": clock.as_manifest()}
+    source["sha256"] = _digest(root, reader.used)
     return write_box_dataset(out, records, SCENARIO_NAME, source)
 
 

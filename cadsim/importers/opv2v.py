@@ -57,6 +57,7 @@ from cadsim.importers import ImportFormatError
 from cadsim.importers.box_dataset import ImportResult, check_out, write_box_dataset
 from cadsim.importers.box_sequence import ImportedFrame, sequence_records
 from cadsim.importers.carla_frame import carla_matrix, mirrored, mirrored_points
+from cadsim.importers.record_time import TimeNote, relative_times
 from cadsim.importers.safe_read import (
     confined,
     field,
@@ -494,21 +495,21 @@ def import_opv2v(
             stored = stored or any(a.predicted is not None for a in read)
             lacking |= {(scenario.name, a.agent) for a in read if a.predicted is None}
             if chosen != chosen_before and run:
-                pieces.append((episode, slot, protocol, run))
+                pieces.append((episode, slot, protocol, scenario, run))
                 slot += len(run)
                 run = []
             chosen_before = chosen
             run.append((name, scenario.name, read))
         if run:
-            pieces.append((episode, slot, protocol, run))
+            pieces.append((episode, slot, protocol, scenario, run))
     if not pieces:
         raise ImportFormatError(root, f"no frame with {n} agents")
     use_prior = prior and stored
     if use_prior:
         _stated_sigmas([p for _, _, p in listing], prior_sigma_m)
     sequential = n == 2 and any(len(run) > 1 for *_, run in pieces)
-    records = []
-    for episode, slot, protocol, run in pieces:
+    records, clock = [], TimeNote()
+    for episode, slot, protocol, scenario_path, run in pieces:
         imported = []
         # the other agents' messages are as old as the exported prior's latency (views 2, 3, …
         # send to view 1); without the prior a preset's redraw applies its own latency
@@ -548,6 +549,10 @@ def import_opv2v(
                 ImportedFrame(time, tuple(views), list(objects.values()), meta,
                               sigma, _PRIOR_FRAME if use_prior else "")
             )  # fmt: skip
+        imported = relative_times(
+            imported, scenario_path / PROTOCOL, f"scenario {run[0][1][:40]!r}", ordered=sequential,
+            interval_s=protocol.get("interval_s"), own_clock=True, note=clock,
+        )  # fmt: skip
         sim_seed = protocol.get("sim_seed", episode)
         records += sequence_records(
             episode, slot, sim_seed, imported, sequential, protocol.get("interval_s")
@@ -562,7 +567,8 @@ def import_opv2v(
         h.update(path.relative_to(root).as_posix().encode() + b"\0")
         h.update(hashlib.sha256(read_bytes(path)).digest())
     source = SOURCE | {"folder": root.name, "agents": n, "skipped_frames": skipped}
-    source |= {"prior": "stored" if use_prior else "none", "sha256": h.hexdigest()}
+    source |= {"prior": "stored" if use_prior else "none", "time": clock.as_manifest()}
+    source["sha256"] = h.hexdigest()
     if use_prior and lacking:
         source["agents_without_prior"] = [f"{s}/{a}" for s, a in sorted(lacking)]
     return write_box_dataset(out, records, SCENARIO_NAME, source)

@@ -30,8 +30,8 @@ box-only detections in
 each LiDAR's frame (:mod:`.sensor_frame`); the true relative pose is the calibration's; the
 vehicle's body is its NovAtel (GNSS/INS) unit, the roadside unit's its LiDAR; ``time`` is the
 vehicle's point-cloud time (s) counted from its sequence's first frame (the source's epoch time
-in ``meta.epoch_time_s``: a GNSS preset's walk then spans the sequence, not the years since
-1970) and ``meta.time_offset_s`` the vehicle's minus the roadside
+in ``meta.source_time_s``, :mod:`.record_time`: a GNSS preset's walk then spans the sequence,
+not the years since 1970) and ``meta.time_offset_s`` the vehicle's minus the roadside
 unit's. No localisation prior is stored (the data has no noisy pose): a preset draws one.
 """
 
@@ -40,7 +40,6 @@ from __future__ import annotations
 import hashlib
 import itertools
 from collections.abc import Iterable
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +50,7 @@ from cadsim.importers.box_dataset import ImportResult, check_out, write_box_data
 from cadsim.importers.box_sequence import ImportedFrame, sequence_records
 from cadsim.importers.dair_side import read_boxes, side_view
 from cadsim.importers.episode_names import episode_numbers
+from cadsim.importers.record_time import TimeNote, relative_times
 from cadsim.importers.safe_read import confined, field, number, read_bytes, read_json, rigid
 
 SCENARIO_NAME = "v2x-seq-spd"
@@ -373,7 +373,7 @@ def import_v2x_seq(
             coop_path, f"no cooperative frames of sequences {sorted(wanted or [])}"
         )
     sequential = any(len(frames) > 1 for frames in grouped.values())
-    records = []
+    records, clock = [], TimeNote()
     try:
         episodes = episode_numbers(grouped)
     except ValueError as exc:
@@ -388,15 +388,16 @@ def import_v2x_seq(
                     f"frames {a.meta['vehicle_frame'][:20]!r} and {b.meta['vehicle_frame'][:20]!r} "
                     f"of sequence {sequence[:20]!r}: same pointcloud_timestamp",
                 )
-        start = frames[0].time  # times from the sequence's first frame (the epoch in meta)
-        frames = [
-            replace(f, time=f.time - start, meta=f.meta | {"epoch_time_s": f.time}) for f in frames
-        ]
+        frames = relative_times(
+            frames, reader.root / "vehicle-side" / "data_info.json", f"sequence {sequence[:20]!r}",
+            ordered=True, note=clock,
+        )  # fmt: skip
         records += sequence_records(episode, 0, episode, frames, sequential)
     source = SOURCE | {
         "folder": root.name,
         "sequences": {s: len(f) for s, f in sorted(grouped.items())},
         "offset_convention": offset_convention,
+        "time": clock.as_manifest(),
         "untracked_objects": sum(
             f.meta["untracked_objects"] for frames in grouped.values() for f in frames
         ),

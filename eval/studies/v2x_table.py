@@ -40,6 +40,8 @@ import pandas as pd
 from eval.core.abstention import cannot_run
 from eval.core.pose_metrics import COLUMNS as POSE_COLUMNS
 from eval.core.pose_metrics import SECONDARY, success_flags, summarise_pose
+from eval.core.registration_metrics import COLUMNS as REG_COLUMNS
+from eval.core.registration_metrics import summarise_registration
 from eval.core.result_files import write_csv, write_text
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
@@ -83,6 +85,7 @@ COLUMNS = (
     *POSE_COLUMNS[:2],
     POSE_COLUMNS[4],
     SECONDARY,
+    *REG_COLUMNS[:3],  # V2X-Reg++'s success@1/2/3 m (eval.core.registration_metrics)
     "ms_per_pair",
 )
 
@@ -180,6 +183,8 @@ def v2x_table(per_pair: pd.DataFrame) -> pd.DataFrame:
     pooled = summarise_pooled(per_pair, by=by)[[*by, "f1_pooled_mean"]]
     table = runs.merge(pooled.rename(columns={"f1_pooled_mean": "f1_pooled"}), on=by)
     table = table.merge(summarise_pose(per_pair, by), on=by, how="left")
+    registration = summarise_registration(per_pair, by)[[*by, *REG_COLUMNS[:3]]]
+    table = table.merge(registration, on=by, how="left")
     times = per_pair.groupby(by, sort=False)["time_s"].median().mul(1000).rename("ms_per_pair")
     table = table.merge(times.reset_index(), on=by)
     table = table.merge(_intervals(per_pair, ""), on=by, how="left")
