@@ -17,7 +17,8 @@ than a 16 × 16-pixel object it is resolved):
   truncated and occluded objects (few pixels) are confused more often.
 - **heading**: the true yaw plus N(0, (:data:`HEADING_SD` · q)²) radians (an orientation
   regressor is worse on small objects).
-- **size**: σ = ``size_noise`` · q (log units, at most :data:`MAX_SIZE_SIGMA`). The depth the
+- **size**: σ = ``size_noise`` · max(q, 1) (log units, at most :data:`MAX_SIZE_SIGMA`: an
+  object resolved better than the reference is sized no better, the regressor's error floor). The depth the
   detector reads is ẑ = z · exp(σ/2 · ε) (one draw per object). The image measures the visible
   silhouette: height Δv · ẑ / f_y and width Δu · ẑ / f_x; the width is split into length and
   width with the estimated heading and the reported class's mean aspect ratio L₀ / W₀
@@ -54,16 +55,17 @@ CONFUSION_GROUPS: tuple[tuple[str, ...], ...] = (
     ("traffic_light", "sign"),
     ("robot", "box", "cone"),
 )
-REFERENCE_PIXELS = 256.0
+REFERENCE_PIXELS = 1024.0
 """Visible pixels (a 16 × 16-pixel object) at which the class confusion and size noise are the
 ``[detection]`` table's rates; both scale with √(REFERENCE_PIXELS / pixels)."""
 MAX_CONFUSION = 0.9
 MAX_SIZE_SIGMA = 1.0
 HEADING_SD = 0.15
 """Heading error (radians, ≈ 9°) at :data:`REFERENCE_PIXELS` (docs/detection.md)."""
-FULL_FILL = 0.6
+FULL_FILL = 0.7
 """Share of its 3-D box's projected area an unoccluded, untruncated object's mask covers
-(measured on the CAD meshes: docs/detection.md); completeness is relative to it."""
+(the median for the car mesh seen from 10–35 m at four headings: docs/detection.md);
+completeness is relative to it."""
 
 
 @dataclass(frozen=True)
@@ -147,7 +149,7 @@ def measured_attributes(
     p_confused = np.clip(class_confusion * q, 0.0, max(MAX_CONFUSION, class_confusion))
     reported = confused_classes(names, confused_u[idx] < p_confused, choice[idx])
     yaws = np.array([objects[i].yaw for i in idx], dtype=float) + HEADING_SD * q * eps_heading[idx]
-    sigma = np.minimum(size_noise * q, MAX_SIZE_SIGMA)
+    sigma = np.minimum(size_noise * np.maximum(q, 1.0), MAX_SIZE_SIGMA)
     depth = np.asarray(seen.depth_m, dtype=float) * pm.exp(0.5 * sigma * eps_depth[idx])
     extent = np.asarray(seen.extent_px, dtype=float).reshape(-1, 2)
     fx, fy = seen.focal_px
