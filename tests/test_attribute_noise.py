@@ -1,5 +1,5 @@
 """Attributes as a detector measures them: seeded class confusion within confusion groups at the
-configured rate for a 16 × 16-pixel object and more for fewer pixels, sizes measured from the
+configured rate for a 32 × 32-pixel object and more for fewer pixels, sizes measured from the
 silhouette and completed from the reported class, and their place in the features."""
 
 from __future__ import annotations

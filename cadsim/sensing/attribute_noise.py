@@ -7,19 +7,19 @@ Per detected object, with p its visible pixels, z the median depth of its mask (
 its mask's pixel box and c its *completeness* (visible pixels over the pixel area its whole 3-D
 box would cover, image border and occluders ignored, over :data:`FULL_FILL`, clipped to [0, 1]:
 truncation and occlusion both lower it), and q = √(:data:`REFERENCE_PIXELS` / p) (how much worse
-than a 16 × 16-pixel object it is resolved):
+than a 32 × 32-pixel object, COCO's small/medium boundary, it is resolved):
 
 - **class**: reported as another class of its confusion group with probability
-  ``class_confusion`` · q (clipped to [0, :data:`MAX_CONFUSION`], or to the rate itself when
-  it is higher; uniformly among the group's
-  other members: a van for a truck, a cyclist for a pedestrian, a sign for a traffic light —
-  never a bus for a pedestrian); classes outside every group are never confused. Small, far,
-  truncated and occluded objects (few pixels) are confused more often.
+  ``class_confusion`` · q (clipped to [0, :data:`MAX_CONFUSION`], or to the rate itself when it
+  is higher; uniformly among the group's other members: a van for a truck, a cyclist for a
+  pedestrian, a sign for a traffic light — never a bus for a pedestrian); classes outside every
+  group are never confused. Small, far, truncated and occluded objects (few pixels) are confused
+  more often.
 - **heading**: the true yaw plus N(0, (:data:`HEADING_SD` · q)²) radians (an orientation
   regressor is worse on small objects).
-- **size**: σ = ``size_noise`` · max(q, 1) (log units, at most :data:`MAX_SIZE_SIGMA`: an
-  object resolved better than the reference is sized no better, the regressor's error floor). The depth the
-  detector reads is ẑ = z · exp(σ/2 · ε) (one draw per object). The image measures the visible
+- **size**: σ = ``size_noise`` · max(q, 1) (log units, at most :data:`MAX_SIZE_SIGMA`; an
+  object resolved better than the reference is sized no better: the regressor's error floor).
+  The depth the detector reads is ẑ = z · exp(σ/2 · ε) (one draw per object). The image measures the visible
   silhouette: height Δv · ẑ / f_y and width Δu · ẑ / f_x; the width is split into length and
   width with the estimated heading and the reported class's mean aspect ratio L₀ / W₀
   (a box L × W seen at angle α between its length axis and the line of sight has silhouette
@@ -28,8 +28,8 @@ than a 16 × 16-pixel object it is resolved):
   seen: log ŝ = c · log m + (1 − c) · log s₀, then times exp(σ · ε) per dimension (the
   regressor's own error). A class without a mean size (robots) is its measurement alone.
 
-So a near, fully visible object's size is the measurement of its silhouette, with a few per cent
-of error; a truncated or occluded one's is pulled towards its (reported) class's mean and its
+So a near, fully visible object's size is the measurement of its silhouette, within about
+``size_noise``; a truncated or occluded one's is pulled towards its (reported) class's mean and its
 measured part is too small; a distant one's error grows as 1/√p. The true size and heading enter
 only through what the image shows (the silhouette's pixel extent) and the heading regressor's
 target. Draws (fixed order, whatever the rates, for every object of the snapshot so that an
@@ -56,8 +56,8 @@ CONFUSION_GROUPS: tuple[tuple[str, ...], ...] = (
     ("robot", "box", "cone"),
 )
 REFERENCE_PIXELS = 1024.0
-"""Visible pixels (a 16 × 16-pixel object) at which the class confusion and size noise are the
-``[detection]`` table's rates; both scale with √(REFERENCE_PIXELS / pixels)."""
+"""Visible pixels (32 × 32: COCO's small/medium boundary) at which class confusion and size
+noise are the ``[detection]`` table's rates; both scale with √(REFERENCE_PIXELS / pixels)."""
 MAX_CONFUSION = 0.9
 MAX_SIZE_SIGMA = 1.0
 HEADING_SD = 0.15
@@ -112,7 +112,7 @@ def confused_classes(names: np.ndarray, confused: np.ndarray, choice: np.ndarray
 
 
 def resolution_factor(pixels: np.ndarray) -> np.ndarray:
-    """(k,) √(REFERENCE_PIXELS / pixels): 1 at a 16 × 16-pixel object, larger below."""
+    """(k,) √(REFERENCE_PIXELS / pixels): 1 at a 32 × 32-pixel object, larger below."""
     return np.sqrt(REFERENCE_PIXELS / np.maximum(np.asarray(pixels, dtype=float), 1.0))
 
 
@@ -135,7 +135,7 @@ def measured_attributes(
     ...                    np.array([20.0]), np.array([1.0]), np.array([np.pi / 2]), (800.0, 800.0))
     >>> out = measured_attributes([car], seen, 0.0, 0.0, np.random.default_rng(0))
     >>> out.classes, np.round(out.sizes, 2).tolist()
-    (['car'], [[4.48, 1.79, 1.52]])
+    (['car'], [[4.47, 1.79, 1.52]])
     """
     n = len(objects)
     confused_u = rng.random(n)

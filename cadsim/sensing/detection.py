@@ -13,13 +13,14 @@ Oracle instance masks with realistic filtering. For each ``target`` object in th
 Position: the ray through the mask's centroid pixel at the median *noisy* depth of the mask, in the
 camera frame (OpenCV, metres). That point lies on the visible surface, in front of the object's
 centre; with ``surface_to_center`` it is pushed along the ray by ``centre_offset_along`` (the mean
-depth of a box's visible surface in front of its centre, from the object's 3-D box: an oracle box
-size and heading, as a 3-D detector would estimate them). Features:
+depth of a box's visible surface in front of its centre) of the box the detector *estimated* —
+its reported size and heading, never the object's true ones. Features:
 ``cadsim.sensing.features``, whose attribute block (class, size) is what the view's detector
-reports: with ``attribute_rng`` given, the true class is confused with probability
-``class_confusion`` and the size carries relative noise ``size_noise``
-(``cadsim.sensing.attribute_noise``); without it, the simulator's truth. The ground-truth object
-id and class are kept beside the features, never in them.
+reports: with ``attribute_rng`` given, class, size and heading are measured from the view
+(``cadsim.sensing.attribute_noise``: the mask's silhouette and depth, completed from the reported
+class by how much of the object is seen, scatter and class confusion growing as the visible
+pixels fall); without it, the simulator's truth. The ground-truth object id and class are kept
+beside the features, never in them.
 """
 
 from __future__ import annotations
@@ -46,9 +47,10 @@ class DetectionConfig:
     """The ``[detection]`` table of a scenario file (see the module docstring for each filter).
 
     class_confusion: probability that a view's detector reports another class of the object's
-    confusion group (per view; 0.0075 makes the two views disagree on ≈ 1.5 % of covisible
-    objects, the rate of the paper group's CAD data). size_noise: relative (log-normal) error of
-    each reported size dimension. miss_near, miss_far, miss_occluded, false_positives,
+    confusion group, for an object of 32² visible pixels (more for fewer pixels; 0.0075 makes
+    two views disagree on ≈ 1.5 % of such covisible objects, the rate of the paper group's CAD
+    data). size_noise: relative (log-normal) error of each reported size dimension at 32² pixels
+    and above, growing below (:mod:`cadsim.sensing.attribute_noise`). miss_near, miss_far, miss_occluded, false_positives,
     centre_jitter: the detector errors of :mod:`cadsim.sensing.detector_errors` (all 0: off)."""
 
     min_pixels: int = 40
