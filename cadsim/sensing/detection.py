@@ -50,7 +50,8 @@ class DetectionConfig:
     confusion group, for an object of 32² visible pixels (more for fewer pixels; 0.0075 makes
     two views disagree on ≈ 1.5 % of such covisible objects, the rate of the paper group's CAD
     data). size_noise: relative (log-normal) error of each reported size dimension at 32² pixels
-    and above, growing below (:mod:`cadsim.sensing.attribute_noise`). miss_near, miss_far, miss_occluded, false_positives,
+    and above, growing below (:mod:`cadsim.sensing.attribute_noise`). miss_near, miss_far,
+    miss_occluded, false_positives,
     centre_jitter: the detector errors of :mod:`cadsim.sensing.detector_errors` (all 0: off)."""
 
     min_pixels: int = 40
