@@ -7,7 +7,10 @@ A reported centre is *covered* when it lies in front of the camera, projects ins
 (0 ≤ u < width, 0 ≤ v < height, pixels), is at most ``max_depth_m`` (the camera detector's
 ``[detection]`` range, metres) deep along the camera's optical axis, and at most
 ``max_range_m`` (the LiDAR's specified range) from the LiDAR. A LiDAR sees all around and further;
-its boxes outside that region are its *extra* objects, counted apart from the comparison.
+its boxes outside that region are its *extra* objects, counted apart from the comparison. The
+LiDAR's vertical field of view is not applied: an object standing on the road within its range
+always has a part between its lowest and highest channel (the HDL-64E's −24.9° … +2° from a
+roof), even where its centre lies above the top one.
 Imports numpy and ``cadsim.camera`` only.
 """
 
