@@ -201,13 +201,15 @@ def test_appearance_draws_one_light_per_episode_and_a_gain_per_camera():
 # 1, cadsim/sources/sumo/demand.py) and one pair per episode: other traffic, other images.
 # Re-pinned for cad-v2x's appearance model in cad-intersection (issue 56): colour and the
 # features change; depth and instance maps do not.
+# detections.npz re-pinned for attributes measured from the view (cadsim.sensing.attribute_noise:
+# sizes from the mask and depth, estimated headings, the centre shift from the estimates).
 CAD_FIRST_RECORD_SHA256 = {
     "view1.png": "6f42fd9feeaa95b2e10249d07ba9f6d6928648a3c63f7788ad85c6ce024cd7c3",
     "view2.png": "ed5e1c8233569380d737d14c4d0f8a28b0d724b17ae5a606392adf3557816ca0",
     "depth.npz": "5d0ac9c6677c33723c645824aadd502e47ca481810a4bbf76a34a28ad376b532",
     "instance.npz": "c0b105fd9d6ef6d6ce8a62eb65030c05ce49db46057de8a982b61c6d7335cf06",
     # format 5 stores true_classes and reported_classes (was: classes)
-    "detections.npz": "390d1f3822e3079a878b6ee401ca1ca6d411a2b816e4e7c82472651a601551bb",
+    "detections.npz": "eeff6bd60f3b7b7df1b272932946ff169227d78f4d83bff0bdb27153473c1565",
 }
 
 
