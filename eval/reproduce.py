@@ -377,9 +377,30 @@ def _record(
         runs=runs,
         cold_start=cold,
         code_version=code_version(),
+        gl=gl_record(state.data),
         cache=str(args.cache),
         budget_s={stage.name: stage.budget_s for stage in STAGES},
     )
+
+
+def gl_record(data: Path) -> dict:
+    """The GL drivers that drew the run's datasets (each manifest's ``gl`` under ``data``,
+    distinct) and the backend variables of this process, for the run record."""
+    import os
+
+    from cadsim.generation.pipeline import gl_drivers
+
+    found = []
+    for manifest in sorted(Path(data).glob("**/manifest.json")):
+        try:
+            gl = json.loads(manifest.read_text(encoding="utf-8")).get("gl")
+        except (OSError, ValueError, AttributeError):
+            continue
+        found += gl if isinstance(gl, list) else []
+    return {
+        "drivers": gl_drivers(found),
+        "env": {k: os.environ.get(k) for k in ("CADSIM_GL_BACKEND", "PYOPENGL_PLATFORM")},
+    }
 
 
 def executor_record(workers: int | None, scheduler: str | None) -> dict:
