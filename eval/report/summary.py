@@ -31,8 +31,10 @@ def read_csv(path: Path) -> pd.DataFrame | None:
     """The CSV at ``path`` (empty strings as missing), or None when it is absent or unreadable."""
     if not path.is_file():
         return None
+    from eval.core.spreadsheet_safe import restore
+
     try:
-        return pd.read_csv(path, keep_default_na=False, na_values=[""])
+        return restore(pd.read_csv(path, keep_default_na=False, na_values=[""]))
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError):
         return None
 
