@@ -40,6 +40,7 @@ def test_escaped_characters_read_back_as_themselves_in_the_site():
     assert cell("<b>[1]`x`") == "\\<b\\>\\[1\\]\\`x\\`"
     assert inline(cell("<b>[1]`x`")) == "&lt;b&gt;[1]`x`"
     assert cell(cell("a|b<c")) == cell("a|b<c")  # idempotent
+    assert row(["+4.0 [-3.7, +11.6]"]) == "| +4.0 [-3.7, +11.6] |"  # the code's intervals
 
 
 def test_the_report_modules_escape_dataset_labels():
