@@ -237,8 +237,15 @@ def to_markdown(table: pd.DataFrame) -> str:
             f"**{cell(dataset)}** — {frames} test frame pairs × {runs} run{'s' * (runs != 1)}; "
             "percent, mean ± std over runs"
         )
+        if runs == 1:  # the tutorial's case: a spread needs several runs
+            caption += " (one run: every ± 0.0 is no spread measured; --runs N gives one)"
+        if has_paper:
+            caption += (
+                f"; paper ({paper}): mean ± its printed spread, from the paper's own data and "
+                "protocol, not these pairs — compare orders and gaps, not digits"
+            )
         lines = [
-            caption + (f"; paper ({paper}): mean ± its printed spread" if has_paper else ""),
+            caption,
             "",
             row(header),
             "|" + "|".join(":---" if h == "Method" else "---:" for h in header) + "|",
