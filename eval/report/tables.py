@@ -312,10 +312,13 @@ def write_table1(
     return markdown
 
 
-def write_tables(out_dir: str | Path, paper_csv: str | Path = PAPER_CSV) -> str:
+def write_tables(
+    out_dir: str | Path, paper_csv: str | Path = PAPER_CSV, reference: str | None = None
+) -> str:
     """Table I of every variant whose per-pair metrics are in `out_dir`, and the paired
-    differences of the main one; returns the main variant's Markdown (else the first written)."""
-    from eval.protocol.paired_differences import write_paired_differences
+    differences (`reference` − every other matcher; None: maximin) of the main and equal-cue
+    ones; returns the main variant's Markdown (else the first written)."""
+    from eval.protocol.paired_differences import REFERENCE, write_paired_differences
 
     out_dir = Path(out_dir)
     written = {
@@ -325,5 +328,5 @@ def write_tables(out_dir: str | Path, paper_csv: str | Path = PAPER_CSV) -> str:
     }
     for variant in (MAIN, EQUAL):
         if variant in written:
-            write_paired_differences(out_dir, variant)
+            write_paired_differences(out_dir, variant, reference or REFERENCE)
     return written.get(MAIN) or next(iter(written.values()), "")
