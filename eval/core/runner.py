@@ -300,6 +300,7 @@ class Runner:
         self.progress = progress
         self.stats = RunStats()  # of the last run() call
         self.totals = RunStats()  # of every call so far
+        self._versions: dict[str, str] = {}  # matcher name -> its runs' code version (per call)
 
     def run(self, requests: Sequence[RunRequest], desc: str = "runs") -> list[RunResult]:
         """Results of `requests`, in order; computes the missing ones. Raises :class:`RunFailed`
@@ -367,7 +368,7 @@ class Runner:
         return found
 
     def _run(self, requests: Sequence[RunRequest], desc: str) -> list[RunResult]:
-        self._versions: dict[str, str] = {}
+        self._versions = {}  # a plug-in's file may have changed since the last call
         wanted = [req.spec(self._version(req)) for req in requests]
         requests = [_seed_free(_latency_only(req)) for req in requests]
         specs = [req.spec(self._version(req)) for req in requests]
