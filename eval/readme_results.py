@@ -32,6 +32,7 @@ from eval.claims import build_claims
 from eval.core.result_files import write_csv, write_text
 from eval.protocol.claims import FILE as CLAIMS
 from eval.protocol.claims import to_frame
+from eval.report import levels_part
 from eval.report.agreement_part import agreement_part
 from eval.report.appendix import REPORT, SITE, appendix
 from eval.report.benchmark_parts import (
@@ -141,6 +142,7 @@ def _sections(
             [
                 part("regime", lambda: regime_part(results)),
                 part("table1", lambda: table1_part(results, rel, record), "Table I", "table1.md"),
+                part("levels", lambda: levels_part.report_part(results, rel)),
                 part("paired", lambda: paired_part(results, rel)),
                 part("spread", lambda: spread_part(results)),
                 part("paper protocol", lambda: paper_protocol_part(results)),

@@ -12,6 +12,17 @@ shares of the step rather than being at the mercy of each order's magnitude:
 
 Default weights (w1, w2, w3) = (1/3, 1/3, 1/3). A term that is all zero (no triangles -> T = 0)
 drops out of that step. Without features b = 1 and the first-order term just keeps x (damping).
+
+As published, appearance reaches the walk only through the additive first-order share w1. The
+equal-cue protocol (``appearance=True``, ``distance_scale``; :mod:`matchers.blocks.cue_terms`)
+hands MOS its cues in the form every other matcher gets them — multiplied into each higher-order
+entry — while the additive mix stays:
+
+    M'[a, b]    = M[a, b] · b_a · b_b
+    T'[a, b, c] = T[a, b, c] · K[a, b] · K[b, c] · K[a, c] · b_a · b_b · b_c
+
+with K the metric edge kernel of width ``distance_scale`` × the median within-view distance (the
+hypergraph matchers' metric term; M already compares metric edge lengths).
 """
 
 from __future__ import annotations
@@ -22,6 +33,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from matchers.blocks.appearance_similarity import appearance_similarity
+from matchers.blocks.cue_terms import appearance_weighted_affinity, weighted_tensor
 from matchers.blocks.memory_models import mos_memory
 from matchers.blocks.pairwise import NEIGHBOURS, resolve_affinity
 from matchers.core.matching import Matching
@@ -78,6 +90,8 @@ def mos(
     max_iter: int = 300,
     tol: float = 1e-6,
     sinkhorn_iter: int = 100,
+    appearance: bool = False,
+    distance_scale: float | None = None,
 ) -> Matching:
     """MOS (see the module docstring), then Hungarian.
 
@@ -85,7 +99,15 @@ def mos(
     pairwise options ``affinity`` / ``sigma2`` / ``sigma_scale`` / ``pairwise`` /
     ``affinity_neighbours`` as for :func:`matchers.sm.sm` (the second-order term), tensor
     options as for every hypergraph matcher, walk options as for :func:`matchers.rrwhm.rrwhm`.
-    Scores: the final distribution divided by its maximum.
+    ``appearance`` (False, as published) and ``distance_scale`` (None, as published): the
+    equal-cue terms of the module docstring. Scores: the final distribution divided by its
+    maximum.
+
+    >>> import numpy as np
+    >>> from matchers.core.problem import Problem
+    >>> p = np.random.default_rng(0).normal(size=(6, 3)) * 10
+    >>> mos(Problem(p, p), appearance=True, distance_scale=0.1).pairs.shape[1]
+    2
     """
     started = time.perf_counter()
     check_problem(problem)
@@ -113,6 +135,9 @@ def mos(
     pairwise = resolve_affinity(
         problem, affinity, sigma2, sigma_scale, pairwise, affinity_neighbours
     )
+    if appearance:
+        pairwise = appearance_weighted_affinity(pairwise, problem)
+    built = weighted_tensor(built, problem, distance_scale, appearance)
     b = appearance_similarity(problem).reshape(-1)
     step = multi_order_step(b, pairwise, built, weights)
     x, iterations, converged = jump_walk(step, n, m, jump, beta, max_iter, tol, sinkhorn_iter)

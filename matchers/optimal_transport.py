@@ -1,6 +1,7 @@
 """``optimal_transport``: association by entropic optimal transport on a distance-based
-affinity (as V2X-Reg++ associates objects of two ends, and as SuperGlue's and many V2X
-registration methods' final layer does), implemented from those descriptions, pose-free.
+affinity (as SuperGlue's and many V2X registration methods' final layer does), implemented
+from those descriptions, pose-free. A generic baseline: V2X-Reg++'s own association (box-pair
+hypotheses scored by the boxes they align, no transport) is :mod:`matchers.v2x_reg`.
 
 Affinity: the local-context similarity S_ij in [0, 1] of the two objects (their neighbour
 distances agree within eps, :func:`~matchers.blocks.local_context.context_similarity`), a

@@ -56,12 +56,13 @@ def refined_prior(
     if not likelihood.any():
         return likelihood, info
     cutoff = gate * tighten * sigma
+    vote = spread * tighten * sigma  # aligned, objects meet within the tightened width
     top = np.argsort(-likelihood, axis=None, kind="stable")[: min(256, int((likelihood > 0).sum()))]
     candidates = np.zeros(likelihood.size, dtype=bool)
     candidates[top] = True
     motion = (
         np.eye(2),
-        consensus_translation(xy2, xy1, candidates.reshape(likelihood.shape), cutoff),
+        consensus_translation(xy2, xy1, candidates.reshape(likelihood.shape), vote),
     )
 
     def aligned(turn: np.ndarray, shift: np.ndarray) -> np.ndarray:

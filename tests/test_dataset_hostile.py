@@ -94,7 +94,7 @@ def test_an_imported_split_with_epoch_timestamps_draws_gnss_priors(tmp_path):
     assert main(["import", "v2x-seq", str(write_v2x_seq(tmp_path / "spd")), "--out", str(tmp_path / "d")]) == 0  # fmt: skip
     pairs = list(Dataset(tmp_path / "d", verify=True))
     assert min(p.time for p in pairs) == 0.0
-    assert min(p.record["meta"]["epoch_time_s"] for p in pairs) > 1e9
+    assert min(p.record["meta"]["source_time_s"] for p in pairs) > 1e9
 
     def draw():
         for pair in pairs:

@@ -54,7 +54,8 @@ def test_zero_noise_gives_the_clean_depth_detections(dataset):
     assert clean.view1.equals(pair.redetect(0.0, seed=4).view1)  # no randomness left
     cfg = DetectionConfig(**SCENARIO.detection)
     view = RenderedView(pair.color1, pair.depth1, pair.instance1)
-    direct = detect(view, pair.depth1, pair.objects, pair.cameras[0], cfg)
+    attributes = np.random.default_rng(pair.record["observers"][0]["attribute_seed"])
+    direct = detect(view, pair.depth1, pair.objects, pair.cameras[0], cfg, attributes)
     np.testing.assert_array_equal(clean.view1.positions, direct.positions)
     assert clean.view1.object_ids == list(direct.object_ids)
     # The stored detections carry noise; the clean ones are closer to the true object centres.

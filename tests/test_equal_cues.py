@@ -103,6 +103,18 @@ def test_the_metric_term_multiplies_each_entry_by_its_three_edges_pairwise_affin
     assert same.shape == (1,) and 0 < same[0] <= 1
 
 
+def test_mos_under_equal_cues_multiplies_its_cues_into_m_and_t_and_differs_from_published():
+    # the additive first-order share alone (as published) is not the equal-cue form: the scores
+    # change once appearance and the metric kernel enter every higher-order entry
+    problem = _views()[0]
+    published = get("mos")(problem).scores
+    equal = get("mos")(problem, **dict(equal_cue_spec(MatcherSpec("mos")).options)).scores
+    assert not np.allclose(published, equal, rtol=0, atol=1e-6)
+    # no features and no metric term: the equal-cue switch alone changes nothing
+    bare = Problem(problem.points1, problem.points2)
+    assert np.array_equal(get("mos")(bare).scores, get("mos")(bare, appearance=True).scores)
+
+
 def test_without_features_the_appearance_factor_changes_nothing():
     problem = _views()[0]
     bare = Problem(problem.points1, problem.points2)

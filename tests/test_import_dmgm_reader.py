@@ -403,6 +403,10 @@ def _one_tensor_view(tensor: bytes, storages: dict[str, bytes]) -> bytes:
         (op_tensor("0", "FloatStorage", 6, (6,), (1,), offset=2**31 - 1), {"0": b"\0" * 24},
          "reaches beyond"),
         (op_tensor("0", "FloatStorage", 6, (2, 3), (3, 2)), {"0": b"\0" * 24}, "reaches beyond"),
+        # an empty axis: no element, but 2**30 rows for whoever walks the first axis
+        (op_tensor("0", "FloatStorage", 6, (2**30, 2**30, 0), (0, 0, 0)), {"0": b"\0" * 24},
+         "empty tensor of size"),
+        (op_tensor("0", "FloatStorage", 6, (1,) * 40, (1,) * 40), {"0": b"\0" * 24}, "up to 32"),
         (op_tensor("7", "FloatStorage", 6, (6,), (1,)), {"0": b"\0" * 24}, "archive/data/7 is missing"),
         (op_tensor("0", "IntStorage", 6, (6,), (1,)) + op_str("x") + op_tensor("0", "FloatStorage", 6, (6,), (1,)),
          {"0": b"\0" * 24}, "two different types"),

@@ -1,12 +1,13 @@
 """Sizes in exported boxes do not name the object (the issue's checks): on a small cad-v2x
 dataset exported to OPV2V and imported back as a box-only dataset, covisible boxes' sizes differ
-between the two views by the detector's size noise, every class shows a spread of sizes, and
-size alone separates true from false pairs far less well than the true sizes did.
+between the two views by at least the detector's size noise, every class shows a spread of
+sizes, and size alone separates true from false pairs far less well than the true sizes did;
+and on every scenario in scenarios/, camera and LiDAR, size names no pair beyond what the true
+class does (docs/detection.md, "Size as a cue", has the measured table).
 
-Measured on 6 pairs of cad-v2x (docs/dataset.md, "Sizes in exported boxes"): size-only AUC 0.93
-with the true sizes and one size per vType (what the exporter wrote before), 0.83 with the
-reported ones, below the 0.91 that the true class alone gives; against same-class false pairs
-0.71 (0.53 on the 25 pairs of make reproduce's cad-v2x split)."""
+Measured on 4 pairs of cad-v2x with sizes measured from the image: size-only AUC 0.719 with the
+reported sizes against 0.921 for the true class alone, 0.475 against same-class false pairs
+(docs/dataset.md, "Sizes in exported boxes", has the earlier model's figures)."""
 
 from __future__ import annotations
 
@@ -46,9 +47,10 @@ def test_covisible_boxes_differ_between_views_by_the_detectors_noise(round_trip)
             ratios.append(np.log(v1.sizes[i] / v2.sizes[j]))
     ratios = np.array(ratios)
     assert len(ratios) >= 8 and (np.abs(ratios) > 1e-6).all(axis=1).all()  # never identical
-    # two independent log-normal errors of sd 0.45: the ratio's log has sd 0.45 * sqrt(2)
+    # two independent errors of sd at least 0.45 (the rate of an object of 32² pixels; smaller,
+    # truncated and occluded ones are sized worse): the ratio's log has sd ≥ 0.45 * sqrt(2)
     spread = ratios.std()
-    assert 0.6 * SIZE_NOISE * np.sqrt(2) < spread < 1.4 * SIZE_NOISE * np.sqrt(2)
+    assert spread > 0.8 * SIZE_NOISE * np.sqrt(2)
 
 
 def test_every_class_shows_a_spread_of_sizes(round_trip):
@@ -107,3 +109,109 @@ def test_size_alone_no_longer_names_the_pair(round_trip):
     assert after <= class_only
     # ... and within a class it is near chance
     assert roc_auc(np.concatenate(true), np.concatenate(same_class)) <= 0.75
+
+
+# --- Every multi-class scenario, camera and LiDAR -------------------------------------------
+# 4 frame pairs each (a sequence scenario: one sequence; the arena: 16 pairs, its robots being
+# few per view), generated once per module: about 140 s on one core (the `slow` marker).
+
+SCENARIOS = sorted((ROOT / "scenarios").glob("*.toml"))
+ONE_BODY_SIZE = {"mrc-arena": "robot"}  # the class whose members all have one size
+ONE_BODY_BOUND = 0.55
+SAME_CLASS_BOUND = 0.75
+
+
+def _generated(tmp_path_factory, path: Path) -> Path:
+    from cadsim.scenario import load_scenario
+
+    scenario = load_scenario(path)
+    pairs = 1 if scenario.sequence else 16 if path.stem in ONE_BODY_SIZE else 4
+    out = tmp_path_factory.mktemp(path.stem) / "data"
+    args = ["--pairs", str(pairs), "--workers", "1", "--no-progress"]
+    assert main(["generate", str(path), "--out", str(out), *args]) == 0
+    return out
+
+
+def _view_sizes(dataset: Dataset, pair) -> list[np.ndarray]:
+    """(k, 3) reported sizes per view: the camera's from its attribute features, the LiDAR's
+    from its boxes (a LiDAR-only record's stored sizes, a two-sensor record's box arrays)."""
+    from cadsim.dataset.box_record import read_box_sizes
+    from cadsim.dataset.sensor_view import _lidar_boxes
+    from cadsim.sensing.features import reported_sizes
+
+    if dataset.sensor == "lidar":
+        return [np.asarray(b["sizes"], dtype=float) for b in _lidar_boxes(pair)[1]]
+    out = []
+    for v, det in zip(pair.view_numbers, (pair.view1, pair.view2), strict=True):
+        found = reported_sizes(det.features) if len(det) else np.zeros((0, 3))
+        out.append(found if found is not None else np.asarray(read_box_sizes(pair.path, v)))
+    return out
+
+
+def size_leak(dataset: Dataset, one_class: str | None = None) -> dict[str, float]:
+    """Size-only AUC pooled over every candidate pair, against same-class false pairs only (the
+    true classes), and the AUC the true class alone gives (1 for a same-class pair, else 0);
+    ``one_class``: the same-class AUC among that class's objects only."""
+    true, false, same_false, class_false = [], [], [], []
+    for k in range(len(dataset)):
+        pair = dataset[k] if dataset.n_views == 2 else dataset.snapshot(k).pair(1, 2)
+        score = size_similarity(*_view_sizes(dataset, pair))
+        is_true = np.zeros(score.shape, dtype=bool)
+        gt = np.asarray(pair.gt_pairs, dtype=np.int64).reshape(-1, 2)
+        is_true[gt[:, 0], gt[:, 1]] = True
+        c1, c2 = np.array(pair.view1.true_classes), np.array(pair.view2.true_classes)
+        same = np.equal.outer(c1, c2)
+        if one_class is not None:
+            same &= np.equal.outer(c1 == one_class, c2 == one_class) & (c1 == one_class)[:, None]
+        true.append(score[is_true] if one_class is None else score[is_true & same])
+        false.append(score[~is_true])
+        same_false.append(score[~is_true & same])
+        class_false.append(np.equal.outer(c1, c2)[~is_true].astype(float))
+    t = np.concatenate(true)
+    return {
+        "pooled": roc_auc(t, np.concatenate(false)),
+        "same_class": roc_auc(t, np.concatenate(same_false)),
+        "class_alone": roc_auc(np.ones(len(t)), np.concatenate(class_false)),
+    }
+
+
+@pytest.fixture(scope="module")
+def every_scenario(tmp_path_factory) -> dict[str, Path]:
+    return {p.stem: _generated(tmp_path_factory, p) for p in SCENARIOS}
+
+
+# Two classes that size separates perfectly (cars, signal poles) and mostly car–car false pairs:
+# the pooled AUC is above the true class's whenever the measured sizes tell cars apart at all
+# (0.772 against 0.719 on these 4 pairs, 0.749 against 0.707 on 16; same-class 0.60 and 0.57).
+KNOWN_ABOVE_CLASS = {
+    "sumo-game-cross": "cars and signal poles only: any within-car size signal puts the pooled "
+    "size-only AUC above the true class's (docs/detection.md)"
+}
+
+
+def _case(stem: str):
+    reason = KNOWN_ABOVE_CLASS.get(stem)
+    marks = [pytest.mark.xfail(strict=True, reason=reason)] if reason else []
+    return pytest.param(stem, marks=marks, id=stem)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("stem", [_case(p.stem) for p in SCENARIOS])
+def test_size_names_no_pair_in_any_scenario_camera_or_lidar(every_scenario, stem):
+    from cadsim.dataset.sensor_view import dataset_sensor
+
+    folder = every_scenario[stem]
+    stored = dataset_sensor(Dataset(folder).manifest)
+    reads = {"both": [None, "lidar"], "lidar": [None], "camera": [None]}[stored]
+    for sensor in reads:
+        dataset = Dataset(folder, sensor=sensor)
+        classes = {c for pair in dataset for c in pair.view1.true_classes + pair.view2.true_classes}
+        assert len(classes) >= 2, f"{stem}: one class only"  # every scenario is multi-class
+        leak = size_leak(dataset)
+        where = f"{stem} read as {sensor or stored}: {leak}"
+        assert leak["pooled"] <= leak["class_alone"], where
+        assert leak["same_class"] <= SAME_CLASS_BOUND, where
+        if stem in ONE_BODY_SIZE:
+            body = size_leak(dataset, ONE_BODY_SIZE[stem])
+            assert body["same_class"] <= ONE_BODY_BOUND, f"{where}; {body}"
+            assert leak["pooled"] <= ONE_BODY_BOUND, where

@@ -199,13 +199,17 @@ def test_appearance_draws_one_light_per_episode_and_a_gain_per_camera():
 # (the same bytes on every CPU), and a two-view scenario's records are unchanged by N-view
 # snapshots (docs/multi-agent.md). Re-pinned again for the demand drawn in process (demand model
 # 1, cadsim/sources/sumo/demand.py) and one pair per episode: other traffic, other images.
+# Re-pinned for cad-v2x's appearance model in cad-intersection (issue 56): colour and the
+# features change; depth and instance maps do not.
+# detections.npz re-pinned for attributes measured from the view (cadsim.sensing.attribute_noise:
+# sizes from the mask and depth, estimated headings, the centre shift from the estimates).
 CAD_FIRST_RECORD_SHA256 = {
-    "view1.png": "a692230461442ca53755422788ece3d01c19cf0f63a692aff8f95694848ac7d9",
-    "view2.png": "1b8a4f9a68ab3e2bf60e3cc2ee5467087164abb5718a8c0a23cc0a8e92df067c",
+    "view1.png": "6f42fd9feeaa95b2e10249d07ba9f6d6928648a3c63f7788ad85c6ce024cd7c3",
+    "view2.png": "ed5e1c8233569380d737d14c4d0f8a28b0d724b17ae5a606392adf3557816ca0",
     "depth.npz": "5d0ac9c6677c33723c645824aadd502e47ca481810a4bbf76a34a28ad376b532",
     "instance.npz": "c0b105fd9d6ef6d6ce8a62eb65030c05ce49db46057de8a982b61c6d7335cf06",
     # format 5 stores true_classes and reported_classes (was: classes)
-    "detections.npz": "c4609053974274b3ad892598a6b03c4c51afdc2a22519230a9cc03cc40df333f",
+    "detections.npz": "eeff6bd60f3b7b7df1b272932946ff169227d78f4d83bff0bdb27153473c1565",
 }
 
 

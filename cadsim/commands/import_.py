@@ -3,8 +3,8 @@
 Formats (docs/external-data.md): ``dmgm`` (the DMGM CAD test pairs, ``proc_s/<id>/data.pt`` +
 ``proc_t/<id>/data.pt``), ``v2x-seq`` (V2X-Seq-SPD's cooperative frames), ``dair-v2x``
 (DAIR-V2X-C's cooperative frame pairs), ``opv2v`` (the OPV2V family's
-``scenario/<agent>/<frame>.yaml``) and ``v2v4real`` (the same layout as V2V4Real encodes it), all
-but ``dmgm`` as box-only records. A
+``scenario/<agent>/<frame>.yaml``), ``v2v4real`` (the same layout as V2V4Real encodes it) and
+``tumtraf-v2x`` (TUMTraf-V2X's OpenLABEL labels), all but ``dmgm`` as box-only records. A
 malformed input file is one error line naming the file (and key), exit status 2.
 """
 
@@ -99,6 +99,32 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     _opv2v_arguments(v2v4real)
     _dair_arguments(formats)
+    _tumtraf_arguments(formats)
+
+
+def _tumtraf_arguments(formats) -> None:
+    tum = formats.add_parser(
+        "tumtraf-v2x",
+        help="TUMTraf-V2X cooperative labels (ASAM OpenLABEL JSON; vehicle + infrastructure)",
+        description="Write TUMTraf-V2X's OpenLABEL labels as box-only frame pairs: the vehicle's "
+        "and the infrastructure's LiDAR boxes, linked by the object uids both sides share.",
+        epilog="examples:\n  cadsim import tumtraf-v2x path/to/TUMTraf-V2X/test --out data/tumtraf\n"
+        "  cadsim import tumtraf-v2x labels --out data/tumtraf --infrastructure-cs "
+        "s110_lidar_ouster_north",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    tum.add_argument("src", metavar="SRC", help="folder holding the OpenLABEL .json files")
+    tum.add_argument("--out", required=True, help="new (or empty) dataset folder")
+    tum.add_argument(
+        "--vehicle-cs",
+        default="vehicle_lidar_robosense",
+        help="the vehicle LiDAR's coordinate system (default: vehicle_lidar_robosense)",
+    )
+    tum.add_argument(
+        "--infrastructure-cs",
+        default="s110_lidar_ouster_south",
+        help="the infrastructure LiDAR's coordinate system (default: s110_lidar_ouster_south)",
+    )
 
 
 def _opv2v_arguments(opv2v: argparse.ArgumentParser) -> None:
@@ -125,7 +151,7 @@ def _opv2v_arguments(opv2v: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    if args.format in ("v2x-seq", "opv2v", "v2v4real", "dair-v2x"):
+    if args.format in ("v2x-seq", "opv2v", "v2v4real", "dair-v2x", "tumtraf-v2x"):
         try:
             return _run_boxes(args)
         except KeyboardInterrupt:
@@ -154,6 +180,10 @@ def _run_boxes(args: argparse.Namespace) -> int:
         from cadsim.importers.dair_v2x import import_dair_v2x
 
         result = import_dair_v2x(args.src, args.out, args.link_gate)
+    elif args.format == "tumtraf-v2x":
+        from cadsim.importers.tumtraf_v2x import import_tumtraf_v2x
+
+        result = import_tumtraf_v2x(args.src, args.out, args.vehicle_cs, args.infrastructure_cs)
     else:
         from cadsim.importers.opv2v import import_opv2v
 

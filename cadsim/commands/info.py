@@ -11,13 +11,21 @@ from collections import Counter
 
 import numpy as np
 
+from cadsim.dataset.difficulty import LevelRule, level_counts
 from cadsim.dataset.lidar_regime import card_lines
 from cadsim.dataset.regime import dataset_regime
+from cadsim.terminal_text import display_name
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("dataset", help="dataset folder written by `cadsim generate`")
     parser.add_argument("--json", action="store_true", help="print one JSON object")
+    parser.add_argument(
+        "--levels-from",
+        metavar="DATASET",
+        help="fit the difficulty-level rule on this dataset (the benchmark fits it on the "
+        "validation split: docs/evaluation.md, 'Difficulty levels'); default: on this dataset",
+    )
 
 
 def _range(values: np.ndarray) -> list[float] | None:
@@ -31,9 +39,29 @@ def _stats(values: list[int]) -> dict:
     return {"mean": float(a.mean()), "min": float(a.min()), "max": float(a.max())}
 
 
-def summarise(ds) -> dict:
+def difficulty_summary(frame_pairs: list, reference: list | None = None) -> dict:
+    """Per-pair difficulty factors and levels (:mod:`cadsim.dataset.difficulty`), the level rule
+    fitted on ``reference`` pairs (default: ``frame_pairs`` themselves), and the level counts."""
+    factors = [p.difficulty for p in frame_pairs]
+    if not factors:
+        return {"difficulty": None}
+    rule_on = [p.difficulty for p in reference] if reference else factors
+    rule = LevelRule.fit(rule_on)
+    levels = rule.levels(factors)
+    return {
+        "difficulty": {
+            "rule": rule.as_record() | {"fitted_on": "reference" if reference else "itself"},
+            "level_counts": level_counts(levels),
+            "levels": levels,
+            "factors": factors,
+        }
+    }
+
+
+def summarise(ds, reference=None) -> dict:
     """The dataset summary ``cadsim info --json`` prints. Depths are detections' z (metres along
-    each observer's optical axis, from the stored noisy positions)."""
+    each observer's optical axis, from the stored noisy positions). ``reference``: the dataset
+    the difficulty-level rule is fitted on (default: ``ds``)."""
     pairs, class_mix, depths, frame_pairs = [], Counter(), [], []
     for pair in ds:
         frame_pairs.append(pair)
@@ -84,6 +112,7 @@ def summarise(ds) -> dict:
             "regime": dataset_regime(frame_pairs),
             "pairs": pairs,
         }
+        | difficulty_summary(frame_pairs, list(reference) if reference is not None else None)
         | _lidar_card(frame_pairs)
         | ({"multi_view": multi_view_summary(ds)} if getattr(ds, "n_views", 2) > 2 else {})
         | (sequence_summary(ds, pairs) if getattr(ds, "is_sequential", False) else {})
@@ -185,7 +214,7 @@ def _import_notes(src: dict) -> list[str]:
     lines = []
     if src.get("agents_without_prior"):
         missing = src["agents_without_prior"]
-        shown = ", ".join(missing[:4]) + (
+        shown = ", ".join(display_name(m) for m in missing[:4]) + (
             f", … ({len(missing)} in all)" if len(missing) > 4 else ""
         )
         lines.append(f"  no stored prior for     {shown} (pairs with them have none)")
@@ -229,7 +258,9 @@ def _gl_lines(drivers: list[dict]) -> list[str]:
 
 def _text(s: dict) -> str:
     total = sum(s["class_mix"].values()) or 1
-    mix = ", ".join(f"{c} {n} ({100 * n / total:.0f}%)" for c, n in s["class_mix"].items())
+    mix = ", ".join(
+        f"{display_name(c)} {n} ({100 * n / total:.0f}%)" for c, n in s["class_mix"].items()
+    )
     d = s["depth"]
     depth = (
         "-"
@@ -237,12 +268,15 @@ def _text(s: dict) -> str:
         else f"min {d['min']:.1f}  median {d['median']:.1f}  max {d['max']:.1f}"
     )
     lines = [
-        f"{s['dataset']}: scenario {s['scenario']}, {s['n_pairs']} pairs, "
+        f"{s['dataset']}: scenario {display_name(s['scenario'])}, {s['n_pairs']} pairs, "
         + ("imported (no seed), " if s["seed"] is None else f"seed {s['seed']}, ")
         + f"checksum {s['checksum'][:16]}"
         + (" (every record verified against it)" if s.get("verified") else ""),
         *(
-            [f"  imported from           {src['repository']} @ {src['commit']} ({src['licence']})"]
+            [
+                f"  imported from           {display_name(src['repository'])} @ "
+                f"{display_name(src['commit'])} ({display_name(src['licence'])})"
+            ]
             if (src := s.get("source"))
             else []
         ),
@@ -256,6 +290,7 @@ def _text(s: dict) -> str:
         f"  regime                  {_regime_text(s['regime'])}",
         f"  cues for matchers       {s['regime'].get('cues') or '-'}",
         *(card_lines(s["lidar_detector"]) if "lidar_detector" in s else []),
+        *_difficulty_lines(s.get("difficulty")),
         "",
         f"  {'pair':>4}  {'name':<12} {'n1':>3} {'n2':>3} {'cov':>3}  {'depth1 (m)':>12}  {'depth2 (m)':>12}",
     ]
@@ -273,6 +308,14 @@ def _text(s: dict) -> str:
             + (f"  {p['sequence']:>4} {p['frame']:>5}" if "sequence" in p else "")
         )
     return "\n".join(lines)
+
+
+def _difficulty_lines(d: dict | None) -> list[str]:
+    if not d:
+        return []
+    counts = ", ".join(f"{level} {n}" for level, n in d["level_counts"].items())
+    where = "this dataset" if d["rule"]["fitted_on"] == "itself" else "--levels-from"
+    return [f"  difficulty levels       {counts} (terciles of the composite on {where})"]
 
 
 def _sequence_text(q: dict) -> str:
@@ -314,6 +357,7 @@ def run(args: argparse.Namespace) -> int:
     from cadsim.dataset import Dataset
 
     # Verified first (every record re-hashed against the manifest): what it prints is the data.
-    summary = summarise(Dataset(args.dataset, verify=True)) | {"verified": True}
+    reference = Dataset(args.levels_from) if args.levels_from else None
+    summary = summarise(Dataset(args.dataset, verify=True), reference) | {"verified": True}
     print(json.dumps(summary, indent=1) if args.json else _text(summary))
     return 0

@@ -51,8 +51,9 @@ def load_npz(data: bytes | str, what: str, keys=None) -> dict[str, np.ndarray]:
 
     Each member's ``.npy`` header is read and checked before its data is inflated: a plain
     dtype (no objects), data that the zip entry's size holds exactly, and at most
-    :data:`MAX_NPZ_BYTES` declared over all members — so a header claiming 10¹² elements, or a
-    stray member of gigabytes, is refused without allocating it."""
+    :data:`MAX_NPZ_BYTES` declared over all members (and per member with each size counted as
+    at least 1, so an empty axis cannot declare 10¹² rows) — so a header claiming 10¹² elements,
+    or a stray member of gigabytes, is refused without allocating it."""
     try:
         src = io.BytesIO(data) if isinstance(data, bytes) else data
         out, declared = {}, 0
@@ -112,7 +113,15 @@ def npy_header(member, what: str, key: str) -> tuple[tuple[int, ...], bool, np.d
         raise _Refused(f"{what}: {key[:60]}: npy format version {version}")
     if dtype.hasobject:
         raise _Refused(f"{what}: {key[:60]}: object arrays are not read (they need pickle)")
-    return tuple(int(n) for n in shape), bool(fortran), np.dtype(dtype)
+    shape = tuple(int(n) for n in shape)
+    # an empty axis makes the data 0 bytes, not the rows a reader may walk: sizes of 0 count as 1
+    cells = math.prod(max(n, 1) for n in shape)
+    if cells * max(dtype.itemsize, 1) > MAX_NPZ_BYTES:
+        raise _Refused(
+            f"{what}: {key[:60]}: its header declares shape {str(shape)[:60]} {dtype}: more than "
+            f"{MAX_NPZ_BYTES:,} bytes were each size at least 1"
+        )
+    return shape, bool(fortran), np.dtype(dtype)
 
 
 def json_bytes(obj) -> bytes:

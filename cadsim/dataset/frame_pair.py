@@ -249,6 +249,22 @@ class FramePair:
             return None
         return camera_to_world(self.cameras[0]), camera_to_world(self.cameras[1])
 
+    @cached_property
+    def difficulty(self) -> dict:
+        """The pair's difficulty factors (:mod:`cadsim.dataset.difficulty`; truth, never a
+        matcher's input): as the record stores them, else (imported records) what its truth
+        allows, computed here."""
+        from cadsim.dataset.difficulty import difficulty_factors
+
+        stored = self.record.get("difficulty")
+        if isinstance(stored, dict):
+            return dict(stored)
+        v1, v2 = self.view1, self.view2
+        return difficulty_factors(
+            v1.positions, v2.positions, v1.true_classes, v2.true_classes, self.gt_pairs,
+            self.camera_to_world,
+        )  # fmt: skip
+
     @property
     def observer_ids(self) -> tuple[str, str]:
         obs = self._observers
@@ -343,6 +359,7 @@ class FramePair:
                 "name": self.name,
                 "noise_rate": self.noise_rate,
                 "localisation": None if loc is None else dataclasses.asdict(loc[0]),
+                **_headings(self.view1, self.view2),
             },
             pixels1=_box_centres(self.view1.boxes) if pixels else None,
             pixels2=_box_centres(self.view2.boxes) if pixels else None,
@@ -421,6 +438,13 @@ class FramePair:
             else:
                 episode_seed = seeds[2] if len(seeds) > 2 else self.sim_seed
                 when = self.time - (latency if k else 0.0)
+                if not np.isfinite(self.time):  # imported before importers gave every record one
+                    if model.walk_m_per_sqrt_s > 0:
+                        raise ValueError(
+                            f"{self.path / layout.RECORD_JSON}: time: null, and a GNSS preset's walk needs it: import "
+                            "the source again (importers now give a record without a time 0 s)"
+                        )
+                    when = 0.0  # no walk: the time changes nothing
                 errors.append(draw_gnss_error(model, episode_seed, vehicle, when, seed))
         return errors[0], errors[1]
 
@@ -691,6 +715,15 @@ class FramePair:
 def _reported(view: ViewDetections) -> tuple[str, ...] | None:
     """The classes a view's detector reported (None where the record does not say)."""
     return None if view.reported_classes is None else tuple(view.reported_classes)
+
+
+def _headings(view1, view2) -> dict:
+    """``{"headings": (h1, h2)}`` of two box-only views (radians, each view's frame; what a
+    box-level matcher such as ``v2x_reg`` aligns), {} when a view has none."""
+    h1, h2 = getattr(view1, "headings", None), getattr(view2, "headings", None)
+    if h1 is None or h2 is None:
+        return {}
+    return {"headings": (np.asarray(h1, dtype=float), np.asarray(h2, dtype=float))}
 
 
 def _box_centres(boxes: np.ndarray) -> np.ndarray:

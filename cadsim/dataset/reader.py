@@ -19,7 +19,7 @@ from cadsim.dataset.checksum import dataset_checksum
 from cadsim.dataset.frame_pair import FramePair
 from cadsim.dataset.manifest import DatasetError, read_manifest
 from cadsim.dataset.multi_view import SnapshotViews
-from cadsim.dataset.sensor_view import check_sensor, dataset_sensor, lidar_pair
+from cadsim.dataset.sensor_view import check_sensor, dataset_sensor, sensor_pair
 from cadsim.dataset.sequence_check import check_sequences
 from cadsim.dataset.verification import RecordLayout, record_layout, verify_record
 
@@ -40,7 +40,8 @@ class Dataset(Sequence[FramePair]):
     record). ``ds.n_views``: views per record (2: frame pairs); ``ds.snapshot(k)``: record k's
     views (N-view datasets). ``sensor``: read a two-sensor dataset (``sensor = "both"``) as
     "camera" (its camera detections, the default) or "lidar" (its LiDAR boxes,
-    :mod:`cadsim.dataset.sensor_view`); None or the records' own sensor: as stored.
+    :mod:`cadsim.dataset.sensor_view`), or either one's detections where both sensors cover
+    ("camera-common", "lidar-common"); None or the records' own sensor: as stored.
     """
 
     def __init__(self, path: str | Path, verify: bool = False, sensor: str | None = None) -> None:
@@ -72,6 +73,7 @@ class Dataset(Sequence[FramePair]):
             raise DatasetError(
                 f"{self.path / layout.MANIFEST}: records: a finished dataset with no record"
             )
+        self._lidar_range_m = _lidar_range_m(gen) if self.sensor else 0.0
         if verify:
             self.verify_once()
 
@@ -106,7 +108,7 @@ class Dataset(Sequence[FramePair]):
             self.detection_config,
             record_files=self.record_files,
         )
-        return pair if self.sensor is None else lidar_pair(pair)
+        return pair if self.sensor is None else sensor_pair(pair, self.sensor, self._lidar_range_m)
 
     def __iter__(self) -> Iterator[FramePair]:
         for k in range(len(self)):
@@ -207,3 +209,10 @@ class Dataset(Sequence[FramePair]):
             check_sequences(self.path, self._records)
         if dataset_checksum(r["checksum"] for r in self._records) != self.checksum:
             raise DatasetError(f"{self.path / layout.MANIFEST}: dataset checksum mismatch")
+
+
+def _lidar_range_m(generation: dict) -> float:
+    """The specified range (metres) of a two-sensor dataset's LiDAR (its ``[lidar]`` table)."""
+    from cadsim.sensing.lidar.beam_pattern import LidarConfig
+
+    return float(LidarConfig(**(generation.get("lidar") or {})).pattern().max_range_m)

@@ -49,9 +49,10 @@ from cadsim import portable_math as pm
 from cadsim.camera import Camera
 from cadsim.dataset import layout
 from cadsim.dataset.detections import ViewDetections, ground_truth_pairs
+from cadsim.dataset.difficulty import difficulty_factors
 from cadsim.dataset.encoding import json_bytes, npz_bytes, png_bytes
 from cadsim.dataset.lidar_points import view_arrays as lidar_view_arrays
-from cadsim.observer_pose import ObserverPose
+from cadsim.observer_pose import ObserverPose, camera_to_world
 from cadsim.sensing.localisation import LocalisationConfig
 from cadsim.world import WorldObject
 
@@ -249,8 +250,20 @@ def encode_record(rec: PairRecord) -> dict[str, bytes]:
             "covisible": len(gt),
         },
         "meta": jsonable(rec.meta),
+        "difficulty": _difficulty(rec, observers, gt),
     }
     return _files(views, record)
+
+
+def _difficulty(rec: PairRecord, observers: list[dict], gt: np.ndarray) -> dict:
+    """The pair's difficulty factors (:mod:`cadsim.dataset.difficulty`), with the cameras exactly
+    as ``record.json`` stores them (a LiDAR-only view's is its LiDAR's), so a reader computes the
+    same."""
+    d1, d2 = rec.view1.detections, rec.view2.detections
+    to_world = tuple(camera_to_world(Camera.from_dict(o["camera"])) for o in observers)
+    return difficulty_factors(
+        d1.positions, d2.positions, d1.true_classes, d2.true_classes, gt, to_world
+    )
 
 
 def encode_snapshot(rec: SnapshotRecord) -> dict[str, bytes]:

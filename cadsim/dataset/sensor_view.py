@@ -30,8 +30,11 @@ from cadsim.sensing.box_features import (
     lidar_to_camera_convention,
 )
 
-SENSORS = ("camera", "lidar")
-"""What :class:`cadsim.dataset.reader.Dataset` can read a ``"both"`` dataset as."""
+SENSORS = ("camera", "lidar", "camera-common", "lidar-common")
+"""What :class:`cadsim.dataset.reader.Dataset` can read a ``"both"`` dataset as: either sensor
+whole, or either sensor's detections in the region both cover (``-common``:
+:mod:`cadsim.sensing.lidar.camera_coverage`; every detection of a view whose reported centre lies
+in its camera's frustum and range and in its LiDAR's range, false positives included)."""
 
 
 def dataset_sensor(manifest: dict) -> str:
@@ -77,6 +80,39 @@ def lidar_detections(boxes: dict, objects: list[dict]) -> ViewDetections:
         reported_classes=reported,
         headings=heading_from_lidar_yaw(boxes["yaws"]),
     )
+
+
+def sensor_pair(pair, sensor: str, lidar_range_m: float):
+    """``pair`` (of a ``"both"`` record) read as ``sensor`` (one of :data:`SENSORS` but
+    "camera"); ``lidar_range_m``: the LiDAR's specified range (metres)."""
+    if sensor == "lidar":
+        return lidar_pair(pair)
+    camera_rows, lidar_rows = common_rows(pair, lidar_range_m)
+    base, rows = (lidar_pair(pair), lidar_rows) if sensor == "lidar-common" else (pair, camera_rows)
+    views = tuple(v.take(r) for v, r in zip((base.view1, base.view2), rows, strict=True))
+    out = type(pair)(
+        base.path, base.index, base._entry, base._noise, base._detection, views,
+        record_files=base._record_files, view_numbers=base.view_numbers,
+    )  # fmt: skip
+    out.__dict__["record"] = base.record
+    return out
+
+
+def common_rows(pair, lidar_range_m: float) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Per view of ``pair`` (a ``"both"`` record read as stored): the rows of its camera
+    detections and of its LiDAR boxes that lie in the region both sensors cover (the camera's
+    frustum up to its detector's ``max_depth_m``, within ``lidar_range_m`` of the LiDAR)."""
+    from cadsim.sensing.lidar.camera_coverage import covered, lidar_box_world
+
+    poses, boxes = _lidar_boxes(pair)
+    depth = float(pair._detection.get("max_depth_m", 80.0))
+    camera_rows, lidar_rows = [], []
+    for view, camera, pose, found in zip((pair.view1, pair.view2), pair.cameras, poses, boxes, strict=True):  # fmt: skip
+        world = camera.camera_to_world(view.positions) if len(view) else np.zeros((0, 3))
+        camera_rows.append(np.flatnonzero(covered(world, camera, pose, depth, lidar_range_m)))
+        centres = lidar_box_world(found["centres"], pose)
+        lidar_rows.append(np.flatnonzero(covered(centres, camera, pose, depth, lidar_range_m)))
+    return camera_rows, lidar_rows
 
 
 def lidar_pair(pair):
@@ -135,4 +171,12 @@ def _lidar_boxes(pair) -> tuple[list[np.ndarray], list[dict]]:
     return poses, boxes
 
 
-__all__ = ["SENSORS", "check_sensor", "dataset_sensor", "lidar_detections", "lidar_pair"]
+__all__ = [
+    "SENSORS",
+    "check_sensor",
+    "common_rows",
+    "dataset_sensor",
+    "lidar_detections",
+    "lidar_pair",
+    "sensor_pair",
+]

@@ -30,6 +30,13 @@ from cadsim.observer_pose import ObserverPose
 from cadsim.world import WorldObject
 
 NO_TRACK = "-1"
+MAX_BOXES = 1000
+"""Most boxes one side's label file may hold (checked before anything is built from them): the
+ground truth's assignment is a boxes × boxes matrix per frame (1000² float64: 8 MB). The real
+DAIR-V2X-C pair checked (docs/external-data.md) holds 23 and 8 boxes."""
+MAX_LABEL_BYTES = 4 * 2**20
+"""Largest label file read (bytes), so that parsing it stays small too: a box is about 300
+bytes of JSON in DAIR-V2X-C, 450 with V2X-Seq's track id and token (1,000 boxes: < 0.5 MiB)."""
 
 
 def _optional_id(obj: dict, key: str, path: Path, where: str) -> str | None:
@@ -49,9 +56,13 @@ def read_boxes(path: Path) -> list[dict]:
     """A side's objects: ``track`` and ``token`` (str or None), ``cls`` (``type`` lower-cased),
     ``centre`` (x, y, z, sensor frame, metres), ``yaw`` (radians), ``size`` (l, w, h, metres),
     ``where`` (the object's index, for errors)."""
-    objects = read_json(path)
+    objects = read_json(path, MAX_LABEL_BYTES)
     if not isinstance(objects, list):
         raise ImportFormatError(path, "top level: expected a list of objects")
+    if len(objects) > MAX_BOXES:
+        raise ImportFormatError(
+            path, f"{len(objects)} boxes, more than {MAX_BOXES} in one side's label file"
+        )
     out = []
     for k, obj in enumerate(objects):
         where = f"[{k}]"
@@ -110,4 +121,4 @@ def side_view(
     return view, objects
 
 
-__all__ = ["NO_TRACK", "read_boxes", "side_view"]
+__all__ = ["MAX_BOXES", "MAX_LABEL_BYTES", "NO_TRACK", "read_boxes", "side_view"]

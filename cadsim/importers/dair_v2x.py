@@ -31,8 +31,11 @@ box are one object, ``c<k>`` (k: the cooperative box); boxes of classes the coop
 not cover (:data:`COOPERATIVE_CLASSES`), and every box where it is not given, are matched side
 to side, ``s<k>``; every other box is seen by one side only (``v<k>``, ``i<k>``). No
 localisation prior is stored (the data has no noisy pose): a ``--localisation`` preset of
-``cadsim evaluate`` draws one. Episodes are ``batch_id``s (0 when
-the side ``data_info.json`` is absent), slots the frame pairs in listed order.
+``cadsim evaluate`` draws one. Episodes are ``batch_id``s (:mod:`.episode_names`: a name of
+digits is its number, any other is numbered after the largest; 0 when the side
+``data_info.json`` is absent), slots the frame pairs in listed order. A side label file holds at
+most :data:`~.dair_side.MAX_BOXES` boxes; a frame listed twice in a side ``data_info.json`` is
+refused.
 """
 
 from __future__ import annotations
@@ -47,7 +50,9 @@ from cadsim import portable_math as pm
 from cadsim.importers import ImportFormatError
 from cadsim.importers.box_dataset import ImportResult, check_out, write_box_dataset
 from cadsim.importers.box_sequence import ImportedFrame, sequence_records
-from cadsim.importers.dair_side import read_boxes, side_view
+from cadsim.importers.dair_side import MAX_BOXES, MAX_LABEL_BYTES, read_boxes, side_view
+from cadsim.importers.episode_names import episode_numbers
+from cadsim.importers.record_time import TimeNote, relative_times
 from cadsim.importers.safe_read import (
     confined,
     field,
@@ -121,7 +126,10 @@ class _Reader:
         return self.path(relative)
 
     def side_info(self, side: str) -> dict[str, dict]:
-        """{frame id: entry} of a side's optional ``data_info.json`` (by its pointcloud stem)."""
+        """{frame id: entry} of a side's optional ``data_info.json`` (by its pointcloud stem),
+        each entry with ``_where`` (its index) and ``_episode`` (its ``batch_id``'s number,
+        :mod:`.episode_names`, over every entry of the file; 0 without a ``batch_id``, and 0 is
+        never a named batch's: a frame the file does not list is episode 0 too)."""
         path = self.optional(f"{_SIDES[side][0]}/data_info.json")
         if path is None:
             return {}
@@ -131,8 +139,29 @@ class _Reader:
         out = {}
         for k, entry in enumerate(entries):
             frame = _stem(field(entry, "pointcloud_path", path, f"[{k}]"), path, f"[{k}].pointcloud_path")  # fmt: skip
-            out[frame] = entry | {"_where": f"[{k}]"}
-        return out
+            if frame in out:  # two entries for one frame: neither may silently win
+                raise ImportFormatError(
+                    path,
+                    f"[{k}].pointcloud_path: frame {frame!r} already at {out[frame]['_where']}",
+                )
+            out[frame] = entry | {"_where": f"[{k}]", "_batch": _batch(entry, path, f"[{k}]")}
+        try:  # "0" too: a frame this file does not list is episode 0, never a named batch's
+            episodes = episode_numbers([*(e["_batch"] for e in out.values()), "0"])
+        except ValueError as exc:
+            raise ImportFormatError(path, f"batch_id: {exc}") from None
+        return {frame: e | {"_episode": episodes[e["_batch"]]} for frame, e in out.items()}
+
+
+def _batch(entry: dict, path: Path, where: str) -> str:
+    """A side entry's ``batch_id`` as a name ("0" when absent): a string or an integer."""
+    value = entry.get("batch_id", 0)
+    if isinstance(value, bool) or not isinstance(value, int | str) or len(str(value)) > 64:
+        raise ImportFormatError(
+            path,
+            f"{where}.batch_id: expected a recording name (string or integer), "
+            f"got {shown(value, 30)}",
+        )
+    return str(value)
 
 
 def _stem(value, path: Path, key: str) -> str:
@@ -178,9 +207,11 @@ def _poses(reader: _Reader, veh: str, inf: str, offset, where: Path, key: str) -
 
 def _cooperative_boxes(path: Path) -> tuple[np.ndarray, list[str]]:
     """(k, 2) ground-plane centres (world, metres) and classes of a ``label_world`` file."""
-    labels = read_json(path)
+    labels = read_json(path, MAX_LABEL_BYTES)
     if not isinstance(labels, list):
         raise ImportFormatError(path, "top level: expected a list of objects")
+    if len(labels) > MAX_BOXES:
+        raise ImportFormatError(path, f"{len(labels)} boxes, more than {MAX_BOXES}")
     centres, classes = [], []
     for k, label in enumerate(labels):
         corners = matrix(field(label, "world_8_points", path, f"[{k}]"), path, f"[{k}].world_8_points", 8, 3)  # fmt: skip
@@ -260,8 +291,7 @@ def _frame(reader, entry, infos, where: Path, key: str, gate_m: float) -> tuple[
     v_info, i_info = infos["vehicle"].get(veh), infos["infrastructure"].get(inf)
     t_veh = _timestamp(v_info, reader.root / "vehicle-side" / "data_info.json")
     t_inf = _timestamp(i_info, reader.root / "infrastructure-side" / "data_info.json")
-    batch = (v_info or {}).get("batch_id", 0)
-    episode = int(batch) if str(batch).isascii() and str(batch).isdigit() and len(str(batch)) <= 9 else 0  # fmt: skip
+    episode = v_info["_episode"] if v_info is not None else 0
     meta = {
         "source": SOURCE["kind"],
         "vehicle_frame": veh,
@@ -314,16 +344,21 @@ def import_dair_v2x(
                 f"[{k}].vehicle_pointcloud_path: frame {frame.meta['vehicle_frame']!r} already at {first}",
             )
         by_episode.setdefault(episode, []).append(frame)
-    records = []
+    records, clock = [], TimeNote()
     for episode in sorted(by_episode):
-        records += sequence_records(episode, 0, episode, by_episode[episode], False)
+        frames = relative_times(
+            by_episode[episode], root / "vehicle-side" / "data_info.json", f"batch {episode}",
+            ordered=False, note=clock,
+        )  # fmt: skip
+        records += sequence_records(episode, 0, episode, frames, False)
     linked = sum(
         len({o.id for o in f.objects if o.id[0] in "cs"})
         for frames in by_episode.values()
         for f in frames
     )
     source = SOURCE | {"folder": root.name, "frame_pairs": len(entries), "linked_objects": linked}
-    source |= {"link_gate_m": gate, "sha256": _digest(root, reader.used)}
+    source |= {"link_gate_m": gate, "time": clock.as_manifest()}
+    source["sha256"] = _digest(root, reader.used)
     return write_box_dataset(out, records, SCENARIO_NAME, source)
 
 

@@ -15,7 +15,10 @@ loader refuses every such file; a full loader would run any ``!!python/...`` tag
   item] → a Python ``float`` / ``int`` / ``bool``;
 - ``python/object/apply:numpy.*core.multiarray._reconstruct`` with ``args`` [``numpy.ndarray``,
   ``(0,)``, ``b'b'``] and ``state`` (1, shape, dtype, fortran flag, ``!!binary`` of exactly the
-  shape's bytes) → nested lists of Python numbers, at most :data:`MAX_ARRAY_ITEMS` items;
+  shape's bytes) → nested lists of Python numbers: the product of the sizes, each counted as at
+  least 1, at most :data:`MAX_ARRAY_ITEMS` (so an empty axis cannot ask for billions of empty
+  lists: that product bounds both the numbers and the lists built), and at most
+  :data:`MAX_FILE_ARRAY_ITEMS` over all the arrays of one file;
 - ``python/tuple`` (a list) and ``python/name:numpy.ndarray`` (inert, only as that argument).
 
 Any other ``!!python/...`` tag is refused, naming it; nothing is imported or called by name.
@@ -25,6 +28,8 @@ Imports only numpy and PyYAML.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 import yaml
@@ -37,6 +42,11 @@ DTYPES = frozenset(
 """Type codes a dtype may name: fixed-size numbers and booleans (never object, bytes, void)."""
 MAX_ARRAY_ITEMS = 65_536
 """Most items of one array (a pose is 16; a LiDAR point cloud is not stored in a label yaml)."""
+MAX_FILE_ARRAY_ITEMS = 1_000_000
+"""Most items of all the arrays of one file together (each size counted as at least 1): as many
+as the values its YAML may hold (``safe_read.MAX_YAML_NODES``), so thousands of small empty
+arrays cannot add up to billions of lists."""
+_BYTE_ORDERS = ("<", ">", "|", "=")
 _PY = "tag:yaml.org,2002:python/"
 _NUMPY = ("numpy.core.multiarray.", "numpy._core.multiarray.")
 
@@ -80,9 +90,21 @@ class NumpyTagLoader(UniqueKeyLoader):
             )
         dtype = np.dtype(args[0])
         if state is not None:
-            if not isinstance(state, tuple) or len(state) != 8 or state[1] not in "<>|=":
-                raise _error(node, "numpy.dtype: state is not a plain dtype's")
-            if state[1] in "<>":
+            if (
+                not isinstance(state, tuple)
+                or len(state) != 8
+                or not isinstance(state[1], str)
+                or state[1] not in _BYTE_ORDERS  # exactly one of them, not a substring
+                or any(part is not None for part in state[2:5])
+            ):
+                order = state[1] if isinstance(state, tuple) and len(state) > 1 else None
+                shown = repr(order)[:20] if isinstance(order, str | int) else type(order).__name__
+                raise _error(
+                    node,
+                    f"numpy.dtype: state is not a plain dtype's (byte order {shown}; expected "
+                    "one of < > | =, no subarray or fields)",
+                )
+            if state[1] in ("<", ">"):
                 dtype = dtype.newbyteorder(state[1])
         return dtype
 
@@ -117,9 +139,22 @@ class NumpyTagLoader(UniqueKeyLoader):
             for s in shape
         ) or len(shape) > 4:  # fmt: skip
             raise _error(node, f"numpy array: shape {str(shape)[:40]} is not up to 4 sizes")
-        items = int(np.prod(shape, dtype=np.int64))
-        if items > MAX_ARRAY_ITEMS:
-            raise _error(node, f"numpy array: {items} items, more than {MAX_ARRAY_ITEMS}")
+        items = math.prod(shape)
+        # what tolist() builds: a list per index of every leading axis, so an empty axis
+        # bounds the numbers (0) but not the lists; each size counted as at least 1 bounds both
+        cells = math.prod(max(s, 1) for s in shape)
+        self._array_items = getattr(self, "_array_items", 0) + min(cells, MAX_ARRAY_ITEMS + 1)
+        if self._array_items > MAX_FILE_ARRAY_ITEMS:
+            raise _error(
+                node,
+                f"numpy arrays: more than {MAX_FILE_ARRAY_ITEMS} items in one file (0 counts as 1)",
+            )
+        if cells > MAX_ARRAY_ITEMS:
+            raise _error(
+                node,
+                f"numpy array: shape {str(shape)[:30]} is more than {MAX_ARRAY_ITEMS} items "
+                "(0 counts as 1)",
+            )
         if (
             not isinstance(dtype, np.dtype)
             or fortran not in (0, 1)
@@ -160,4 +195,4 @@ for _prefix in _NUMPY:
 NumpyTagLoader.add_multi_constructor(_PY, NumpyTagLoader.refuse_python)
 
 
-__all__ = ["DTYPES", "MAX_ARRAY_ITEMS", "NumpyTagLoader"]
+__all__ = ["DTYPES", "MAX_ARRAY_ITEMS", "MAX_FILE_ARRAY_ITEMS", "NumpyTagLoader"]

@@ -20,7 +20,9 @@ Per agent and frame:
   ``obj_type``, V2V4Real's ``ass_id``}} — the boxes the agent sees; the centre is ``location`` +
   ``center`` added in world axes (OpenCOOD's ``project_world_objects``); ``ass_id`` is the
   cross-agent identity where given (−1: never linked), else actor ids shared across agents are
-  the ground truth; a connected agent listed by another is an ordinary object of that box.
+  the ground truth (V2V4Real's keys are each vehicle's local ids: there a box without
+  ``ass_id`` is never linked); a connected agent listed by another is an ordinary object of
+  that box.
 
 Files may carry the numpy tags PyYAML's default dumper writes (:mod:`.numpy_yaml`, V2V4Real).
 
@@ -55,6 +57,7 @@ from cadsim.importers import ImportFormatError
 from cadsim.importers.box_dataset import ImportResult, check_out, write_box_dataset
 from cadsim.importers.box_sequence import ImportedFrame, sequence_records
 from cadsim.importers.carla_frame import carla_matrix, mirrored, mirrored_points
+from cadsim.importers.record_time import TimeNote, relative_times
 from cadsim.importers.safe_read import (
     confined,
     field,
@@ -106,6 +109,7 @@ class _Agent:
     predicted: np.ndarray | None  # 4×4 reported body → world
     boxes: list[dict]
     speed: float = 0.0  # ego_speed, m/s
+    path: Path | None = None  # the yaml read, for errors
 
 
 def _pose(value, path: Path, key: str, right_handed: bool = False) -> np.ndarray:
@@ -125,15 +129,17 @@ def _pose(value, path: Path, key: str, right_handed: bool = False) -> np.ndarray
     return flip(carla_matrix(numbers(value, path, key, 6)))
 
 
-def _boxes(vehicles, path: Path, agent: int = 0) -> list[dict]:
+def _boxes(vehicles, path: Path, agent: int = 0, v2v4real: bool = False) -> list[dict]:
     """The boxes of an agent's ``vehicles``: id = ``a<ass_id>`` where the entry has an
-    ``ass_id`` ≥ 0 (V2V4Real's cross-vehicle identity), ``<agent>:<actor>`` where it is −1
-    (never linked: the key is the agent's local id), else the actor id (shared across agents)."""
+    ``ass_id`` ≥ 0 (V2V4Real's cross-vehicle identity), ``<agent>:<actor>`` where it is −1 or,
+    in V2V4Real (``v2v4real``), absent (never linked: the key is the agent's local id), else the
+    actor id (OPV2V's CARLA actor ids, shared across agents). Two boxes of one agent with one
+    id (an ``ass_id`` given twice) are refused."""
     if vehicles is None:
         return []
     if not isinstance(vehicles, dict):
         raise ImportFormatError(path, "vehicles: expected a mapping of actor ids")
-    out, seen = [], {}
+    out, seen, ids = [], {}, {}
     for actor, entry in vehicles.items():
         key = (  # a string id quoted, so that '101' and 101 read apart
             f"vehicles.{shown(actor, 20)!r}"
@@ -159,14 +165,19 @@ def _boxes(vehicles, path: Path, agent: int = 0) -> list[dict]:
         speed = number(entry.get("speed", 0.0), path, f"{key}.speed", 1e4)
         kind = entry.get("obj_type", "car")
         m = carla_matrix([*location, *angle])
-        oid = str(int(actor))
+        oid = f"{agent}:{int(actor)}" if v2v4real else str(int(actor))  # local without ass_id
         if "ass_id" in entry:
             link = entry["ass_id"]
             if isinstance(link, bool) or not isinstance(link, int) or not -1 <= link < 2**31:
                 raise ImportFormatError(
                     path, f"{key}.ass_id: expected an integer >= -1, got {shown(link, 30)}"
                 )
-            oid = f"{agent}:{oid}" if link == -1 else f"a{link}"
+            oid = f"{agent}:{int(actor)}" if link == -1 else f"a{link}"
+        if oid in ids:
+            raise ImportFormatError(
+                path, f"{key}: object {oid!r} is also {ids[oid]} (one box per object and agent)"
+            )
+        ids[oid] = key
         out.append(
             {
                 "id": oid,
@@ -195,10 +206,10 @@ def _read_agent(path: Path, agent: int, v2v4real: bool = False) -> _Agent:
     predicted = data.get("predicted_ego_pos")
     predicted = None if predicted is None else _pose(predicted, path, "predicted_ego_pos", v2v4real)
     speed = number(data.get("ego_speed", 0.0), path, "ego_speed", 1e4) * _KMH
-    boxes = _boxes(data.get("vehicles"), path, agent)
+    boxes = _boxes(data.get("vehicles"), path, agent, v2v4real)
     if v2v4real:  # boxes in the same right-handed world: undo _view's mirroring
         boxes = [b | {"centre": b["centre"] * [1.0, -1.0, 1.0], "direction": b["direction"] * [1.0, -1.0, 1.0]} for b in boxes]  # fmt: skip
-    return _Agent(agent, sensor, body, predicted, boxes, speed)
+    return _Agent(agent, sensor, body, predicted, boxes, speed, path)
 
 
 def _ordered(agents: list[int]) -> list[int]:
@@ -484,21 +495,21 @@ def import_opv2v(
             stored = stored or any(a.predicted is not None for a in read)
             lacking |= {(scenario.name, a.agent) for a in read if a.predicted is None}
             if chosen != chosen_before and run:
-                pieces.append((episode, slot, protocol, run))
+                pieces.append((episode, slot, protocol, scenario, run))
                 slot += len(run)
                 run = []
             chosen_before = chosen
             run.append((name, scenario.name, read))
         if run:
-            pieces.append((episode, slot, protocol, run))
+            pieces.append((episode, slot, protocol, scenario, run))
     if not pieces:
         raise ImportFormatError(root, f"no frame with {n} agents")
     use_prior = prior and stored
     if use_prior:
         _stated_sigmas([p for _, _, p in listing], prior_sigma_m)
     sequential = n == 2 and any(len(run) > 1 for *_, run in pieces)
-    records = []
-    for episode, slot, protocol, run in pieces:
+    records, clock = [], TimeNote()
+    for episode, slot, protocol, scenario_path, run in pieces:
         imported = []
         # the other agents' messages are as old as the exported prior's latency (views 2, 3, …
         # send to view 1); without the prior a preset's redraw applies its own latency
@@ -512,7 +523,12 @@ def import_opv2v(
             views, objects = [], {}
             for v, agent in enumerate(read):
                 own = use_prior and agent.predicted is not None  # a prior per agent
-                view, found = _view(agent, own, ids, latency if v else 0.0)
+                try:
+                    view, found = _view(agent, own, ids, latency if v else 0.0)
+                except ImportFormatError:
+                    raise
+                except ValueError as exc:  # a check past the reader's: still name the file
+                    raise ImportFormatError(agent.path or root, str(exc)) from None
                 views.append(view)
                 for obj in found:  # a box (class, size) wins over the agent's own marker
                     if obj.id not in objects or not objects[obj.id].target:
@@ -533,6 +549,10 @@ def import_opv2v(
                 ImportedFrame(time, tuple(views), list(objects.values()), meta,
                               sigma, _PRIOR_FRAME if use_prior else "")
             )  # fmt: skip
+        imported = relative_times(
+            imported, scenario_path / PROTOCOL, f"scenario {run[0][1][:40]!r}", ordered=sequential,
+            interval_s=protocol.get("interval_s"), own_clock=True, note=clock,
+        )  # fmt: skip
         sim_seed = protocol.get("sim_seed", episode)
         records += sequence_records(
             episode, slot, sim_seed, imported, sequential, protocol.get("interval_s")
@@ -547,7 +567,8 @@ def import_opv2v(
         h.update(path.relative_to(root).as_posix().encode() + b"\0")
         h.update(hashlib.sha256(read_bytes(path)).digest())
     source = SOURCE | {"folder": root.name, "agents": n, "skipped_frames": skipped}
-    source |= {"prior": "stored" if use_prior else "none", "sha256": h.hexdigest()}
+    source |= {"prior": "stored" if use_prior else "none", "time": clock.as_manifest()}
+    source["sha256"] = h.hexdigest()
     if use_prior and lacking:
         source["agents_without_prior"] = [f"{s}/{a}" for s, a in sorted(lacking)]
     return write_box_dataset(out, records, SCENARIO_NAME, source)

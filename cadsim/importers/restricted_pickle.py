@@ -25,6 +25,7 @@ Must not import torch, torch_geometric, or anything outside numpy and the standa
 from __future__ import annotations
 
 import io
+import math
 import os
 import pickle
 import pickletools
@@ -48,6 +49,8 @@ MAX_MEMO_INDEX = 2**16
 MAX_STORAGE_BYTES = 64 * 2**20
 """Largest tensor storage read (bytes). A DMGM view holds a few hundred objects at most, each with
 a 900-value float32 feature: well under 2 MiB; the largest shipped storage is 22 KiB."""
+MAX_TENSOR_DIMS = 32
+"""Most axes of one tensor (numpy's own limit is 64; a DMGM tensor has 1 or 2)."""
 MAX_MEMBER_BYTES = 256 * 2**20
 """Largest total of decompressed bytes read from one archive."""
 _COMPRESSIONS = (zipfile.ZIP_STORED, zipfile.ZIP_DEFLATED)
@@ -164,11 +167,20 @@ def rebuild_tensor(
     array of ``size``, element (i…) at ``storage.values[storage_offset + Σ i_k·stride_k]``.
 
     Refuses (no allocation first) an offset, size or stride that reaches beyond the storage, a
-    tensor with more elements than its storage, gradient hooks and non-integer arguments."""
+    tensor with more elements than its storage, a size whose product (each size counted as at
+    least 1, so an empty axis cannot hide billions of rows) passes what
+    :data:`MAX_STORAGE_BYTES` holds, gradient hooks and non-integer arguments."""
     if not isinstance(storage, Storage):
         raise _Refused(f"tensor storage is {type(storage).__name__}, not a persistent storage")
-    if not isinstance(size, tuple) or not all(_is_int(s) and s >= 0 for s in size):
-        raise _Refused(f"tensor size {size!r} is not a tuple of non-negative ints")
+    if (
+        not isinstance(size, tuple)
+        or len(size) > MAX_TENSOR_DIMS
+        or not all(_is_int(s) and s >= 0 for s in size)
+    ):
+        raise _Refused(
+            f"tensor size {str(size)[:60]} is not a tuple of up to {MAX_TENSOR_DIMS} "
+            "non-negative ints"
+        )
     if (
         not isinstance(stride, tuple)
         or len(stride) != len(size)
@@ -182,11 +194,15 @@ def rebuild_tensor(
     if not isinstance(requires_grad, bool) or not hooks_empty or not metadata_empty:
         raise _Refused("tensor with gradient flag, hooks or metadata of an unexpected kind")
     numel = storage.values.size
-    count = 1
-    for s in size:
-        count *= s
+    count = math.prod(size)
     dtype = storage.values.dtype.newbyteorder("=")
-    if count == 0:
+    if count == 0:  # an empty axis bounds the elements, not the rows: sizes of 0 count as 1
+        cells = math.prod(max(s, 1) for s in size)
+        if cells > MAX_STORAGE_BYTES // storage.values.itemsize:
+            raise _Refused(
+                f"empty tensor of size {str(size)[:60]}: more than a storage of "
+                f"{MAX_STORAGE_BYTES} bytes holds were each size at least 1"
+            )
         return np.zeros(size, dtype=dtype)
     last = storage_offset + sum((s - 1) * st for s, st in zip(size, stride, strict=True))
     if count > numel or last >= numel:

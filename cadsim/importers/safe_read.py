@@ -114,9 +114,10 @@ def _refuse_constant(name: str):
     raise ValueError(f"non-finite number {name}")
 
 
-def read_json(path: Path):
-    """The parsed JSON file at ``path`` (limits of the module docstring)."""
-    text = _text(path)
+def read_json(path: Path, limit: int = MAX_BYTES):
+    """The parsed JSON file at ``path`` (limits of the module docstring; at most ``limit``
+    bytes)."""
+    text = _text(path, limit)
     if _json_depth(text) > MAX_DEPTH:
         raise ImportFormatError(path, f"nested deeper than {MAX_DEPTH} levels")
     try:
@@ -142,6 +143,10 @@ def read_yaml(path: Path, numpy_tags: bool = False):
         raise ImportFormatError(path, f"not safe YAML ({problem})") from None
     except RecursionError:
         raise ImportFormatError(path, f"nested deeper than {MAX_DEPTH} levels") from None
+    except ImportFormatError:
+        raise
+    except ValueError as exc:  # a value a constructor could not take: still name the file
+        raise ImportFormatError(path, f"not safe YAML ({str(exc).splitlines()[0][:80]})") from None
 
 
 def _check_yaml_events(events, path: Path) -> None:

@@ -23,14 +23,15 @@ Read (paths relative to the folder given; every one confined to it, :mod:`.safe_
   ``system_error_offset`` applied by the chosen convention (:data:`OFFSET_CONVENTIONS`; default:
   added to its translation, DAIR-V2X's ``calib_i2v.py``).
 
-Mapping: a cooperative sequence is an episode (its number), its frames in time order the
-slots; an object seen by both sides (both track ids given) has one object id, ``v<veh track>``,
-on both; one seen by one side ``v<track>`` or ``i<track>``; boxes become box-only detections in
+Mapping: a cooperative sequence is an episode (its number, :mod:`.episode_names`), its frames
+in time order the slots; an object seen by both sides (both track ids given) has one object
+id, ``v<veh track>``, on both; one seen by one side ``v<track>`` or ``i<track>``; boxes become
+box-only detections in
 each LiDAR's frame (:mod:`.sensor_frame`); the true relative pose is the calibration's; the
 vehicle's body is its NovAtel (GNSS/INS) unit, the roadside unit's its LiDAR; ``time`` is the
 vehicle's point-cloud time (s) counted from its sequence's first frame (the source's epoch time
-in ``meta.epoch_time_s``: a GNSS preset's walk then spans the sequence, not the years since
-1970) and ``meta.time_offset_s`` the vehicle's minus the roadside
+in ``meta.source_time_s``, :mod:`.record_time`: a GNSS preset's walk then spans the sequence,
+not the years since 1970) and ``meta.time_offset_s`` the vehicle's minus the roadside
 unit's. No localisation prior is stored (the data has no noisy pose): a preset draws one.
 """
 
@@ -39,7 +40,6 @@ from __future__ import annotations
 import hashlib
 import itertools
 from collections.abc import Iterable
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -49,6 +49,8 @@ from cadsim.importers import ImportFormatError
 from cadsim.importers.box_dataset import ImportResult, check_out, write_box_dataset
 from cadsim.importers.box_sequence import ImportedFrame, sequence_records
 from cadsim.importers.dair_side import read_boxes, side_view
+from cadsim.importers.episode_names import episode_numbers
+from cadsim.importers.record_time import TimeNote, relative_times
 from cadsim.importers.safe_read import confined, field, number, read_bytes, read_json, rigid
 
 SCENARIO_NAME = "v2x-seq-spd"
@@ -312,13 +314,6 @@ def _frame(
     return sequence, ImportedFrame(t_veh, tuple(views), list(objects.values()), meta)
 
 
-def _episode(sequence: str, index: int) -> int:
-    """The episode of a sequence id: the id itself when it is ASCII digits ('0010' → 10;
-    '²' or '١٠' are names like any other), else its index."""
-    plain = sequence.isascii() and sequence.isdigit() and len(sequence) <= 9
-    return int(sequence) if plain else index
-
-
 def _digest(root: Path, files: Iterable[Path]) -> str:
     """SHA-256 over the files the import read (relative name and SHA-256 of each), each read
     again within the reader's size limit — never the rest of the folder."""
@@ -378,12 +373,13 @@ def import_v2x_seq(
             coop_path, f"no cooperative frames of sequences {sorted(wanted or [])}"
         )
     sequential = any(len(frames) > 1 for frames in grouped.values())
-    records, used = [], set()
-    for index, sequence in enumerate(sorted(grouped)):
-        episode = _episode(sequence, index)
-        if episode in used:
-            raise ImportFormatError(coop_path, f"sequence {sequence!r}: episode {episode} twice")
-        used.add(episode)
+    records, clock = [], TimeNote()
+    try:
+        episodes = episode_numbers(grouped)
+    except ValueError as exc:
+        raise ImportFormatError(coop_path, f"vehicle_sequence: {exc}") from None
+    for sequence in sorted(grouped):
+        episode = episodes[sequence]
         frames = sorted(grouped[sequence], key=lambda f: f.time)
         for a, b in itertools.pairwise(frames):
             if a.time == b.time:
@@ -392,15 +388,16 @@ def import_v2x_seq(
                     f"frames {a.meta['vehicle_frame'][:20]!r} and {b.meta['vehicle_frame'][:20]!r} "
                     f"of sequence {sequence[:20]!r}: same pointcloud_timestamp",
                 )
-        start = frames[0].time  # times from the sequence's first frame (the epoch in meta)
-        frames = [
-            replace(f, time=f.time - start, meta=f.meta | {"epoch_time_s": f.time}) for f in frames
-        ]
+        frames = relative_times(
+            frames, reader.root / "vehicle-side" / "data_info.json", f"sequence {sequence[:20]!r}",
+            ordered=True, note=clock,
+        )  # fmt: skip
         records += sequence_records(episode, 0, episode, frames, sequential)
     source = SOURCE | {
         "folder": root.name,
         "sequences": {s: len(f) for s, f in sorted(grouped.items())},
         "offset_convention": offset_convention,
+        "time": clock.as_manifest(),
         "untracked_objects": sum(
             f.meta["untracked_objects"] for frames in grouped.values() for f in frames
         ),

@@ -13,13 +13,14 @@ Oracle instance masks with realistic filtering. For each ``target`` object in th
 Position: the ray through the mask's centroid pixel at the median *noisy* depth of the mask, in the
 camera frame (OpenCV, metres). That point lies on the visible surface, in front of the object's
 centre; with ``surface_to_center`` it is pushed along the ray by ``centre_offset_along`` (the mean
-depth of a box's visible surface in front of its centre, from the object's 3-D box: an oracle box
-size and heading, as a 3-D detector would estimate them). Features:
+depth of a box's visible surface in front of its centre) of the box the detector *estimated* —
+its reported size and heading, never the object's true ones. Features:
 ``cadsim.sensing.features``, whose attribute block (class, size) is what the view's detector
-reports: with ``attribute_rng`` given, the true class is confused with probability
-``class_confusion`` and the size carries relative noise ``size_noise``
-(``cadsim.sensing.attribute_noise``); without it, the simulator's truth. The ground-truth object
-id and class are kept beside the features, never in them.
+reports: with ``attribute_rng`` given, class, size and heading are measured from the view
+(``cadsim.sensing.attribute_noise``: the mask's silhouette and depth, completed from the reported
+class by how much of the object is seen, scatter and class confusion growing as the visible
+pixels fall); without it, the simulator's truth. The ground-truth object id and class are kept
+beside the features, never in them.
 """
 
 from __future__ import annotations
@@ -34,7 +35,7 @@ from cadsim import portable_math as pm
 from cadsim.camera import Camera
 from cadsim.config_tables import check_number, config_from_table
 from cadsim.render.view import RenderedView
-from cadsim.sensing.attribute_noise import perceived_attributes
+from cadsim.sensing.attribute_noise import FULL_FILL, Observation, measured_attributes
 from cadsim.sensing.box_projection import projected_box_areas
 from cadsim.sensing.detector_errors import clutter_boxes, error_stream, jittered, miss_probability
 from cadsim.sensing.features import FEATURE_DIM, object_features
@@ -46,9 +47,11 @@ class DetectionConfig:
     """The ``[detection]`` table of a scenario file (see the module docstring for each filter).
 
     class_confusion: probability that a view's detector reports another class of the object's
-    confusion group (per view; 0.0075 makes the two views disagree on ≈ 1.5 % of covisible
-    objects, the rate of the paper group's CAD data). size_noise: relative (log-normal) error of
-    each reported size dimension. miss_near, miss_far, miss_occluded, false_positives,
+    confusion group, for an object of 32² visible pixels (more for fewer pixels; 0.0075 makes
+    two views disagree on ≈ 1.5 % of such covisible objects, the rate of the paper group's CAD
+    data). size_noise: relative (log-normal) error of each reported size dimension at 32² pixels
+    and above, growing below (:mod:`cadsim.sensing.attribute_noise`). miss_near, miss_far,
+    miss_occluded, false_positives,
     centre_jitter: the detector errors of :mod:`cadsim.sensing.detector_errors` (all 0: off)."""
 
     min_pixels: int = 40
@@ -137,15 +140,17 @@ class Detections:
         )
 
 
-def centre_offset_along(obj: WorldObject, ray_world: np.ndarray) -> float:
-    """How far (metres) the centre of the object's 3-D box lies behind its visible surface along a
-    unit viewing direction: the area-weighted mean over the visible faces, which for a box is
+def centre_offset_along(size: Sequence[float], yaw: float, ray_world: np.ndarray) -> float:
+    """How far (metres) the centre of an upright box of ``size`` (length, width, height, metres)
+    and heading ``yaw`` (world radians) lies behind its visible surface along a unit viewing
+    direction ``ray_world``: the area-weighted mean over the visible faces, which for a box is
     volume / (2 · area projected along the ray), i.e. L·W·H / (2 (W·H|r_x| + L·H|r_y| + L·W|r_z|))
-    with r in the object's axes (L/2 seen end-on, W/2 seen side-on)."""
-    r = np.abs(
-        pm.matmul(ray_world, obj.pose()[:3, :3])
-    )  # |components| in the object's x, y, z axes
-    L, W, Hh = (max(float(v), 1e-6) for v in obj.size)
+    with r in the box's axes (L/2 seen end-on, W/2 seen side-on). The detector passes its own
+    size and heading estimates, never the object's true ones."""
+    c, s = np.cos(yaw), np.sin(yaw)
+    r0, r1, r2 = (float(v) for v in ray_world)
+    r = np.abs([c * r0 + s * r1, -s * r0 + c * r1, r2])  # |components| in the box's axes
+    L, W, Hh = (max(float(v), 1e-6) for v in size)
     projected = W * Hh * r[0] + L * Hh * r[1] + L * W * r[2]
     return 0.5 * L * W * Hh / projected
 
@@ -172,6 +177,7 @@ class DetectionPlan:
     surface_to_center: bool
     shape: tuple[int, int]
     reported_classes: list[str] = field(default_factory=list)
+    estimates: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
 
     def __len__(self) -> int:
         return len(self.objects)
@@ -192,12 +198,13 @@ class DetectionPlan:
             return Detections.empty()
         R = self.camera.rotation_cam_to_world()
         positions = []
-        for i, obj in enumerate(self.objects):
+        for i in range(len(self.objects)):
             z = float(np.median(values[self.starts[i] : self.starts[i + 1]]))
             p = self.camera.back_project(self.centres[i : i + 1], np.array([z]))[0]
             if self.surface_to_center:
                 ray = p / np.sqrt(np.sum(p * p))  # not BLAS (see features._l2)
-                p = p + centre_offset_along(obj, pm.matmul(R, ray)) * ray
+                size, yaw = self.estimates[i, :3], float(self.estimates[i, 3])
+                p = p + centre_offset_along(size, yaw, pm.matmul(R, ray)) * ray
             positions.append(p)
         return Detections(
             positions=np.array(positions, dtype=float),
@@ -246,23 +253,19 @@ def plan_detections(
         )
     counts = np.bincount(inst + 1, minlength=n + 1)  # [0] = background
     candidates = [i for i in range(n) if objects[i].target and counts[i + 1] >= config.min_pixels]
-    if attribute_rng is None or not candidates:
-        seen_cls, seen_size = [o.cls for o in objects], [o.size for o in objects]
-    else:
-        seen_cls, seen_size = perceived_attributes(
-            objects, config.class_confusion, config.size_noise, attribute_rng
-        )
     # Pixels of every object, grouped: a stable sort by label, split at the cumulative counts.
     order = np.argsort(inst, kind="stable")
     starts = np.concatenate([[0], np.cumsum(counts)])
     boxes_px = ndimage.find_objects(instance + 1, max_label=n)
     clean = clean_depth.ravel()
     m = config.border_margin_px
-    kept, masks, centres, boxes, features, depths, visible = [], [], [], [], [], [], []
+    R = camera.rotation_cam_to_world()
+    kept_index, masks, centres, boxes, depths, visible, complete, azimuths = ([] for _ in range(8))
     for i in candidates:
         obj = objects[i]
         pix = order[starts[i + 1] : starts[i + 2]]
-        if np.median(clean[pix]) > config.max_depth_m:
+        depth = float(np.median(clean[pix]))
+        if depth > config.max_depth_m:
             continue
         rows, cols = boxes_px[i]
         x0, y0, x1, y1 = cols.start, rows.start, cols.stop, rows.stop
@@ -273,24 +276,50 @@ def plan_detections(
         if in_image > 0 and len(pix) / in_image < config.min_visible_fraction:
             continue
         v, u = np.divmod(pix, w)
+        centre = (u.mean() + 0.5, v.mean() + 0.5)
+        sight = pm.matmul(R, camera.back_project(np.array([centre]), np.array([depth]))[0])
+        kept_index.append(i)
+        masks.append(pix)
+        centres.append(centre)
+        boxes.append((x0, y0, x1, y1))
+        depths.append(depth)
+        visible.append(len(pix) / in_image if in_image > 0 else 1.0)
+        complete.append(len(pix) / (full_area * FULL_FILL) if full_area > 0 else 1.0)
+        azimuths.append(pm.arctan2(sight[1], sight[0]))
+    kept = [objects[i] for i in kept_index]
+    if attribute_rng is None:
+        seen_cls = [o.cls for o in kept]
+        seen_size = [tuple(float(x) for x in o.size) for o in kept]
+        seen_yaw = [float(o.yaw) for o in kept]
+    else:
+        extent = np.array([(b[2] - b[0], b[3] - b[1]) for b in boxes], dtype=float)
+        observed = Observation(
+            np.array(kept_index, dtype=np.int64), np.array([len(p) for p in masks]),
+            extent.reshape(-1, 2), np.array(depths), np.array(complete), np.array(azimuths),
+            (camera.fx, camera.fx),
+        )  # fmt: skip
+        measured = measured_attributes(
+            objects, observed, config.class_confusion, config.size_noise, attribute_rng
+        )
+        seen_cls = measured.classes
+        seen_size = [tuple(float(x) for x in s) for s in measured.sizes]
+        seen_yaw = [float(y) for y in measured.yaws]
+    features = []
+    for k, obj in enumerate(kept):
         if known_features is not None and obj.id in known_features:
             features.append(known_features[obj.id])
-        else:
-            mask_crop = np.zeros((y1 - y0, x1 - x0), dtype=np.uint8)
-            mask_crop[v - y0, u - x0] = 255
-            box = (x0, y0, x1, y1)
-            features.append(object_features(color(), box, mask_crop, seen_cls[i], seen_size[i]))
-        kept.append(obj)
-        masks.append(pix)
-        centres.append((u.mean() + 0.5, v.mean() + 0.5))
-        boxes.append((x0, y0, x1, y1))
-        depths.append(float(np.median(clean[pix])))
-        visible.append(len(pix) / in_image if in_image > 0 else 1.0)
-    reported = {objects[i].id: seen_cls[i] for i in candidates}
+            continue
+        x0, y0, x1, y1 = boxes[k]
+        v, u = np.divmod(masks[k], w)
+        mask_crop = np.zeros((y1 - y0, x1 - x0), dtype=np.uint8)
+        mask_crop[v - y0, u - x0] = 255
+        features.append(object_features(color(), boxes[k], mask_crop, seen_cls[k], seen_size[k]))
+    estimates = [(*s, y) for s, y in zip(seen_size, seen_yaw, strict=True)]
+    reported = list(seen_cls)
     if config.has_errors and attribute_rng is not None:
-        kept, masks, centres, boxes, features = _with_detector_errors(
-            (kept, masks, centres, boxes, features), depths, visible, clean_depth, camera,
-            config, color, error_stream(attribute_rng), known_features,
+        kept, masks, centres, boxes, features, estimates, reported = _with_detector_errors(
+            (kept, masks, centres, boxes, features, estimates, reported), depths, visible,
+            clean_depth, camera, config, color, error_stream(attribute_rng), known_features,
         )  # fmt: skip
     empty = Detections.empty()  # its shapes, for a view without detections
     return DetectionPlan(
@@ -303,27 +332,29 @@ def plan_detections(
         camera=camera,
         surface_to_center=config.surface_to_center,
         shape=(h, w),
-        reported_classes=[reported.get(o.id, o.cls) for o in kept],  # clutter: its drawn class
+        reported_classes=reported,  # clutter: its drawn class
+        estimates=np.array(estimates, dtype=float).reshape(-1, 4),
     )
 
 
 def _with_detector_errors(
-    found: tuple[list, list, list, list, list], depths: list, visible: list,
+    found: tuple[list, ...], depths: list, visible: list,
     clean_depth: np.ndarray, camera: Camera, config: DetectionConfig,
     color: Callable[[], np.ndarray], rng: np.random.Generator,
     known_features: Mapping[str, np.ndarray] | None,
-) -> tuple[list, list, list, list, list]:  # fmt: skip
-    """(objects, masks, centres, boxes, features) after the detector's misses, centre jitter
-    and false positives (:mod:`cadsim.sensing.detector_errors`, in that draw order)."""
-    kept, masks, centres, boxes, features = found
+) -> tuple[list, ...]:  # fmt: skip
+    """(objects, masks, centres, boxes, features, estimates, reported classes) after the
+    detector's misses, centre jitter and false positives (:mod:`cadsim.sensing.detector_errors`,
+    in that draw order); a clutter box's estimate is its reported size and heading 0."""
+    kept, masks, centres, boxes, features, estimates, reported = found
     p_miss = miss_probability(
         depths, visible, config.miss_near, config.miss_far, config.miss_occluded,
         config.max_depth_m,
     )  # fmt: skip
     stay = rng.random(len(kept)) >= p_miss
     pick = [k for k in range(len(kept)) if stay[k]]
-    kept, masks, boxes, features = (
-        [seq[k] for k in pick] for seq in (kept, masks, boxes, features)
+    kept, masks, boxes, features, estimates, reported = (
+        [seq[k] for k in pick] for seq in (kept, masks, boxes, features, estimates, reported)
     )
     moved = jittered(
         np.asarray(centres, dtype=float).reshape(-1, 2)[pick], boxes, config.centre_jitter, rng
@@ -346,7 +377,9 @@ def _with_detector_errors(
         masks.append(clutter.pixels)
         centres.append((u.mean() + 0.5, v.mean() + 0.5))
         boxes.append(clutter.box)
-    return kept, masks, centres, boxes, features
+        estimates.append((*clutter.size, 0.0))
+        reported.append(clutter.cls)
+    return kept, masks, centres, boxes, features, estimates, reported
 
 
 def detect(

@@ -131,6 +131,30 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="the matcher every other is compared with in paired_differences.csv (NAME − each "
         "other, with its 95 %% interval over episodes; default maximin); one of --matchers",
     )
+    parser.add_argument(
+        "--pose-metrics",
+        choices=("cadsim", "v2x-reg"),
+        default="cadsim",
+        help="cadsim (default: Table I's pose columns, success@(1 m, 2°) and (2 m, 5°), median "
+        "RTE/RRE) or v2x-reg: also V2X-Reg++'s registration table (registration.csv/.md): "
+        "success@1/2/3 m (RTE < λ m and RRE < λ°, over all frames, a frame without a pose a "
+        "failure), mRTE/mRRE over the frames successful at λ, seconds per frame",
+    )
+    parser.add_argument(
+        "--frames",
+        metavar="JSON",
+        default=None,
+        help="with --pose-metrics v2x-reg: only the frame pairs of a V2X-Reg++ frame list (their "
+        "JSON: cooperative data_info entries, e.g. data_info_top3000.json)",
+    )
+    parser.add_argument(
+        "--top-k",
+        type=int_in(1, 1000),
+        default=None,
+        metavar="K",
+        help="with --pose-metrics v2x-reg: the v2x_reg matcher keeps each view's top K boxes as "
+        "V2X-Reg++ selects them (bus, truck, car first, then by volume; within 120 m)",
+    )
     add_localisation_argument(parser)
     add_runner_arguments(parser)
 
@@ -182,6 +206,13 @@ def _preset_spec(text: str) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    registration = getattr(args, "pose_metrics", "cadsim") == "v2x-reg"
+    if not registration and (args.frames is not None or args.top_k is not None):
+        raise ValueError("--frames and --top-k: expected with --pose-metrics v2x-reg")
+    if args.frames is not None:
+        from eval.core.registration_metrics import read_frame_list
+
+        read_frame_list(args.frames)  # refused before anything runs
     check_outputs(args.out, args.cache)
     paper = args.protocol == "paper"
     no_val = (args.no_calibration or paper) and not args.tune
@@ -197,6 +228,13 @@ def run(args: argparse.Namespace) -> int:
     if args.model and args.matchers.strip() == "all":
         matchers += [MatcherSpec(n) for n in LEARNED_PLAIN]
     matchers = with_model(matchers, args.model, [e.test_dir for e in entries])
+    if args.top_k is not None:
+        matchers = [
+            MatcherSpec.of(m.name, **dict(m.options), top_k=args.top_k)
+            if m.name == "v2x_reg"
+            else m
+            for m in matchers
+        ]
     reference = reference_matcher(args.reference, matchers)
     with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(
@@ -220,4 +258,9 @@ def run(args: argparse.Namespace) -> int:
 
     render_all(args.out)
     print(markdown)
+    if registration:
+        from eval.report.registration_table import write_registration
+
+        tests = {e.label: e.test_dir for e in entries}
+        print(write_registration(args.out, tests, args.frames))
     return 0

@@ -60,6 +60,11 @@ def evaluate_entry(
         ap_rows=ap_rows,
         pr=pr,
         qualitative=qualitative_entry(entry, test_runs, taus),
+        val_per_pair=(
+            score_runs(val_runs, taus, dataset=entry.label, split="validation")
+            if val_runs
+            else None
+        ),
     )
 
 

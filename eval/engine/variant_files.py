@@ -30,6 +30,9 @@ class EntryResult:
     ap_rows: list[dict]
     pr: pd.DataFrame
     qualitative: dict = field(default_factory=dict)
+    val_per_pair: pd.DataFrame | None = None
+    """The validation runs scored at the same τ (``split`` "validation"): what a choice made on
+    validation (the headline's difficulty level) reads; never a test number."""
 
 
 THRESHOLD_COLUMNS = (
@@ -77,6 +80,12 @@ def write_variant(
         pd.concat([r.per_pair for r in results], ignore_index=True),
         variant_path(out_dir, "metrics_per_pair", variant, ".csv"),
     )
+    validation = [r.val_per_pair for r in results if r.val_per_pair is not None]
+    if validation:
+        write_csv(
+            pd.concat(validation, ignore_index=True),
+            variant_path(out_dir, "metrics_per_pair_validation", variant, ".csv"),
+        )
     write_csv(
         pd.DataFrame([a for r in results for a in r.ap_rows]),
         variant_path(out_dir, "average_precision", variant, ".csv"),

@@ -106,6 +106,12 @@ def equal_cues(state: RunState) -> None:
         state.entries, state.matchers, state.seeds, state.runner, state.out,
         tune=state.args.tune, protocol="equal_cues",
     )  # fmt: skip
+    if all(e.val_dir is not None for e in state.entries) and state.entries:
+        from eval.engine.difficulty_levels import write_table1_levels
+
+        headline = write_table1_levels(state.out, state.entries)
+        state.record["difficulty_levels"] = headline
+        log.info("[equal cues] headline level (chosen on validation): %s", headline["level"])
 
 
 def paper_protocol(state: RunState) -> None:

@@ -13,9 +13,10 @@ Angles are a function of the distances (three side lengths fix a triangle), so a
 reads distances has every geometric fact one that reads angles has, and more: the scene's scale.
 The information each matcher gets is therefore {geometry: metric or scale-free, appearance}.
 As published, the eight differ (:data:`PUBLISHED_CUES`: SM and RRWM read no appearance, the
-hypergraph methods no appearance and no scale, maximin no scale, MOS everything). The equal-cue
-protocol (:data:`EQUAL_CUE_OPTIONS`) hands every one of them metric geometry and appearance, each
-in its family's natural form, with the same tuning budget (:data:`EQUAL_CUE_SPACES`, 8
+hypergraph methods no appearance and no scale, maximin no scale, MOS everything — but appearance
+only as an additive first-order share). The equal-cue protocol (:data:`EQUAL_CUE_OPTIONS`) hands
+every one of them metric geometry and appearance, each in its family's natural form (MOS, too:
+appearance and the metric kernel multiplied into its M and T, :mod:`matchers.mos`), with the same tuning budget (:data:`EQUAL_CUE_SPACES`, 8
 configurations each, the kernel widths relative to the scene) and τ on validation.
 """
 
@@ -51,7 +52,7 @@ EQUAL_CUE_OPTIONS: Mapping[str, Mapping[str, object]] = {
     "hgm": _HYPERGRAPH,
     "bcagm": _HYPERGRAPH,
     "rrwhm": _HYPERGRAPH,
-    "mos": {},
+    "mos": _HYPERGRAPH,
     "maximin": {"distance_scale": DEFAULT_DISTANCE_SCALE},
 }
 """Options that hand each matcher the equal cue set (metric geometry + appearance)."""

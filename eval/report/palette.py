@@ -15,8 +15,9 @@ TOL_MUTED = ("#CC6677", "#332288", "#DDCC77", "#117733", "#88CCEE", "#882255", "
              "#999933", "#AA4499")  # fmt: skip
 TOL_LIGHT = ("#77AADD", "#EE8866", "#EEDD88", "#FFAABB", "#99DDFF", "#44BB99", "#BBCC33",
              "#AAAA00", "#DDDDDD")  # fmt: skip
+TOL_DARK = ("#222255", "#225555", "#225522", "#666633", "#663333", "#555555")
 MARKERS: tuple = ("o", "s", "^", "v", "D", "P", "X", "*", "<", ">", "h", "p", "d", "H", "8",
-           "1", "2", "3", "4", "+", "x", "|", "_", (5, 1, 0), (6, 2, 0))  # fmt: skip
+           "1", "2", "3", "4", "+", "x", "|", "_", (5, 1, 0), (6, 2, 0), (7, 1, 0))  # fmt: skip
 
 
 class Style(NamedTuple):
@@ -31,12 +32,13 @@ BUILTIN: dict[str, Style] = {
         ("maximin", "sm", "rrwm", "tm", "hgm", "bcagm", "rrwhm", "mos", "appearance",
          "consistency", "pose", "pose_refine", "pose_appearance", "maximin_pose", "none",
          "cbm", "cbm_pose", "freealign", "freealign_pose", "optimal_transport",
-         "optimal_transport_pose", "learned", "learned_pose", "maximin_learned", "rrwm_learned"),
+         "optimal_transport_pose", "learned", "learned_pose", "maximin_learned", "rrwm_learned",
+         "v2x_reg"),
         (OKABE_ITO[7], OKABE_ITO[0], OKABE_ITO[1], OKABE_ITO[2], OKABE_ITO[3], OKABE_ITO[4],
          OKABE_ITO[5], OKABE_ITO[6], TOL_MUTED[0], TOL_MUTED[1], TOL_MUTED[2], TOL_MUTED[3],
          TOL_MUTED[4], TOL_MUTED[5], "#BBBBBB", *TOL_LIGHT[:6], TOL_MUTED[6], TOL_MUTED[7],
-         TOL_LIGHT[6], TOL_MUTED[8]),
-        MARKERS[:25],
+         TOL_LIGHT[6], TOL_MUTED[8], TOL_LIGHT[7]),
+        MARKERS[:26],
         strict=True,
     )
 }  # fmt: skip
@@ -45,9 +47,9 @@ BUILTIN: dict[str, Style] = {
 def styles(matchers: list[str]) -> dict[str, Style]:
     """The style of each of `matchers`: built-ins their own, others the unused ones in order."""
     used = {s.color for s in BUILTIN.values()}
-    spare_colors = [c for c in (*TOL_MUTED, *TOL_LIGHT, *OKABE_ITO) if c not in used] or list(
-        TOL_MUTED
-    )
+    spare_colors = [
+        c for c in (*TOL_MUTED, *TOL_LIGHT, *OKABE_ITO, *TOL_DARK) if c not in used
+    ] or list(TOL_MUTED)
     out, k = {}, 0
     for name in matchers:
         if name in BUILTIN:

@@ -29,6 +29,7 @@ COLUMNS = (
     "appearance_auc",
     "image_auc",
     "same_class_auc",
+    "size_only_auc",
     "position_error_median_m",
     "lidar_false_positive_sources",
     "continuity",
@@ -41,6 +42,7 @@ TITLES = {
     "appearance_auc": "appearance AUC",
     "image_auc": "image-only AUC",
     "same_class_auc": "AUC vs same-class false pairs",
+    "size_only_auc": "size-only AUC",
     "position_error_median_m": "position error (m, median)",
     "lidar_false_positive_sources": "LiDAR false positives by source (% of boxes)",
     "continuity": "own-tracker continuity by speed (% of links)",
@@ -49,14 +51,17 @@ TITLES = {
 
 def regime_of(path: str | Path) -> dict:
     """The regime fields of the dataset at `path` (``dataset_regime``), verified first, with
-    ``lidar_false_positive_sources`` (``lidar_regime.sources_text`` of the LiDAR detector card;
+    ``size_only_auc`` (``cadsim.exporters.size_separability``: how well the reported sizes alone
+    tell true from false pairs), ``lidar_false_positive_sources`` (``lidar_regime.sources_text`` of the LiDAR detector card;
     None for a dataset without LiDAR points)."""
     from cadsim.dataset import Dataset, lidar_regime, regime
+    from cadsim.exporters.size_separability import size_only_auc
 
     dataset = Dataset(path, verify=True)
     card = lidar_regime.lidar_detector_card(dataset)
     sources = None if card is None else lidar_regime.sources_text(card["false_positive_sources"])
     return regime.dataset_regime(dataset) | {
+        "size_only_auc": size_only_auc(dataset),
         "lidar_false_positive_sources": sources,
         "continuity": continuity_text(path) if len(dataset) > dataset.sequences else None,
     }

@@ -19,9 +19,12 @@ budget, τ and parameters on the validation split, oracle and prior rows — on 
 paired sensor comparison (:mod:`eval.studies.v2x_sensors`) takes: the camera V2X table's runs
 where its splits hold these very camera records (checked record by record), else an evaluation
 of the two-sensor split as camera. Files: ``table_v2x_lidar.{md,csv}``,
-``table_v2x_lidar_intervals.csv``, ``v2x_lidar/<preset>/``; ``table_v2x_sensors.csv``; only
-when the camera side is evaluated here, under ``v2x_lidar/``: ``table_camera.{md,csv}``,
-``table_camera_intervals.csv``, ``camera/<preset>/``.
+``table_v2x_lidar_intervals.csv``, ``v2x_lidar/<preset>/``; ``table_v2x_sensors.csv``, from the
+two sensors' detections in the region both cover (``sensor="lidar-common"`` and
+``"camera-common"``; under ``v2x_lidar/``: ``table_lidar_common.*``, ``lidar_common/<preset>/``,
+and the camera's likewise unless no camera detection lies outside that region, when the camera
+runs serve); only when the camera side is evaluated here, under ``v2x_lidar/``:
+``table_camera.{md,csv}``, ``table_camera_intervals.csv``, ``camera/<preset>/``.
 """
 
 from __future__ import annotations
@@ -40,6 +43,7 @@ NAME = "v2x_lidar"
 LABEL = "CAD-V2X LiDAR"
 CAMERA_LABEL = "CAD-V2X camera (two-sensor split)"
 CAMERA_NAME = "camera"  # the camera side's table and folder under ``v2x_lidar/``
+LIDAR_COMMON, CAMERA_COMMON = "lidar_common", "camera_common"  # both sensors' shared region
 SCENARIO = "scenarios/cad-v2x-both.toml"
 
 
@@ -81,7 +85,12 @@ def evaluate_lidar(
     (:func:`eval.studies.v2x_sensors.same_camera_frames`), that table's runs are the camera
     side and nothing is evaluated twice."""
     from eval.studies.v2x_boxes import box_matchers
-    from eval.studies.v2x_sensors import same_camera_frames, write_sensor_table
+    from eval.studies.v2x_sensors import (
+        camera_fully_covered,
+        coverage_counts,
+        same_camera_frames,
+        write_sensor_table,
+    )
     from eval.studies.v2x_table import SUBDIR, evaluate_v2x
 
     out_dir = Path(out_dir)
@@ -105,7 +114,21 @@ def evaluate_lidar(
         )  # fmt: skip
     else:
         log.info("[v2x lidar] camera side: the camera table's runs (the same camera records)")
-    write_sensor_table(out_dir / NAME, camera_dir, out_dir)
+    # The sensor comparison: both sensors on the objects both cover (eval.studies.v2x_sensors).
+    common = {}
+    for sensor, folder in (("lidar-common", LIDAR_COMMON), ("camera-common", CAMERA_COMMON)):
+        if sensor == "camera-common" and all(map(camera_fully_covered, (test_dir, val_dir))):
+            common[sensor] = camera_dir  # no camera detection lies outside: the same runs
+            continue
+        log.info("[v2x lidar] %s: the detections both sensors cover (%s)", LABEL, sensor)
+        evaluate_v2x(
+            test_dir, val_dir, f"{LABEL} ({sensor})", chosen, seeds, runner, out_dir / NAME,
+            tune=tune, name=folder, sensor=sensor,
+        )  # fmt: skip
+        common[sensor] = out_dir / NAME / folder
+    write_sensor_table(
+        common["lidar-common"], common["camera-common"], out_dir, coverage_counts(test_dir)
+    )
     camera_side = str(camera_dir.relative_to(out_dir))
     return table, {"matchers": [m.name for m in chosen], "camera_side": camera_side}
 
@@ -176,7 +199,9 @@ def readme_part(results: Path, rel: str) -> list[str]:
         "",
         *bullets(goal_line(results) + [line for line in (power_line(results, NAME),) if line]),
         "",
-        "LiDAR against camera on the same frames, per preset and matcher family (the matcher "
+        "LiDAR against camera on the same frames and the same region — the detections of each "
+        "sensor inside the camera's field of view and range, decided by geometry, false "
+        "positives included — per preset and matcher family (the matcher "
         "chosen on validation, the same on both sensors): mean per-frame-pair difference of F1 "
         "with its 95 % interval over episodes; a sensor favours the family only where the "
         "difference stays beyond 0 after Holm's adjustment over every comparison of "

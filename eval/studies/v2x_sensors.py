@@ -1,7 +1,13 @@
-"""Camera against LiDAR on the same frames (``results/table_v2x_sensors.csv``): per localisation
-preset and matcher, the difference LiDAR − camera of the test F1 on each frame pair of the
-two-sensor split (``scenarios/cad-v2x-both.toml``: every record holds the camera detections and
-the LiDAR boxes of one frame; :mod:`eval.studies.v2x_lidar` evaluates it as each sensor).
+"""Camera against LiDAR on the same frames and the same objects (``results/table_v2x_sensors.csv``):
+per localisation preset and matcher, the difference LiDAR − camera of the test F1 on each frame
+pair of the two-sensor split (``scenarios/cad-v2x-both.toml``: every record holds the camera
+detections and the LiDAR boxes of one frame; :mod:`eval.studies.v2x_lidar` evaluates it as each
+sensor), each sensor's detections restricted to the region both cover — the camera's frustum up
+to its detector's range, within the LiDAR's range — decided from each detection's reported centre
+alone (``sensor="lidar-common"`` / ``"camera-common"``, :mod:`cadsim.sensing.lidar.camera_coverage`;
+false positives kept or dropped by the same rule, never by ids). So a difference is the sensors',
+not their coverage's; the LiDAR's boxes outside that region are counted apart
+(:func:`coverage_counts`: the ``*_per_view`` columns).
 
 Protocol. For each (preset, matcher) evaluated on both sensors: F1 per frame pair averaged over
 the runs (seeds), d = F1(LiDAR) − F1(camera) per frame pair (a difference of fractions), its
@@ -55,7 +61,14 @@ COLUMNS = (
     "p_value",
     "p_holm",
     "verdict",
+    "objects",
+    "camera_per_view",
+    "lidar_per_view",
+    "lidar_extra_per_view",
+    "lidar_extra_false_per_view",
 )
+COVERED = "in both sensors' coverage (camera frustum and range)"
+"""The ``objects`` column: which detections the comparison is made on."""
 
 
 def _pair_means(per_pair: pd.DataFrame) -> pd.DataFrame:
@@ -73,11 +86,13 @@ def sensor_differences(
     camera: pd.DataFrame,
     validation: Mapping[str, Mapping[str, float]] | None = None,
     level: float = LEVEL,
+    coverage: Mapping[str, float] | None = None,
 ) -> pd.DataFrame:
     """:data:`COLUMNS` rows from the per-pair metrics of the same split read as LiDAR and as
     camera (``metrics_per_pair.csv`` of :func:`eval.studies.v2x_table.evaluate_v2x`, with a
     ``preset`` column); ``validation``: {preset: {matcher: validation F1 averaged over the two
-    sensors}} to mark the ``chosen`` rows (module docstring). ValueError when a frame pair's
+    sensors}} to mark the ``chosen`` rows (module docstring); ``coverage``: the split's
+    :func:`coverage_counts` (the last columns; absent: empty). ValueError when a frame pair's
     episode or simulation seed differs between the two: they are not the same frames."""
     from eval.core.abstention import cannot_run
     from eval.studies.v2x_table import reads_prior
@@ -108,10 +123,12 @@ def sensor_differences(
             | {"diff": diff, "ci_low": low, "ci_high": high, "clusters": clusters}
             | {"pairs": len(group), "p_value": t_p_value(d, episodes)}
         )
-    table = pd.DataFrame(rows, columns=[c for c in COLUMNS if c not in ("chosen", "p_holm", "verdict")])  # fmt: skip
+    table = pd.DataFrame(rows, columns=COLUMNS[: COLUMNS.index("p_value") + 1])
     table["p_holm"] = holm(table["p_value"].to_numpy()) if len(table) else []
     table["verdict"] = [_verdict(r) for r in table.itertuples(index=False)]
     table["chosen"] = _chosen(table, validation or {})
+    for key, value in (coverage or {}).items():
+        table[key] = value
     return table.reindex(columns=list(COLUMNS))
 
 
@@ -171,11 +188,50 @@ def same_camera_frames(camera_dir: str | Path, both_dir: str | Path) -> bool:
     return True
 
 
+def camera_fully_covered(dataset_dir: str | Path) -> bool:
+    """Whether no camera detection of two-sensor dataset ``dataset_dir`` lies outside the region
+    both sensors cover (then its camera runs are its ``"camera-common"`` runs)."""
+    from cadsim.dataset import Dataset
+
+    whole, common = Dataset(dataset_dir), Dataset(dataset_dir, sensor="camera-common")
+    return all(
+        len(a.view1) == len(b.view1) and len(a.view2) == len(b.view2)
+        for a, b in zip(whole, common, strict=True)
+    )
+
+
+def coverage_counts(dataset_dir: str | Path) -> dict[str, float]:
+    """Per view of two-sensor dataset ``dataset_dir``, on average: the camera's and the LiDAR's
+    detections in the region both cover, the LiDAR's boxes outside it and how many of those are
+    false positives (no object's id) — the ``objects`` … ``lidar_extra_false_per_view`` columns."""
+    from cadsim.dataset import Dataset
+
+    def per_view(sensor: str, false_only: bool = False) -> float:
+        views = [v for p in Dataset(dataset_dir, sensor=sensor) for v in (p.view1, p.view2)]
+        count = [sum(i.startswith("clutter") for i in v.object_ids) if false_only else len(v) for v in views]  # fmt: skip
+        return float(np.mean(count)) if count else 0.0
+
+    lidar = per_view("lidar-common")
+    return {
+        "objects": COVERED,
+        "camera_per_view": round(per_view("camera-common"), 4),
+        "lidar_per_view": round(lidar, 4),
+        "lidar_extra_per_view": round(per_view("lidar") - lidar, 4),
+        "lidar_extra_false_per_view": round(
+            per_view("lidar", True) - per_view("lidar-common", True), 4
+        ),
+    }
+
+
 def write_sensor_table(
-    lidar_dir: str | Path, camera_dir: str | Path, out_dir: str | Path
+    lidar_dir: str | Path,
+    camera_dir: str | Path,
+    out_dir: str | Path,
+    coverage: Mapping[str, float] | None = None,
 ) -> pd.DataFrame:
     """``out_dir/table_v2x_sensors.csv`` from the LiDAR and camera evaluation folders of the same
-    split (each holding ``metrics_per_pair.csv`` and ``validation_f1.csv``); returns the table."""
+    split (each holding ``metrics_per_pair.csv`` and ``validation_f1.csv``) and its
+    :func:`coverage_counts`; returns the table."""
     from eval.engine.validation_choice import recorded_validation
 
     lidar_dir, camera_dir = Path(lidar_dir), Path(camera_dir)
@@ -184,13 +240,25 @@ def write_sensor_table(
         recorded_validation(lidar_dir.parent, lidar_dir.name),
         recorded_validation(camera_dir.parent, camera_dir.name),
     )
-    table = sensor_differences(read(lidar_dir), read(camera_dir), validation)
+    table = sensor_differences(read(lidar_dir), read(camera_dir), validation, coverage=coverage)
     write_csv(table.round(6), Path(out_dir) / f"table_{NAME}.csv")
     return table
 
 
 def _pp(value: float) -> str:
     return f"{100 * value:+.1f}"
+
+
+def _region(row) -> str:
+    """ ", same region (…)" for a table with coverage columns, else ""."""
+    extra = getattr(row, "lidar_extra_per_view", None)
+    if extra is None or not np.isfinite(extra):
+        return ""
+    return (
+        f", same region (camera {row.camera_per_view:.1f} and LiDAR {row.lidar_per_view:.1f} "
+        f"detections per view; the LiDAR's {extra:.1f} others, "
+        f"{row.lidar_extra_false_per_view:.1f} of them false positives, left out)"
+    )
 
 
 def sensor_lines(results: Path) -> list[str]:
@@ -213,7 +281,7 @@ def sensor_lines(results: Path) -> list[str]:
         )
         out.append(
             f"`{row.preset}`, {row.family} (`{row.matcher}`, chosen on validation): F1 on "
-            f"LiDAR boxes − on camera detections, same frames, {_pp(row.diff)} {interval} "
+            f"LiDAR boxes − on camera detections, same frames{_region(row)}, {_pp(row.diff)} {interval} "
             f"points over {int(row.clusters)} episodes (LiDAR {100 * row.lidar_f1:.1f}, camera "
             f"{100 * row.camera_f1:.1f}; Holm-adjusted p {row.p_holm:.3f}) — {row.verdict}"
         )
@@ -223,6 +291,8 @@ def sensor_lines(results: Path) -> list[str]:
 __all__ = [
     "COLUMNS",
     "NAME",
+    "camera_fully_covered",
+    "coverage_counts",
     "mean_validation",
     "sensor_differences",
     "sensor_lines",

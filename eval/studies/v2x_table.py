@@ -40,10 +40,13 @@ import pandas as pd
 from eval.core.abstention import cannot_run
 from eval.core.pose_metrics import COLUMNS as POSE_COLUMNS
 from eval.core.pose_metrics import SECONDARY, success_flags, summarise_pose
+from eval.core.registration_metrics import COLUMNS as REG_COLUMNS
+from eval.core.registration_metrics import summarise_registration
 from eval.core.result_files import write_csv, write_text
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
 from eval.engine.comparison import INTERVAL_COLUMNS, best_against_runner_up
+from eval.engine.difficulty_levels import write_split_levels
 from eval.engine.episode_interval import column_interval
 from eval.engine.protocol_run import evaluate
 from eval.engine.splits import open_entry
@@ -82,6 +85,7 @@ COLUMNS = (
     *POSE_COLUMNS[:2],
     POSE_COLUMNS[4],
     SECONDARY,
+    *REG_COLUMNS[:3],  # V2X-Reg++'s success@1/2/3 m (eval.core.registration_metrics)
     "ms_per_pair",
 )
 
@@ -148,6 +152,7 @@ def evaluate_v2x(
     write_csv(val_table.round(6), base / "validation_f1.csv")
     intervals = best_against_runner_up(per_pair, validation)
     write_csv(intervals.round(6), out_dir / f"table_{name}_intervals.csv")
+    write_split_levels(out_dir, f"table_{name}", per_pair, test_dir, val_dir, ("preset",))
     write_text(out_dir / f"table_{name}.md", to_markdown(table, intervals, label) + "\n")
     return table
 
@@ -178,6 +183,8 @@ def v2x_table(per_pair: pd.DataFrame) -> pd.DataFrame:
     pooled = summarise_pooled(per_pair, by=by)[[*by, "f1_pooled_mean"]]
     table = runs.merge(pooled.rename(columns={"f1_pooled_mean": "f1_pooled"}), on=by)
     table = table.merge(summarise_pose(per_pair, by), on=by, how="left")
+    registration = summarise_registration(per_pair, by)[[*by, *REG_COLUMNS[:3]]]
+    table = table.merge(registration, on=by, how="left")
     times = per_pair.groupby(by, sort=False)["time_s"].median().mul(1000).rename("ms_per_pair")
     table = table.merge(times.reset_index(), on=by)
     table = table.merge(_intervals(per_pair, ""), on=by, how="left")

@@ -54,6 +54,7 @@ ALL_MATCHERS = (
     "cbm",
     "freealign",
     "optimal_transport",
+    "v2x_reg",
 )
 
 

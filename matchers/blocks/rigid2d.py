@@ -78,10 +78,14 @@ def consensus_translation(
 
     Every candidate pair (i, j) (True in the (n, m) mask ``candidates``; at most ``limit`` of
     them, in row-major order) proposes t = target_i - source_j; each proposal is scored by
-    sum_i max_j biweight(|target_i - source_j - t|, cutoff) — how many targets it brings a
-    source point close to — and the best one wins (ties: the first). A vote among hypotheses,
-    so pairs that are wrong, however confident, cannot pull it as they would pull a mean or
-    a median. Vectorised: (proposals, n, m) residuals. No candidate gives t = 0.
+    min(sum_i max_j w_ij, sum_j max_i w_ij), w_ij = biweight(|target_i - source_j - t|,
+    cutoff) — how many objects it brings close to one of the other view's, counting each
+    object once on the sparser side (one point near many counts once: with the score of the
+    targets alone, a shift that drops a few sources into a dense crowd of targets outvoted
+    the true one when the cutoff was wide) — and the best one wins (ties: the first). A vote
+    among hypotheses, so pairs that are wrong, however confident, cannot pull it as they
+    would pull a mean or a median. Vectorised: (proposals, n, m) residuals. No candidate
+    gives t = 0.
     """
     source = np.asarray(source, dtype=float).reshape(-1, 2)
     target = np.asarray(target, dtype=float).reshape(-1, 2)
@@ -92,7 +96,8 @@ def consensus_translation(
     proposals = target[rows] - source[cols]  # (H, 2)
     offsets = target[:, None, :] - source[None, :, :]  # (n, m, 2)
     residual = np.linalg.norm(offsets[None] - proposals[:, None, None, :], axis=-1)
-    support = biweight(residual, cutoff).max(axis=2).sum(axis=1)
+    near = biweight(residual, cutoff)  # (H, n, m)
+    support = np.minimum(near.max(axis=2).sum(axis=1), near.max(axis=1).sum(axis=1))
     return proposals[int(np.argmax(support))]
 
 

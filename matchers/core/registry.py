@@ -55,6 +55,7 @@ _BUILTIN: dict[str, str] = {
     "rrwm": "matchers.rrwm:rrwm",
     "sm": "matchers.sm:sm",
     "tm": "matchers.tm:tm",
+    "v2x_reg": "matchers.v2x_reg:v2x_reg",
 }
 _registered: dict[str, Matcher] = {}
 _registered_spaces: dict[str, list[dict]] = {}

@@ -89,6 +89,13 @@ BUILTIN_SEARCH_SPACES: dict[str, list[dict]] = {
     "optimal_transport": [{}]
     + [{"tolerance_scale": s} for s in (0.05, 0.2, 0.3)]
     + [{"epsilon": 0.03}, {"epsilon": 0.3}, {"dustbin": 0.1}, {"dustbin": 0.5}],
+    # V2X-Reg++ (matchers.v2x_reg): the boxes kept (top-25 by default; their other published
+    # setting top-10, and all), the correspondence distances and the support a pair needs.
+    "v2x_reg": [{}]
+    + [{"top_k": 10}, {"top_k": 0}]
+    + [{"distance_scale": s} for s in (0.5, 2.0)]
+    + [{"min_support": s} for s in (2, 6)]
+    + [{"top_k": 10, "distance_scale": 2.0}],
     "cbm_pose": _context_pose(),
     "freealign_pose": _context_pose(),
     "optimal_transport_pose": _context_pose(),

@@ -3,7 +3,8 @@
 Pipeline (each step its own module): road plane fitted and ground points dropped
 (``ground_removal``), the rest clustered on a bird's-eye grid (``clustering``), each cluster's
 minimum-area rectangle fitted (``box_fit``), a class given by its size and the box completed to
-that class's size away from the sensor (``size_classes``); clusters no class fits (walls,
+that class's size away from the sensor (``size_classes``), its size scattered as a box
+regressor's is, more for fewer points (``size_noise``); clusters no class fits (walls,
 buildings, curbs) are dropped. So are clusters *cut by the field of view* — a point within
 ``FOV_MARGIN_DEG`` of the top channel, so their true height is unknown — that would be a pole,
 a truck, a bus, or a van shorter than ``CUT_MIN_LENGTH_M`` on the ground: such clusters are
@@ -36,6 +37,7 @@ from cadsim.sensing.lidar.box_fit import fit_box
 from cadsim.sensing.lidar.clustering import CELL_M, MIN_POINTS, cluster_points
 from cadsim.sensing.lidar.ground_removal import remove_ground
 from cadsim.sensing.lidar.size_classes import class_from_size, complete_box
+from cadsim.sensing.lidar.size_noise import noisy_sizes
 
 MIN_HEIGHT_ABOVE_ROAD_M = 0.2
 FOV_MARGIN_DEG = 0.25
@@ -86,10 +88,13 @@ def detect_boxes(
     top_elevation_deg: float | None = None,
     cell_m: float = CELL_M,
     min_points: int = MIN_POINTS,
+    size_rng: np.random.Generator | None = None,
 ) -> LidarBoxes:
     """Boxes in ``points`` (n, 3) LiDAR frame, metres; ``sensor_height_m``: the mount's nominal
     height above the road; ``top_elevation_deg``: the sensor's highest channel (None: no
     field-of-view cut is applied), both from the sensor's specification (module docstring).
+    ``size_rng``: the stream of the box regressor's size scatter
+    (:mod:`cadsim.sensing.lidar.size_noise`); None: the completed boxes' sizes as fitted.
 
     >>> import numpy as np
     >>> detect_boxes(np.zeros((0, 3)), 1.75).classes
@@ -128,9 +133,12 @@ def detect_boxes(
             yaws.append(box.yaw)
             classes.append(cls)
             counts.append(len(members))
+    sizes = np.asarray(sizes, dtype=np.float64).reshape(-1, 3)
+    if size_rng is not None and len(sizes):
+        sizes = noisy_sizes(sizes, np.asarray(counts), size_rng)
     return LidarBoxes(
         centres=np.asarray(centres, dtype=np.float64).reshape(-1, 3),
-        sizes=np.asarray(sizes, dtype=np.float64).reshape(-1, 3),
+        sizes=sizes,
         yaws=np.asarray(yaws, dtype=np.float64).reshape(-1),
         classes=classes,
         point_counts=np.asarray(counts, dtype=np.int64).reshape(-1),

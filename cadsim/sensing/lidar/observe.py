@@ -4,7 +4,8 @@ A vehicle observer carries a roof unit of the ``[lidar]`` table's pattern; an ob
 object (a roadside unit's pole camera) a level unit of ``roadside_preset`` at the camera's
 position and heading. The sweep's random draws come from the view's seed (the frame's identity,
 ``cadsim.dataset.seeds``) on a stream of its own (:data:`LIDAR_STREAM`), so a scenario with both
-sensors draws its depth noise and its LiDAR noise independently. The carrier itself is not drawn.
+sensors draws its depth noise and its LiDAR noise independently; the box detector's size
+scatter on a sub-stream of it (:data:`SIZE_STREAM`). The carrier itself is not drawn.
 The detector's nominal mounting height is the sensor's height above the renderer's ground plane
 (what a calibrated mount knows).
 """
@@ -26,6 +27,8 @@ from cadsim.sensing.lidar.raycast import LidarScan, scan
 from cadsim.world import Snapshot
 
 LIDAR_STREAM = 0x11DA4
+SIZE_STREAM = 0x512E
+"""Sub-stream (under :data:`LIDAR_STREAM`) of the box detector's size scatter."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -58,7 +61,8 @@ def observe(
     rng = np.random.default_rng([int(seed), LIDAR_STREAM])
     sweep = scan(snapshot, pose, pattern, rng, {observer_id} if observer_id else ())
     height = float(pose[2, 3]) - GROUND_Z
-    boxes = detect_boxes(sweep.points, height, max(pattern.elevations_deg))
+    size_rng = np.random.default_rng([int(seed), LIDAR_STREAM, SIZE_STREAM])
+    boxes = detect_boxes(sweep.points, height, max(pattern.elevations_deg), size_rng=size_rng)
     objects = snapshot.objects
     ids, true = box_ground_truth(
         boxes, sweep.object_index, [o.id for o in objects], [o.cls for o in objects],

@@ -29,10 +29,17 @@ MIN_PERIOD_S = 0.01  # at most 100 departures a second per kind
 MAX_TRIPS = 1_000_000  # trips per kind: end / period
 MIN_STEP_S = 0.001
 PERIOD_OR_OFF = f"0 (none) or a number >= {MIN_PERIOD_S:g} (seconds)"
+MIN_CLUTTER_SPACING_M = 10.0  # shortest step 5 m: longer than a trailer (4 m mean), no overlaps
+MAX_CLUTTER_OBJECTS = 100_000  # roadside objects drawn per scene: road length / spacing
+CLUTTER_SPACING = f"0 (none) or metres in [{MIN_CLUTTER_SPACING_M:g}, {MAX_LENGTH_M:g}]"
 
 
 def _period_or_off(value: float) -> bool:
     return value == 0 or value >= MIN_PERIOD_S
+
+
+def _spacing_or_off(value: float) -> bool:
+    return value == 0 or MIN_CLUTTER_SPACING_M <= value <= MAX_LENGTH_M
 
 
 NETWORK = Table(
@@ -136,8 +143,8 @@ SCENE = Table(
             0.0,
             "mean distance between roadside clutter objects (trees, poles, bins, parked "
             "trailers) along each road side, metres (0: none)",
-            ge=0,
-            le=MAX_LENGTH_M,
+            check=_spacing_or_off,
+            expect=CLUTTER_SPACING,
         ),
     }
 )
@@ -186,10 +193,33 @@ def check_traffic(t: dict, ctx: ScenarioContext, prefix: str) -> None:
         _check_confinable(t["demand"]["vtypes"], ctx, prefix + ".demand.vtypes")
     if t["sumocfg"] is not None:
         net = _check_sumocfg(t["sumocfg"], ctx, prefix + ".sumocfg")
-        require_usable_junction(net, ctx, prefix + ".sumocfg")
+        road_m = require_usable_junction(net, ctx, prefix + ".sumocfg")
     elif t["net"] is not None:
         _check_confinable(t["net"], ctx, prefix + ".net")
-        require_usable_junction(t["net"], ctx, prefix + ".net")
+        road_m = require_usable_junction(t["net"], ctx, prefix + ".net")
+    else:
+        road_m = _grid_road_m(t["network"])
+    _check_clutter_count(t["scene"], road_m, ctx, prefix + ".scene.clutter_spacing")
+
+
+def _grid_road_m(network: dict) -> float:
+    """Road-side length (m) of a generated grid, an upper bound: both sides of its
+    2·J·(J − 1) blocks and 4·J arms (junction areas not subtracted)."""
+    j = network["junctions"]
+    return 2.0 * (2 * j * (j - 1) * network["block_length"] + 4 * j * network["arm_length"])
+
+
+def _check_clutter_count(scene: dict, road_m: float, ctx: ScenarioContext, key: str) -> None:
+    """Roadside clutter is drawn along every road of the network (then kept near the observed
+    junctions): road length / spacing objects, at most MAX_CLUTTER_OBJECTS."""
+    spacing = scene.get("clutter_spacing", 0.0) if scene else 0.0
+    if spacing > 0 and road_m / spacing > MAX_CLUTTER_OBJECTS:
+        raise ctx.error(
+            key,
+            f"is {spacing:g}: about {road_m / spacing:,.0f} clutter objects along "
+            f"{road_m / 1000:,.1f} km of road sides",
+            f"at most {MAX_CLUTTER_OBJECTS:,} objects (a larger spacing, 0, or a smaller network)",
+        )
 
 
 def _check_sumocfg(path: str, ctx: ScenarioContext, key: str) -> str:
@@ -251,8 +281,10 @@ def _check_vtypes(demand: dict, ctx: ScenarioContext, key: str) -> None:
             )
 
 
-def require_usable_junction(net_path: str, ctx: ScenarioContext, key: str) -> None:
-    """Raise unless the net has a junction that two vehicles can approach on different arms."""
+def require_usable_junction(net_path: str, ctx: ScenarioContext, key: str) -> float:
+    """Raise unless the net has a junction that two vehicles can approach on different arms;
+    returns the length (m) of its road sides (one per normal edge, the clutter's line)."""
+    from cadsim.sources.sumo.free_space import right_hand_lanes
     from cadsim.sources.sumo.network import RoadNetwork
 
     try:
@@ -268,6 +300,7 @@ def require_usable_junction(net_path: str, ctx: ScenarioContext, key: str) -> No
             f"({len(network.net.getNodes())} nodes)",
             "a net with at least one junction joining three or more roads",
         )
+    return float(sum(cum[-1] for _, _, cum in right_hand_lanes(network)))
 
 
 TRAFFIC = Table(
