@@ -42,7 +42,9 @@ def _interval(row) -> str:
 def paired_markdown(table: pd.DataFrame) -> str:
     """One row per (dataset, rival): maximin − rival in F1, balanced accuracy and recall (pp),
     and the minimum detectable ΔF1 (95 % confidence, 80 % power; "–" in files without it)."""
-    reference = str(table["matcher_a"].iloc[0]) if len(table) else "maximin"
+    reference = (
+        str(table["matcher_a"].iloc[0]) if "matcher_a" in table and len(table) else "maximin"
+    )
     lines = [
         f"| Dataset | {cell(reference)} − | ΔF1 [95 % CI] | ΔF1 MDD | Δ balanced acc. [95 % CI] "
         "| Δ recall [95 % CI] | episodes |",
