@@ -59,7 +59,7 @@ def test_evaluate_reference_writes_the_differences_against_it(tmp_path, capsys):
 def test_the_readme_api_example_runs_with_a_second_view_in_its_own_frame():
     text = (ROOT / "README.md").read_text()
     block = text.split("## Adding a matcher or a scenario")[1].split("```python")[1].split("```")[0]
-    assert "0.01" not in block and "world1" in block and "@ R" in block
+    assert "0.01" not in block and "world1/world2" in block and ") @ " in block
     scope: dict = {}
     exec(compile(block, "README.md", "exec"), scope)  # noqa: S102 - the README's own example
     assert sorted(map(tuple, scope["m"].pairs.tolist())) == [(0, 2), (1, 1), (3, 0), (5, 4), (7, 3)]
