@@ -126,7 +126,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--reference",
-        default="maximin",
+        default=None,
         metavar="NAME",
         help="the matcher every other is compared with in paired_differences.csv (NAME − each "
         "other, with its 95 %% interval over episodes; default maximin); one of --matchers",
@@ -235,7 +235,7 @@ def run(args: argparse.Namespace) -> int:
             else m
             for m in matchers
         ]
-    reference = reference_matcher(args.reference, matchers)
+    reference = None if args.reference is None else reference_matcher(args.reference, matchers)
     with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(
             ResultCache(args.cache),
