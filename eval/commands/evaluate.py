@@ -129,7 +129,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="NAME",
         help="the matcher every other is compared with in paired_differences.csv (NAME − each "
-        "other, with its 95 %% interval over episodes; default maximin); one of --matchers",
+        "other, with its 95 %% interval over episodes); one of --matchers (default: maximin, "
+        "when evaluated)",
     )
     parser.add_argument(
         "--pose-metrics",

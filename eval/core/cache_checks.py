@@ -16,7 +16,7 @@ the dataset's manifest and stored detections read once per process):
   sizes and ground truth; :func:`inconsistent_groups`: runs that must share their ground truth
   (same data, other matchers) do.
 
-Imports only numpy, ``matchers.core.discretise`` and, lazily, the dataset reader.
+Imports numpy and, lazily, scipy's assignment solver and the dataset reader.
 """
 
 from __future__ import annotations
