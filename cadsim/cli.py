@@ -33,7 +33,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "schema": ("cadsim.commands.schema", "print the JSON Schema of scenario files"),
     "import": (
         "cadsim.commands.import_",
-        "write external data (DMGM, V2X-Seq, OPV2V) as a dataset",
+        "write external data (DMGM, V2X-Seq, OPV2V/V2XSet, V2V4Real, DAIR-V2X) as a dataset",
     ),
     "export": ("cadsim.commands.export", "write a dataset in the OPV2V layout or as KITTI labels"),
     "train": ("cadsim.commands.train", "train the learned matchers on training datasets"),
@@ -72,6 +72,8 @@ COMMAND_EXAMPLES: dict[str, tuple[str, ...]] = {
         "cadsim import dmgm path/to/DMGM/data/cad/test --out data/dmgm --sequences 069,071",
         "cadsim import v2x-seq path/to/V2X-Seq-SPD --out data/v2x-seq",
         "cadsim import opv2v path/to/OPV2V/test --out data/opv2v-test",
+        "cadsim import v2v4real path/to/V2V4Real/test --out data/v2v4real-test",
+        "cadsim import dair-v2x path/to/cooperative-vehicle-infrastructure --out data/dair-v2x-c",
     ),
     "export": (
         "cadsim export opv2v data/cad-v2x --out export/cad-v2x-opv2v",

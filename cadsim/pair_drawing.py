@@ -348,3 +348,66 @@ def draw_pair_from_record(pair, labels: bool = True):
         y=0.995,
     )
     return fig
+
+
+def match_classes(declared, gt) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(correct, wrong, missed) (k, 2) pair arrays: the declared pairs that are true, those that
+    are not, and the true pairs not declared."""
+    declared = np.asarray(declared, int).reshape(-1, 2)
+    gt = np.asarray(gt, int).reshape(-1, 2)
+    true = (declared[:, None, :] == gt[None, :, :]).all(axis=2).any(axis=1)
+    found = (gt[:, None, :] == declared[None, :, :]).all(axis=2).any(axis=1)
+    return declared[true], declared[~true], gt[~found]
+
+
+def draw_matches_from_record(pair, declared, matcher: str, labels: bool = True):
+    """Figure of a dataset ``FramePair`` with the pairs a matcher declared (``declared``, (k, 2)):
+    correct ones green, wrong ones red, true pairs it missed yellow (dashed); the bird's-eye
+    panel below shows the same lines between the true positions. From above only when the
+    record has no images."""
+    correct, wrong, missed = match_classes(declared, pair.gt_pairs)
+    shown = np.vstack([correct, wrong, missed])
+    colors = [CORRECT] * len(correct) + [WRONG] * len(wrong) + [MISSED] * len(missed)
+    summary = (
+        f"{pair.name} (pair {pair.index}) — {matcher}: {len(correct)} correct (green), "
+        f"{len(wrong)} wrong (red), {len(missed)} missed (yellow) of {len(pair.gt_pairs)} true"
+    )
+    if not pair.has_images:
+        prior = pair.prior()
+        return topdown_figure(
+            pair.view1.positions,
+            pair.view2.positions,
+            shown,
+            world=None if prior is None else prior[:2],
+            line_colors=colors,
+            labels1=_labels(pair.view1) if labels else None,
+            labels2=_labels(pair.view2) if labels else None,
+            title=summary,
+        )
+    from matplotlib.figure import Figure
+
+    canvas, _ = side_by_side(pair.color1, pair.color2)
+    dpi, below = 100, 5.0  # inches of bird's-eye panel
+    width, images = canvas.shape[1] / dpi, canvas.shape[0] / dpi
+    height = images + below + 0.35
+    fig = Figure(figsize=(width, height), dpi=dpi)
+    draw_pair(
+        fig.add_axes((0, (below + 0.05) / height, 1, images / height)),
+        pair.color1,
+        pair.color2,
+        pair.view1.boxes,
+        pair.view2.boxes,
+        shown,
+        colors,
+        labels1=_labels(pair.view1) if labels else None,
+        labels2=_labels(pair.view2) if labels else None,
+        label_size=8,
+    )
+    if pair.cameras is not None:
+        draw_birdseye(
+            fig.add_axes((0.08, 0.45 / height, 0.84, (below - 0.5) / height)),
+            pair,
+            [(correct, CORRECT, "-"), (wrong, WRONG, "-"), (missed, MISSED, "--")],
+        )
+    fig.suptitle(summary, fontsize=9, y=0.995)
+    return fig

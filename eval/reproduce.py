@@ -26,6 +26,8 @@ from pathlib import Path
 
 import pandas as pd
 
+from cadsim.limits import MAX_PAIRS, MAX_WORKERS
+from cadsim.user_errors import is_user_error, one_line
 from eval.commands.sweep_localisation import DEFAULT_SIGMAS, parse_sigmas
 from eval.commands.sweep_noise import DEFAULT_RATES, parse_rates
 from eval.commands.sweep_regime import DEFAULT_KEEP, parse_keep
@@ -78,10 +80,18 @@ RECORD_SECTIONS = (
 """The run record's sections the stages fill, in the record's order."""
 
 
+PROG = "python -m eval.reproduce"
+
+
+class _OneLineParser(argparse.ArgumentParser):
+    """argparse, but a bad option is one line (``PROG: error: …``), exit status 2."""
+
+    def error(self, message: str):  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
-        prog="python -m eval.reproduce", description=__doc__.splitlines()[0]
-    )
+    p = _OneLineParser(prog=PROG, description=__doc__.splitlines()[0])
     _dataset_options(p)
     _sweep_options(p)
     _study_options(p)
@@ -239,7 +249,7 @@ def scenario_paths(args: argparse.Namespace) -> list[Path]:
         return [Path(s) for s in args.scenarios]
     paths = [ROOT / s for s in SCENARIOS if (ROOT / s).is_file()]
     if not paths:
-        raise SystemExit(f"no scenario files found ({', '.join(SCENARIOS)})")
+        raise FileNotFoundError(f"no scenario files found ({', '.join(SCENARIOS)})")
     return paths
 
 
@@ -251,27 +261,89 @@ def planned_sizes(args: argparse.Namespace) -> SplitSizes:
     return plan_sizes(args, [(dataset_label(s.name), s.pairs) for s in scenarios])
 
 
+# Count options: (name, least value). Runs of the studies that 0 skips may be 0; runs of a sweep
+# that runs anyway, and the Table I runs, at least 1; a first-N-pairs subset 0 (all) or more.
+_COUNTS = (
+    ("runs", 1), ("sweep_runs", 1), ("regime_runs", 1), ("spread_runs", 1),
+    ("localisation_runs", 1), ("external_runs", 0), ("v2x_runs", 0), ("multiagent_runs", 0),
+    ("pairs", 1), ("val_pairs", 1), ("workers", 1), ("sweep_pairs", 0), ("regime_pairs", 0),
+    ("spread_pairs", 0), ("localisation_pairs", 0), ("external_tune_pairs", 0),
+)  # fmt: skip
+MAX_RUNS = 1000  # seeds of one table: far beyond any interval's need, short of a runaway
+_MOST = {"workers": MAX_WORKERS, "pairs": MAX_PAIRS, "val_pairs": MAX_PAIRS}
+
+
+def _check_counts(args: argparse.Namespace) -> None:
+    """Every count option within its range (None: the default), as a one-line ValueError."""
+    for name, least in _COUNTS:
+        value = getattr(args, name)
+        if value is None:
+            continue
+        most = _MOST.get(name, MAX_RUNS if name.endswith("runs") else MAX_PAIRS)
+        if not least <= value <= most:
+            option = "--" + name.replace("_", "-")
+            raise ValueError(f"{option}: expected an integer in {least}..{most}, got {value}")
+
+
+def _check_sizes(sizes: SplitSizes) -> None:
+    """Every planned split within what generation accepts (``--scale`` multiplies them all)."""
+    record = sizes.record()
+    largest = max(_counts_in(record), default=0)
+    if largest > MAX_PAIRS:
+        raise ValueError(
+            f"--scale {sizes.scale}: a split of {largest:,} pairs or sequences, over the "
+            f"{MAX_PAIRS:,} a dataset may hold; use a smaller scale"
+        )
+
+
+def _counts_in(tree) -> list[int]:
+    if isinstance(tree, dict):
+        return [n for key, v in tree.items() if key != "scale" for n in _counts_in(v)]
+    if isinstance(tree, list | tuple):
+        return [n for v in tree for n in _counts_in(v)]
+    return [tree] if isinstance(tree, int) and not isinstance(tree, bool) else []
+
+
 def _check_options(args: argparse.Namespace) -> None:
     """Parse every list option once before anything is generated (a bad one stops the run with
     its one-line message, nothing written)."""
+    _check_counts(args)
     parse_rates(args.rates)
     if args.keep.strip():
         parse_keep(args.keep)
     if args.localisation_sigmas.strip():
-        parse_sigmas(args.localisation_sigmas)
+        try:
+            parse_sigmas(args.localisation_sigmas)
+        except ValueError as exc:  # the sweep command's option is --sigmas
+            raise ValueError(str(exc).replace("--sigmas", "--localisation-sigmas", 1)) from None
+    for option, path in (("--data", args.data), ("--cache", args.cache)):
+        if not str(path).strip():
+            raise ValueError(f"{option}: expected a folder path, got an empty one")
+        if Path(path).exists() and not Path(path).is_dir():
+            raise ValueError(f"{option} {path}: exists and is not a folder")
+
+
+def _check_scenarios(paths: list[Path]) -> None:
+    """Each scenario file exists (its contents are checked as it is read)."""
+    for path in paths:
+        if not path.is_file():
+            raise FileNotFoundError(f"--scenarios {path}: no such scenario file")
 
 
 def _start(args: argparse.Namespace) -> tuple[RunState, dict[str, bool]]:
-    """The run's state before its first stage, and whether it starts cold."""
+    """The run's state before its first stage, and whether it starts cold. Every option is
+    checked before anything is created."""
     from eval.core.result_files import check_outputs
 
+    _check_options(args)
     paths = scenario_paths(args)
+    _check_scenarios(paths)
+    matchers = parse_matchers(args.matchers)
     sizes = planned_sizes(args)
+    _check_sizes(sizes)
     data, out = sizes.data_root(Path(args.data)), check_outputs(args.out, args.cache)
     cold = cold_start(data, Path(args.cache))
     out.mkdir(parents=True, exist_ok=True)
-    matchers = parse_matchers(args.matchers)
-    _check_options(args)
     if sizes.scale != 1:
         log.info("scale %d: every split × %d, datasets under %s", sizes.scale, sizes.scale, data)
     state = RunState(args, sizes, data, out, paths, matchers, list(range(args.runs)))
@@ -305,9 +377,30 @@ def _record(
         runs=runs,
         cold_start=cold,
         code_version=code_version(),
+        gl=gl_record(state.data),
         cache=str(args.cache),
         budget_s={stage.name: stage.budget_s for stage in STAGES},
     )
+
+
+def gl_record(data: Path) -> dict:
+    """The GL drivers that drew the run's datasets (each manifest's ``gl`` under ``data``,
+    distinct) and the backend variables of this process, for the run record."""
+    import os
+
+    from cadsim.generation.pipeline import gl_drivers
+
+    found = []
+    for manifest in sorted(Path(data).glob("**/manifest.json")):
+        try:
+            gl = json.loads(manifest.read_text(encoding="utf-8")).get("gl")
+        except (OSError, ValueError, AttributeError):
+            continue
+        found += gl if isinstance(gl, list) else []
+    return {
+        "drivers": gl_drivers(found),
+        "env": {k: os.environ.get(k) for k in ("CADSIM_GL_BACKEND", "PYOPENGL_PLATFORM")},
+    }
 
 
 def executor_record(workers: int | None, scheduler: str | None) -> dict:
@@ -334,10 +427,22 @@ def _report(out: Path, record: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run every stage; a user error (a bad option, a missing or bad file) is one line on
+    stderr, exit status 2, and — found by the checks of :func:`_start` — nothing created."""
     args = build_parser().parse_args(argv)
     logging.basicConfig(
         level=logging.INFO, format="%(asctime)s %(name)s: %(message)s", datefmt="%H:%M:%S"
     )
+    try:
+        return _reproduce(args, argv)
+    except Exception as exc:
+        if not is_user_error(exc):
+            raise  # a bug: its traceback is what a report needs
+        print(f"{PROG}: error: {one_line(exc)}", file=sys.stderr)
+        return 2
+
+
+def _reproduce(args: argparse.Namespace, argv: list[str] | None) -> int:
     started = time.perf_counter()
     state, cold = _start(args)
     timer = StageTimer()

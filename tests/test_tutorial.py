@@ -32,5 +32,7 @@ def test_the_readme_tutorial_runs(tmp_path, monkeypatch, capsys):
         assert main(argv) == 0, argv
     out = capsys.readouterr().out
     assert "| Maximin |" in out and "| SM |" in out
+    assert "one run: every ± 0.0 is no spread measured" in out  # what ± 0.0 means
+    assert "from the paper's own data and protocol, not these pairs" in out
     assert (tmp_path / "tutorial" / "pair0.png").stat().st_size > 0
     assert (tmp_path / "tutorial" / "results" / "metrics_per_pair.csv").is_file()

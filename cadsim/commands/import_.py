@@ -209,6 +209,13 @@ def _gate(text: str) -> float:
     return value
 
 
+def _default_link_gate() -> float:
+    """DAIR-V2X's default link gate, metres (read from its importer for the help text)."""
+    from cadsim.importers.dair_v2x import LINK_GATE_M
+
+    return float(LINK_GATE_M)
+
+
 def _dair_arguments(formats) -> None:
     dair = formats.add_parser(
         "dair-v2x",
@@ -227,5 +234,5 @@ def _dair_arguments(formats) -> None:
         type=_gate,
         default=None,
         help="largest centre distance (metres) of two boxes linked as one object "
-        "(default: cadsim.importers.dair_v2x.LINK_GATE_M)",
+        f"(default: {_default_link_gate():.1f} m)",
     )

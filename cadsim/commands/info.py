@@ -94,6 +94,7 @@ def summarise(ds, reference=None) -> dict:
             "scenario": manifest["scenario"]["name"],
             "seed": manifest["seeds"]["root"],
             "source": manifest.get("source"),
+            "gl": _gl_drivers(manifest),
             "checksum": ds.checksum,
             "noise": ds.noise_config,
             "n_pairs": len(pairs),
@@ -226,6 +227,35 @@ def _import_notes(src: dict) -> list[str]:
     return lines
 
 
+def _gl_drivers(manifest: dict) -> list[dict]:
+    """The manifest's ``gl`` entries (the GL drivers that drew the records), as plain text
+    fields on one line each (a hand-edited manifest cannot break the output)."""
+    found = manifest.get("gl")
+    keys = ("backend", "vendor", "renderer", "version")
+    return [
+        {k: " ".join(str(g.get(k, "")).split())[:120] for k in keys}
+        | {"gpu_driver": g.get("gpu_driver") is True}
+        for g in (found if isinstance(found, list) else [])
+        if isinstance(g, dict)
+    ]
+
+
+def _gl_lines(drivers: list[dict]) -> list[str]:
+    """``rendered by`` lines, with a warning for a vendor GPU driver's dataset."""
+    lines = [
+        f"  rendered by             {g['backend']}: {g['renderer']} ({g['vendor']}, {g['version']})"
+        for g in drivers
+    ]
+    if any(g["gpu_driver"] for g in drivers):
+        lines.append(
+            "  note                    drawn by a vendor GPU's EGL driver: its pixels (and so "
+            "its detections) differ from what Mesa's llvmpipe (OSMesa or Mesa EGL) draws for the "
+            "same scenario and seed; regenerate with CADSIM_GL_BACKEND=osmesa for the reference "
+            "dataset"
+        )
+    return lines
+
+
 def _text(s: dict) -> str:
     total = sum(s["class_mix"].values()) or 1
     mix = ", ".join(
@@ -251,6 +281,7 @@ def _text(s: dict) -> str:
             else []
         ),
         *_import_notes(s.get("source") or {}),
+        *_gl_lines(s.get("gl") or []),
         f"  objects per view        {_fmt(s['objects_per_view'])}",
         f"  covisible per pair      {_fmt(s['covisible'])}",
         f"  non-covisible per view  {_fmt(s['non_covisible_per_view'])}",

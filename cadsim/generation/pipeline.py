@@ -181,6 +181,7 @@ class EpisodeResult:
     core_seconds: float = 0.0
     view_core_seconds: float = 0.0
     write_core_seconds: float = 0.0
+    gl: dict | None = None  # the GL driver that drew its views (Renderer.gl); None: none drawn
 
 
 @dataclass
@@ -219,6 +220,25 @@ def _renderer(stages: Stages, width: int, height: int):
     if key not in _renderers:
         _renderers[key] = stages.resolve("renderer")(width, height)
     return _renderers[key]
+
+
+def gl_drivers(found, earlier=()) -> list[dict]:
+    """The distinct GL drivers (:attr:`cadsim.render.Renderer.gl` dicts) in `earlier` and
+    `found` (None entries left out), in order of first appearance: the manifest's ``gl``."""
+    drivers: list[dict] = []
+    for gl in [*earlier, *found]:
+        if isinstance(gl, dict) and gl not in drivers:
+            drivers.append(gl)
+    return drivers
+
+
+def _earlier_gl(out: Path) -> list[dict]:
+    """The ``gl`` list an earlier (interrupted or finished) run wrote to ``out``'s manifest."""
+    try:
+        gl = json.loads((out / layout.MANIFEST).read_text(encoding="utf-8")).get("gl")
+    except (OSError, ValueError, AttributeError):
+        return []
+    return [g for g in gl if isinstance(g, dict)] if isinstance(gl, list) else []
 
 
 def release_renderers() -> None:
@@ -609,6 +629,7 @@ def _capture(task, stages, noise_cfg, det_cfg, snapshot, camera, observer, view,
             localisation_seed(task.root_seed, task.episode, slot, view), lidar,
         )  # fmt: skip
     renderer = _renderer(task.stages, camera.width, camera.height)
+    result.gl = getattr(renderer, "gl", None)
     t, c = time.perf_counter(), time.process_time()
     appearance = _appearance(task.scenario)
     if hasattr(renderer, "set_lighting"):  # the episode's light (the default without a table)
@@ -882,7 +903,9 @@ def _generate(
     stale = remove_stale_temp(out)
     if stale:
         log.info("removed %d unfinished record(s) of an interrupted run", len(stale))
-    write_manifest(out, build_manifest(scenario, config, seed_source, [], {}, complete=False))
+    earlier_gl = _earlier_gl(out)  # the drivers that drew the records of a finished earlier run
+    started = build_manifest(scenario, config, seed_source, [], {}, complete=False)
+    write_manifest(out, started | ({"gl": earlier_gl} if earlier_gl else {}))
 
     from tqdm import tqdm
 
@@ -969,6 +992,9 @@ def _generate(
     # The episodes that define the dataset: 0 .. the last one contributing a record.
     episodes = {e: simulation_seed(root_seed, e) for e in range(records[-1]["episode"] + 1)}
     manifest = build_manifest(scenario, config, seed_source, records, episodes, complete=True)
+    drivers = gl_drivers([r.gl for r in results if r.new_records], earlier_gl)
+    if drivers:  # the GL drivers that drew the records (none for a LiDAR-only dataset)
+        manifest["gl"] = drivers
     write_manifest(out, manifest)
     res = GenerationResult(
         out=out,

@@ -6,6 +6,9 @@ ctypes (which does not import OpenGL), then sets the variable; ``load_pyrender``
 the pyrender fixes from ``cadsim.render.shims`` before pyrender is imported.
 
 Preference: OSMesa (exact depth, faster on CPU), then EGL. ``CADSIM_GL_BACKEND=osmesa|egl`` forces one.
+Both draw the same bytes with Mesa's llvmpipe (EGL is made to rasterise as OSMesa does,
+``cadsim.render.shims``); a vendor GPU's EGL driver rasterises its own way, and the manifest says
+which driver drew a dataset (:func:`gl_identity`).
 """
 
 from __future__ import annotations
@@ -48,6 +51,11 @@ BACKENDS: dict[str, BackendSpec] = {
         apt_packages=("libegl1", "libegl-mesa0", "libgl1-mesa-dri"),
     ),
 }
+
+
+ROWS_REVERSED = frozenset({"egl"})
+"""Backends drawn as OSMesa draws (:func:`cadsim.render.shims.match_osmesa_rasterisation`),
+whose images pyrender returns with their rows reversed."""
 
 
 def _missing_libraries(spec: BackendSpec) -> list[str]:
@@ -122,9 +130,36 @@ def load_pyrender() -> tuple[ModuleType, str]:
 
     Returns (pyrender module, backend name)."""
     backend = select_backend()
-    from cadsim.render.shims import apply_shims
+    from cadsim.render.shims import apply_shims, match_osmesa_rasterisation
 
     apply_shims()
     import pyrender
+    import pyrender.renderer
 
+    if backend in ROWS_REVERSED:  # one rasterisation on every backend: OSMesa's
+        match_osmesa_rasterisation(pyrender.renderer)
     return pyrender, backend
+
+
+SOFTWARE_RENDERERS = ("llvmpipe", "softpipe", "swrast", "lavapipe")
+"""Mesa's CPU rasterisers (``GL_RENDERER`` starts with one of these): the ones that give the
+reference bytes."""
+
+
+def gl_identity(backend: str) -> dict:
+    """The current GL context's backend, ``GL_VENDOR``, ``GL_RENDERER`` and ``GL_VERSION``, and
+    whether it is a vendor GPU driver (not one of Mesa's CPU rasterisers) — for the manifest."""
+    from OpenGL.GL import GL_RENDERER, GL_VENDOR, GL_VERSION, glGetString
+
+    def text(name) -> str:
+        value = glGetString(name)
+        return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
+
+    renderer = text(GL_RENDERER)
+    return {
+        "backend": backend,
+        "vendor": text(GL_VENDOR),
+        "renderer": renderer,
+        "version": text(GL_VERSION),
+        "gpu_driver": not renderer.lower().startswith(SOFTWARE_RENDERERS),
+    }

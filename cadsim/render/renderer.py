@@ -3,8 +3,9 @@
 Two passes per view over one persistent scene (``cadsim.render.scene``): a lit colour pass, then a
 segmentation pass in which every object's node is drawn in a flat colour that encodes its index in
 ``snapshot.objects`` (index + 1 packed into 24-bit RGB; 0 = background). Depth and instance ids are
-both taken from the segmentation pass: it is never multisampled, so its depth is exact on EGL too
-(EGL's colour pass uses 4x MSAA), and depth and ids come from the same rasterisation.
+both taken from the segmentation pass, so depth and ids come from the same rasterisation. No pass
+is multisampled, and EGL draws as OSMesa does (``cadsim.render.shims``): the same scenario and
+seed give the same bytes on either backend. ``Renderer.gl`` says which GL driver drew.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from collections.abc import Collection
 import numpy as np
 
 from cadsim.camera import Camera
-from cadsim.render.backend import BACKENDS, install_hint, load_pyrender
+from cadsim.render.backend import BACKENDS, ROWS_REVERSED, gl_identity, install_hint, load_pyrender
 from cadsim.render.frustum_culling import box_corners_world, outside_frustum
 from cadsim.render.scene import DEFAULT_SUN_AZIMUTH_DEG, DEFAULT_SUN_ELEVATION_DEG, ObjectScene
 from cadsim.render.shading import use_lambert_shading
@@ -85,6 +86,9 @@ class Renderer:
                 f"{install_hint(BACKENDS[self.backend])}, or choose the other backend with "
                 "CADSIM_GL_BACKEND=osmesa|egl"
             ) from exc
+        self._rows_reversed = self.backend in ROWS_REVERSED
+        self._gl._platform.make_current()
+        self.gl: dict = gl_identity(self.backend)  # backend, vendor, renderer: for the manifest
         use_lambert_shading(pyrender, self._gl)
         self._scene = ObjectScene(
             pyrender,
@@ -126,6 +130,8 @@ class Renderer:
             seg, depth = self._gl.render(scene, flags=self._flags.SEG, seg_node_map=seg_map)
         finally:
             self._scene.unhide()
+        if self._rows_reversed:  # drawn top row first, as OSMesa draws (cadsim.render.shims)
+            color, seg, depth = color[::-1], seg[::-1], depth[::-1]
         return RenderedView(
             color=np.ascontiguousarray(color[..., :3]),
             depth=np.ascontiguousarray(depth, dtype=np.float32),

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from eval.core.spreadsheet_safe import restore
 from eval.protocol.claims import (
     CROSSES,
     NOT_SHOWN,
@@ -31,7 +32,11 @@ PROTOCOLS = {"_equal_cues": "equal cues", "": "as published"}
 
 def read(path: Path) -> pd.DataFrame | None:
     """The CSV at ``path`` (empty strings as missing), or None when absent."""
-    return pd.read_csv(path, keep_default_na=False, na_values=[""]) if path.is_file() else None
+    return (
+        restore(pd.read_csv(path, keep_default_na=False, na_values=[""]))
+        if path.is_file()
+        else None
+    )
 
 
 def pct(value: float, digits: int = 1) -> str:

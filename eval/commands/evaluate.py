@@ -125,6 +125,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "a record of a test dataset. With --matchers all, the learned matchers join",
     )
     parser.add_argument(
+        "--reference",
+        default=None,
+        metavar="NAME",
+        help="the matcher every other is compared with in paired_differences.csv (NAME − each "
+        "other, with its 95 %% interval over episodes); one of --matchers (default: maximin, "
+        "when evaluated)",
+    )
+    parser.add_argument(
         "--pose-metrics",
         choices=("cadsim", "v2x-reg"),
         default="cadsim",
@@ -150,6 +158,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_localisation_argument(parser)
     add_runner_arguments(parser)
+
+
+def reference_matcher(text: str, matchers) -> str:
+    """``--reference``: the row label (``MatcherSpec.label``; `matchers`: specs or {label: spec})
+    of the one of `matchers` named by
+    `text` (its name or label, case-insensitive, as --matchers reads names); ValueError naming
+    the option otherwise."""
+    named = dict(matchers) if isinstance(matchers, dict) else {m.label: m for m in matchers}
+    names = list(named)
+    by_lower = {m.name.lower(): label for label, m in named.items()}
+    by_lower |= {n.lower(): n for n in names}
+    name = by_lower.get(text.strip().lower())
+    if name is None:
+        raise ValueError(
+            f"--reference: {text!r} is not one of the matchers evaluated ({', '.join(names)}); "
+            "add it to --matchers"
+        )
+    return name
 
 
 def add_localisation_argument(parser: argparse.ArgumentParser) -> None:
@@ -210,6 +236,7 @@ def run(args: argparse.Namespace) -> int:
             else m
             for m in matchers
         ]
+    reference = None if args.reference is None else reference_matcher(args.reference, matchers)
     with make_executor(args.workers, args.scheduler) as executor:
         runner = Runner(
             ResultCache(args.cache),
@@ -227,7 +254,7 @@ def run(args: argparse.Namespace) -> int:
             tune=args.tune,
             protocol=args.protocol,
         )
-    markdown = write_tables(args.out, args.paper_table)
+    markdown = write_tables(args.out, args.paper_table, reference)
     from eval.report.figures import render_all
 
     render_all(args.out)

@@ -7,7 +7,12 @@ reader never sees half a file and an interrupted sweep leaves only complete entr
 
 The code version in every key is a SHA-256 over the source of everything that shapes a run's
 result: the ``matchers`` and ``cadsim`` packages (matchers, dataset reading, depth noise,
-detection), ``eval/core/tasks.py`` and ``eval/core/thinning.py`` — any edit there invalidates the cache.
+detection), ``eval/core/tasks.py`` and ``eval/core/thinning.py`` — any edit there invalidates the cache;
+a plug-in matcher's runs also carry its own module file's hash (:mod:`eval.core.matcher_source`).
+
+An entry is a local speed-up, not a trusted record: :meth:`ResultCache.load` bounds every array a
+``.npy`` header declares and refuses (:class:`StaleEntry`) one whose contents contradict themselves
+(:mod:`eval.core.cache_checks`); the runner also holds it against the dataset and recomputes it.
 """
 
 from __future__ import annotations
@@ -24,9 +29,12 @@ from pathlib import Path
 
 import numpy as np
 
+from eval.core.cache_checks import StaleEntry, check_arrays_bounded, check_result, is_hungarian
 from eval.core.tasks import MatcherSpec, PairOutcome, RunResult, RunSpec
 
-_FORMAT = 4  # 4: the positions, true pose, broadcast prior pose and camera mounts of every pair
+# 4: the positions, true pose, broadcast prior pose and camera mounts of every pair;
+# 5: whether each pair's assignment is the Hungarian of its scores ("hungarian")
+_FORMAT = 5
 
 # Sources that cannot change a run's result (how tasks are dispatched, the CLI, drawing, benches):
 # left out of the code version so editing them does not invalidate the cache. Everything else
@@ -79,8 +87,27 @@ def _ragged(arrays: list[np.ndarray], name: str, dtype) -> dict[str, np.ndarray]
 
 
 def _unragged(data, name: str) -> list[np.ndarray]:
+    """The per-pair arrays of `name`; ValueError unless its offsets run from 0 to its length,
+    never decreasing."""
     flat, offsets = data[name], data[f"{name}_offsets"]
+    if (
+        flat.ndim != 1
+        or offsets.ndim != 1
+        or offsets.dtype.kind not in "iu"
+        or len(offsets) == 0
+        or offsets[0] != 0
+        or offsets[-1] != len(flat)
+        or (np.diff(offsets) < 0).any()
+    ):
+        raise ValueError(f"{name}: offsets do not partition its {flat.size} values")
     return [flat[a:b] for a, b in zip(offsets[:-1], offsets[1:], strict=True)]
+
+
+def _size(value) -> int:
+    """A stored view size: an int ≥ 0 (ValueError otherwise, before it shapes any reshape)."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise ValueError(f"view size: expected an integer ≥ 0, got {value!r}")
+    return value
 
 
 def _spec_from_dict(d: dict) -> RunSpec:
@@ -131,7 +158,11 @@ class ResultCache:
                     k: getattr(o, k)
                     for k in ("index", "name", "episode", "sim_seed", "checksum", "n1", "n2")
                 }
-                | {"time_s": o.time_s, "iterations": o.iterations}
+                | {
+                    "time_s": o.time_s,
+                    "iterations": o.iterations,
+                    "hungarian": is_hungarian(o.assigned, o.scores),
+                }
                 for o in outcomes
             ],
         }
@@ -157,10 +188,12 @@ class ResultCache:
         return path
 
     def load(self, spec: RunSpec) -> RunResult:
-        """The cached result of `spec`; ``KeyError`` if absent, ``ValueError`` if unreadable."""
+        """The cached result of `spec`; ``KeyError`` if absent, ``ValueError`` if unreadable,
+        :class:`StaleEntry` (a ValueError) if its contents contradict themselves."""
         path = self.path(spec)
         if not path.is_file():
             raise KeyError(f"{path}: no cached result for {spec}")
+        check_arrays_bounded(path)
         try:
             with np.load(path, allow_pickle=False) as data:
                 meta = json.loads(str(data["meta"]))
@@ -174,26 +207,40 @@ class ResultCache:
             raise ValueError(
                 f"{path}: unreadable cache entry ({exc}); delete it to recompute"
             ) from exc
-        if meta.get("format") != _FORMAT or _spec_from_dict(meta["spec"]) != spec:
+        try:
+            belongs = meta.get("format") == _FORMAT and _spec_from_dict(meta["spec"]) == spec
+        except (AttributeError, KeyError, TypeError, ValueError, IndexError):
+            belongs = False
+        if not belongs:
             raise ValueError(f"{path}: cache entry does not belong to {spec}; delete it")
-        outcomes = [
-            PairOutcome(
-                **{
-                    k: p[k]
-                    for k in ("index", "name", "episode", "sim_seed", "checksum", "n1", "n2")
-                },
-                gt_pairs=g.reshape(-1, 2),
-                assigned=a.reshape(-1, 2),
-                scores=s.reshape(p["n1"], p["n2"]),
-                time_s=float(p["time_s"]),
-                iterations=int(p["iterations"]),
-                **_pose_fields(q1, p["n1"], q2, p["n2"], row),
-            )
-            for p, g, a, s, q1, q2, row in zip(
-                meta["pairs"], gts, assigned, scores, points1, points2, pose, strict=True
-            )
-        ]
-        return RunResult(spec, meta["dataset_dir"], outcomes, float(meta["wall_s"]))
+        try:
+            result = _result(spec, meta, gts, assigned, scores, points1, points2, pose)
+        except (AttributeError, KeyError, TypeError, ValueError, IndexError) as exc:
+            raise StaleEntry(f"{path}: malformed cache entry ({exc})") from exc
+        check_result(result, [bool(p.get("hungarian")) for p in meta["pairs"]], path)
+        return result
+
+
+def _result(spec, meta, gts, assigned, scores, points1, points2, pose) -> RunResult:
+    """The :class:`RunResult` of a read entry (shapes as stored; :func:`check_result` judges)."""
+    pairs = meta["pairs"]
+    if not (len(pairs) == len(gts) == len(assigned) == len(scores) == len(pose)):
+        raise ValueError(f"{len(pairs)} pairs but {len(scores)} score matrices, {len(pose)} poses")
+    outcomes = [
+        PairOutcome(
+            **{k: p[k] for k in ("index", "name", "episode", "sim_seed", "checksum", "n1", "n2")},
+            gt_pairs=g.reshape(-1, 2),
+            assigned=a.reshape(-1, 2),
+            scores=s.reshape(_size(p["n1"]), _size(p["n2"])),
+            time_s=float(p["time_s"]),
+            iterations=int(p["iterations"]),
+            **_pose_fields(q1, _size(p["n1"]), q2, _size(p["n2"]), row),
+        )
+        for p, g, a, s, q1, q2, row in zip(
+            pairs, gts, assigned, scores, points1, points2, pose, strict=True
+        )
+    ]
+    return RunResult(spec, str(meta["dataset_dir"]), outcomes, float(meta["wall_s"]))
 
 
 def _points(points: np.ndarray | None, n: int) -> np.ndarray:

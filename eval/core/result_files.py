@@ -66,9 +66,12 @@ def write_text(path: str | Path, text: str) -> Path:
 
 
 def write_csv(frame: pd.DataFrame, path: str | Path, **options) -> Path:
-    """Replace ``path`` with ``frame.to_csv(**options)`` (``index=False`` unless given)."""
+    """Replace ``path`` with ``frame.to_csv(**options)`` (``index=False`` unless given), its
+    text cells safe to open in a spreadsheet (:mod:`eval.core.spreadsheet_safe`)."""
+    from eval.core.spreadsheet_safe import neutralise
+
     options.setdefault("index", False)
-    return write_text(path, frame.to_csv(**options))
+    return write_text(path, neutralise(frame).to_csv(**options))
 
 
 def save_figure(fig, path: str | Path, **options) -> Path:

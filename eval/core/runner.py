@@ -26,7 +26,9 @@ from tqdm import tqdm
 
 from cadsim.user_errors import is_user_error, one_line
 from eval.core.cache import ResultCache, code_version
+from eval.core.cache_checks import disagreement, inconsistent_groups
 from eval.core.executor import Executor
+from eval.core.matcher_source import run_version
 from eval.core.tasks import MatcherSpec, RunResult, RunSpec, RunTask, execute
 
 log = logging.getLogger(__name__)
@@ -153,7 +155,7 @@ def _latency_only(req: RunRequest) -> RunRequest:
 
 def _group(
     missing: Sequence[RunRequest],
-    version: str,
+    version: str | Callable[[RunRequest], str],
     workers: int = 1,
     plugin_time_limit_s: float | None = None,
 ) -> list[RunTask]:
@@ -163,7 +165,10 @@ def _group(
     plan and the hypergraph matchers' k-NN search. While there are fewer than two tasks per
     worker (one worker: one task each), the task with the most runs is split in two, by rates
     when it has several, else by matchers — interleaved halves, so that they cost about the
-    same. Every task carries ``plugin_time_limit_s``, the plug-ins' time limit per frame pair."""
+    same. Every task carries ``plugin_time_limit_s``, the plug-ins' time limit per frame pair.
+    ``version``: the code version of every run, or of each request (a plug-in's includes its
+    source's hash, :mod:`eval.core.matcher_source`: its runs get tasks of their own)."""
+    version_of = version if callable(version) else (lambda _req: version)
     groups: dict[tuple, dict[float | None, list[MatcherSpec]]] = {}
     for req in missing:
         key = (
@@ -175,6 +180,7 @@ def _group(
             req.localisation,
             req.views,
             req.sensor,
+            version_of(req),
         )
         groups.setdefault(key, {}).setdefault(req.noise_rate, []).append(req.matcher)
     blocks: list[tuple[tuple, tuple[MatcherSpec, ...], tuple[float | None, ...]]] = []
@@ -195,7 +201,7 @@ def _group(
             break
         blocks[widest : widest + 1] = halves
     return [
-        RunTask(*k[:3], rates, matchers, version, *k[3:7], plugin_time_limit_s, k[7])
+        RunTask(*k[:3], rates, matchers, k[8], *k[3:7], plugin_time_limit_s, k[7])
         for k, matchers, rates in blocks
     ]
 
@@ -294,6 +300,7 @@ class Runner:
         self.progress = progress
         self.stats = RunStats()  # of the last run() call
         self.totals = RunStats()  # of every call so far
+        self._versions: dict[str, str] = {}  # matcher name -> its runs' code version (per call)
 
     def run(self, requests: Sequence[RunRequest], desc: str = "runs") -> list[RunResult]:
         """Results of `requests`, in order; computes the missing ones. Raises :class:`RunFailed`
@@ -325,16 +332,60 @@ class Runner:
             result = RunResult(spec, result.dataset_dir, outcomes, result.wall_s * share)
         return result
 
+    def _version(self, req: RunRequest) -> str:
+        """The code version of `req`'s run (a plug-in's includes its source file's hash)."""
+        name = req.matcher.name
+        if name not in self._versions:
+            self._versions[name] = run_version(self.version, name)
+        return self._versions[name]
+
+    def _servable(self, specs: dict[RunSpec, RunRequest]) -> dict[RunSpec, RunResult]:
+        """The cached results of `specs` that can be served: readable, consistent with
+        themselves, with their dataset and with the other runs on the same data
+        (:mod:`eval.core.cache_checks`). An entry refused is logged and recomputed."""
+        found: dict[RunSpec, RunResult] = {}
+        for spec, req in specs.items():
+            if self._source(spec) is None:
+                continue
+            try:
+                result = self._load(spec)
+                why = disagreement(result, req.dataset_dir)
+            except ValueError as exc:
+                why = one_line(exc)
+            if why is None:
+                found[spec] = result
+            else:
+                log.warning("result cache: refused %s (%s); recomputing it", spec.key()[:16], why)
+        loaded = list(found.values())
+        for i in sorted(inconsistent_groups(loaded)):
+            spec = loaded[i].spec
+            log.warning(
+                "result cache: refused %s (its ground truth or view sizes differ from another "
+                "run's on the same data); recomputing it",
+                spec.key()[:16],
+            )
+            found.pop(spec, None)
+        return found
+
     def _run(self, requests: Sequence[RunRequest], desc: str) -> list[RunResult]:
-        wanted = [req.spec(self.version) for req in requests]
+        self._versions = {}  # a plug-in's file may have changed since the last call
+        wanted = [req.spec(self._version(req)) for req in requests]
         requests = [_seed_free(_latency_only(req)) for req in requests]
-        specs = [req.spec(self.version) for req in requests]
-        missing = list(
-            {s: r for s, r in zip(specs, requests, strict=True) if self._source(s) is None}.values()
-        )
-        self.stats = RunStats(cached=len(set(specs)) - len(missing))
+        specs = [req.spec(self._version(req)) for req in requests]
+        by_spec = dict(zip(specs, requests, strict=True))
+        loaded = self._servable(by_spec)
+        missing = [r for s, r in by_spec.items() if s not in loaded]
+        if loaded:
+            log.info(
+                "%s: %d of %d runs read from the result cache %s (delete it to recompute them)",
+                desc,
+                len(loaded),
+                len(by_spec),
+                self.cache.root,
+            )
+        self.stats = RunStats(cached=len(loaded))
         if missing:
-            tasks = _group(missing, self.version, self.executor.workers, self.plugin_time_limit_s)
+            tasks = _group(missing, self._version, self.executor.workers, self.plugin_time_limit_s)
             log.info(
                 "%s: %d cached, %d to compute in %d tasks",
                 desc,
@@ -343,6 +394,7 @@ class Runner:
                 len(tasks),
             )
             failures, errors = [], []
+            fresh: dict[RunSpec, RunResult] = {}
             with _TaskProgress(tasks, desc, self.executor, self.progress) as bar:
                 for done in self.executor.map_unordered(self.task_fn, tasks):
                     task = tasks[done.index]
@@ -358,6 +410,7 @@ class Runner:
                     else:
                         for result in done.value:
                             self.cache.store(result)
+                            fresh[result.spec] = result
                         self.stats.computed += len(done.value)
                     bar.finished(task)
             if failures:
@@ -366,7 +419,13 @@ class Runner:
                     f"to retry only the failed ones); the first: {one_line(errors[0])}",
                     errors,
                 )
-        loaded = {spec: self._load(spec) for spec in dict.fromkeys(specs)}  # each file once
+        for spec in dict.fromkeys(specs):  # each computed run read back as stored
+            if spec not in loaded:
+                try:
+                    loaded[spec] = self._load(spec)
+                except ValueError as exc:  # stored but not servable: use it this once
+                    log.warning("result cache: %s; not served again", one_line(exc))
+                    loaded[spec] = fresh[spec]
         return [
             loaded[spec] if spec == want else dataclasses.replace(loaded[spec], spec=want)
             for spec, want in zip(specs, wanted, strict=True)

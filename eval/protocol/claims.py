@@ -214,11 +214,13 @@ def read_claims(path: str | Path) -> pd.DataFrame:
     path = Path(path)
     if not path.is_file():
         return pd.DataFrame(columns=list(COLUMNS))
+    from eval.core.spreadsheet_safe import restore
+
     frame = pd.read_csv(path, keep_default_na=False, na_values=[""])
     missing = [c for c in COLUMNS if c not in frame.columns]
     if missing:
         raise ValueError(f"{path}: columns {missing} missing; expected {list(COLUMNS)}")
-    return frame
+    return restore(frame)  # the statements as built (a leading ' marks text for spreadsheets)
 
 
 def statements(

@@ -12,7 +12,8 @@ one there is none. ``mdd`` is the minimum detectable difference at 95 % confiden
 from the same per-cluster differences (:mod:`eval.protocol.detectable_difference`), ``clusters``
 the number of independent clusters it counts.
 
-Output: ``paired_differences.csv`` (:data:`COLUMNS`), maximin against every other matcher.
+Output: ``paired_differences.csv`` (:data:`COLUMNS`), the reference (maximin unless
+``cadsim evaluate --reference NAME`` names another) against every other matcher.
 """
 
 from __future__ import annotations
@@ -94,9 +95,12 @@ def paired_differences(
     return pd.DataFrame(rows, columns=list(COLUMNS))
 
 
-def write_paired_differences(out_dir: str | Path, variant: str = "") -> Path | None:
-    """``paired_differences[_variant].csv`` from that variant's ``metrics_per_pair`` file in
-    `out_dir` (None when it is missing; variant "" is the main one)."""
+def write_paired_differences(
+    out_dir: str | Path, variant: str = "", reference: str = REFERENCE
+) -> Path | None:
+    """``paired_differences[_variant].csv`` (`reference` − every other matcher) from that
+    variant's ``metrics_per_pair`` file in `out_dir` (None when it is missing; variant "" is the
+    main one)."""
     from eval.protocol.variants import variant_path
 
     out_dir = Path(out_dir)
@@ -105,5 +109,5 @@ def write_paired_differences(out_dir: str | Path, variant: str = "") -> Path | N
         return None
     per_pair = pd.read_csv(source, keep_default_na=False, na_values=[""])
     path = variant_path(out_dir, "paired_differences", variant, ".csv")
-    write_csv(paired_differences(per_pair).round(6), path)
+    write_csv(paired_differences(per_pair, reference=reference).round(6), path)
     return path

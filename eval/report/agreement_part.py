@@ -175,7 +175,9 @@ def agreement_part(results: Path, claims: pd.DataFrame) -> list[str]:
         "### Where we agree with the paper, and where not",
         "",
         "(Computed from the tables above and their claims, `claims.csv`; percent, differences "
-        "in percentage points.)",
+        "in percentage points. These bullets compare like with like: each matcher with the cues "
+        "the paper published for it, `table1.csv` — the headline Table I above gives every "
+        "matcher the same cues, `table1_equal_cues.csv`, so its figures differ.)",
         "",
         *bullets,
         "",

@@ -10,12 +10,18 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from eval.core.spreadsheet_safe import restore
+from eval.report.markdown_cell import cell
 from eval.report.tables import PAPER_NAMES, dataset_order, method_name
 
 
 def read_table(path: Path) -> pd.DataFrame | None:
     """The CSV at ``path`` (empty strings as missing), or None when it is absent."""
-    return pd.read_csv(path, keep_default_na=False, na_values=[""]) if path.is_file() else None
+    return (
+        restore(pd.read_csv(path, keep_default_na=False, na_values=[""]))
+        if path.is_file()
+        else None
+    )
 
 
 def plural(count: int, noun: str) -> str:
@@ -36,8 +42,11 @@ def _interval(row) -> str:
 def paired_markdown(table: pd.DataFrame) -> str:
     """One row per (dataset, rival): maximin − rival in F1, balanced accuracy and recall (pp),
     and the minimum detectable ΔF1 (95 % confidence, 80 % power; "–" in files without it)."""
+    reference = (
+        str(table["matcher_a"].iloc[0]) if "matcher_a" in table and len(table) else "maximin"
+    )
     lines = [
-        "| Dataset | maximin − | ΔF1 [95 % CI] | ΔF1 MDD | Δ balanced acc. [95 % CI] "
+        f"| Dataset | {cell(reference)} − | ΔF1 [95 % CI] | ΔF1 MDD | Δ balanced acc. [95 % CI] "
         "| Δ recall [95 % CI] | episodes |",
         "|:---|:---|---:|---:|---:|---:|---:|",
     ]
@@ -55,7 +64,9 @@ def paired_markdown(table: pd.DataFrame) -> str:
             cells.insert(1, f"{100 * mdd:.1f}" if np.isfinite(mdd) else "–")
             episodes = int(group["episodes"].iloc[0])
             lines.append(
-                f"| {dataset} | {method_name(rival)} | " + " | ".join(cells) + f" | {episodes} |"
+                f"| {cell(dataset)} | {cell(method_name(rival))} | "
+                + " | ".join(cells)
+                + f" | {episodes} |"
             )
     return "\n".join(lines)
 

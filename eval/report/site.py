@@ -86,8 +86,32 @@ def _attr(escaped: str) -> str:
     return html.escape(html.unescape(escaped))
 
 
+_ESCAPABLE = "\\`*_[]<>()!#|"
+"""Characters a backslash makes literal (CommonMark's backslash escapes, the ones the report's
+cells use: :mod:`eval.report.markdown_cell`)."""
+_HELD = {ch: chr(0xE000 + k) for k, ch in enumerate(_ESCAPABLE)}  # private-use stand-ins
+
+
+def _hold_escapes(text: str) -> str:
+    """``text`` with each backslash-escaped character replaced by a private-use stand-in, so
+    that no code span, link, emphasis or tag starts from it."""
+    return re.sub(r"\\([\\`*_\[\]<>()!#|])", lambda m: _HELD[m[1]], text)
+
+
+def _release_escapes(html_text: str) -> str:
+    """The stand-ins of :func:`_hold_escapes` back as (HTML-escaped) literal characters."""
+    for ch, held in _HELD.items():
+        html_text = html_text.replace(held, html.escape(ch))
+    return html_text
+
+
 def inline(text: str, links: dict[str, str] | None = None) -> str:
-    """One line of Markdown as HTML (escaped; code spans kept literal)."""
+    """One line of Markdown as HTML (escaped; code spans kept literal; a backslash-escaped
+    character shown as itself)."""
+    return _release_escapes(_inline(_hold_escapes(text), links))
+
+
+def _inline(text: str, links: dict[str, str] | None = None) -> str:
     links = links or {}
     parts = _CODE.split(text)  # even: text, odd: code
     out = []

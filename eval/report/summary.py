@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from eval.core.abstention import NO_NUMBER, cannot_run
+from eval.report.markdown_cell import cell as label_cell
 from eval.report.markdown_cell import row
 from eval.report.tables import PAPER_NAMES, dataset_order, method_name
 
@@ -31,8 +32,10 @@ def read_csv(path: Path) -> pd.DataFrame | None:
     """The CSV at ``path`` (empty strings as missing), or None when it is absent or unreadable."""
     if not path.is_file():
         return None
+    from eval.core.spreadsheet_safe import restore
+
     try:
-        return pd.read_csv(path, keep_default_na=False, na_values=[""])
+        return restore(pd.read_csv(path, keep_default_na=False, na_values=[""]))
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError):
         return None
 
@@ -107,7 +110,7 @@ def table1(results: Path, claims: pd.DataFrame | None = None) -> list[str]:
         lines.append(
             _row(
                 [
-                    dataset,
+                    label_cell(dataset),
                     pct(paper.loc["maximin", "f1_mean"]),
                     cell,
                     rival_cell,
@@ -161,7 +164,7 @@ def noise(results: Path, claims: pd.DataFrame | None = None) -> list[str]:
                 if len(hit)
                 else "–"
             )
-        lines.append(_row([str(dataset), *cells, *leaders]))
+        lines.append(_row([label_cell(dataset), *cells, *leaders]))
     return lines
 
 
@@ -309,11 +312,13 @@ def transfer(results: Path, claims: pd.DataFrame | None = None) -> list[str]:
     matchers = list(dict.fromkeys(rows["matcher"]))
     f1 = rows.drop_duplicates(["train", "matcher"]).set_index(["train", "matcher"])["f1_pooled"]
     lines = [
-        f"| Trained on (tested on {test}) | " + " | ".join(matchers) + " |",
+        f"| Trained on (tested on {label_cell(test)}) | "
+        + " | ".join(label_cell(m) for m in matchers)
+        + " |",
         "|:---|" + "---:|" * len(matchers),
     ]
     for train in dict.fromkeys(rows["train"]):
-        lines.append(_row([str(train), *(pct(f1.get((train, m))) for m in matchers)]))
+        lines.append(_row([label_cell(train), *(pct(f1.get((train, m))) for m in matchers)]))
     if _has(rows, "handcrafted", "handcrafted_f1_pooled"):
         cells = []
         for m in matchers:

@@ -237,8 +237,15 @@ def to_markdown(table: pd.DataFrame) -> str:
             f"**{cell(dataset)}** — {frames} test frame pairs × {runs} run{'s' * (runs != 1)}; "
             "percent, mean ± std over runs"
         )
+        if runs == 1:  # the tutorial's case: a spread needs several runs
+            caption += " (one run: every ± 0.0 is no spread measured; --runs N gives one)"
+        if has_paper:
+            caption += (
+                f"; paper ({paper}): mean ± its printed spread, from the paper's own data and "
+                "protocol, not these pairs — compare orders and gaps, not digits"
+            )
         lines = [
-            caption + (f"; paper ({paper}): mean ± its printed spread" if has_paper else ""),
+            caption,
             "",
             row(header),
             "|" + "|".join(":---" if h == "Method" else "---:" for h in header) + "|",
@@ -305,10 +312,13 @@ def write_table1(
     return markdown
 
 
-def write_tables(out_dir: str | Path, paper_csv: str | Path = PAPER_CSV) -> str:
+def write_tables(
+    out_dir: str | Path, paper_csv: str | Path = PAPER_CSV, reference: str | None = None
+) -> str:
     """Table I of every variant whose per-pair metrics are in `out_dir`, and the paired
-    differences of the main one; returns the main variant's Markdown (else the first written)."""
-    from eval.protocol.paired_differences import write_paired_differences
+    differences (`reference` − every other matcher; None: maximin) of the main and equal-cue
+    ones; returns the main variant's Markdown (else the first written)."""
+    from eval.protocol.paired_differences import REFERENCE, write_paired_differences
 
     out_dir = Path(out_dir)
     written = {
@@ -318,5 +328,5 @@ def write_tables(out_dir: str | Path, paper_csv: str | Path = PAPER_CSV) -> str:
     }
     for variant in (MAIN, EQUAL):
         if variant in written:
-            write_paired_differences(out_dir, variant)
+            write_paired_differences(out_dir, variant, reference or REFERENCE)
     return written.get(MAIN) or next(iter(written.values()), "")

@@ -177,6 +177,8 @@ def write_agreement(out_dir: str | Path, paper_csv: str | Path = PAPER_CSV) -> p
 
 def to_markdown(table: pd.DataFrame) -> str:
     """A short Markdown table of ρ with its interval."""
+    from eval.report.markdown_cell import cell as md_cell
+
     lines = [
         "| Ranking on | vs ranking on | matchers | Spearman ρ [95 % CI] |",
         "|:---|:---|---:|---:|",
@@ -186,7 +188,7 @@ def to_markdown(table: pd.DataFrame) -> str:
         cell = (
             "–" if pd.isna(r["rho"]) else f"{r['rho']:.2f} [{r['ci_low']:.2f}, {r['ci_high']:.2f}]"
         )
-        lines.append(f"| {r['dataset']} | {r['reference']} | {count} | {cell} |")
+        lines.append(f"| {md_cell(r['dataset'])} | {md_cell(r['reference'])} | {count} | {cell} |")
     return "\n".join(lines) + "\n"
 
 

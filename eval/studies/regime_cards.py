@@ -137,6 +137,7 @@ def write_regime(out_dir: str | Path, datasets: Mapping[str, str | Path]) -> Pat
 
 def regime_markdown(path: str | Path) -> str:
     """``regime.csv`` as a Markdown table (shares in percent; empty cells as –)."""
+    from eval.report.markdown_cell import cell as md_cell
     from eval.report.tables import dataset_order
 
     table = pd.read_csv(path, keep_default_na=False, na_values=[""])
@@ -144,7 +145,7 @@ def regime_markdown(path: str | Path) -> str:
     header = ["Dataset", *(TITLES[c] for c in COLUMNS[1:])]
     lines = ["| " + " | ".join(header) + " |", "|:---|" + "---:|" * (len(header) - 1)]
     for _, r in table.iterrows():
-        cells = [str(r["dataset"])]
+        cells = [md_cell(r["dataset"])]
         for c in COLUMNS[1:]:
             v = r.get(c)
             if pd.isna(v):

@@ -78,6 +78,8 @@ def to_markdown(table: pd.DataFrame) -> str:
     """The transfer matrix: one block per test set, a row per (training set, learned matcher),
     the hand-crafted matcher of the same kind chosen on validation beside it (percent), and the
     difference with its interval (percentage points)."""
+    from eval.report.markdown_cell import cell as md_cell
+
     lines = [
         "Transfer of the learned matchers (pooled F1 and AP, percent). τ of every learned row "
         "from pairs its model was not trained on: each cadsim test set's validation split; on "
@@ -95,12 +97,12 @@ def to_markdown(table: pd.DataFrame) -> str:
         frames = rows["frames"].max()
         shown = [] if pd.isna(frames) else [f"{int(frames)} frame pairs"]
         shown += [clusters_text(rows.iloc[0], "in")] if pd.notna(rows["clusters"].max()) else []
-        lines += [f"**Tested on {test}**" + (f" ({' '.join(shown)})" if shown else ""), ""]
+        lines += [f"**Tested on {md_cell(test)}**" + (f" ({' '.join(shown)})" if shown else ""), ""]
         lines += ["| " + " | ".join(header) + " |", "|:---|:---|---:|---:|:---|---:|---:|---:|"]
         for r in rows.itertuples(index=False):
             cells = [
-                r.train,
-                r.matcher,
+                md_cell(r.train),
+                md_cell(r.matcher),
                 pct(r.f1_pooled),
                 pct(r.ap),
                 r.handcrafted if isinstance(r.handcrafted, str) and r.handcrafted else "–",

@@ -69,10 +69,19 @@ def lookup(
     if families and rest and prefix in families:
         return families[prefix](rest)
     if ":" in name:  # not added to available(): an import path names itself
+        module, _, attr = name.partition(":")
         try:
             fn = load(name)
-        except (ImportError, AttributeError) as exc:
-            raise ValueError(f"{kind} {name!r}: cannot import it ({exc})") from None
+        except ImportError as exc:
+            raise ValueError(
+                f"{kind} {name!r}: module {module!r} could not be imported "
+                f"({type(exc).__name__}: {exc}); put the folder holding it on PYTHONPATH "
+                f"(PYTHONPATH=/path/to/folder) or install its package"
+            ) from None
+        except AttributeError:
+            raise ValueError(
+                f"{kind} {name!r}: module {module!r} imports but has no {attr!r}"
+            ) from None
         if not callable(fn):
             raise ValueError(f"{kind} {name!r} is not callable")
         return fn
