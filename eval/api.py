@@ -21,7 +21,7 @@ from eval.core.cache import ResultCache
 from eval.core.executor import make_executor
 from eval.core.runner import Runner
 from eval.report.tables import build_table, write_tables
-from eval.studies.evaluation import evaluate, open_entry, parse_matchers
+from eval.studies.table1.evaluation import evaluate, open_entry, parse_matchers
 
 
 def evaluate_matchers(

@@ -56,17 +56,17 @@ from eval.report.run_part import (
 )
 from eval.report.site import headings, write_site
 from eval.report.summary_captions import SUMMARIES
-from eval.studies.agreement import readme_part as agreement_readme
-from eval.studies.external import readme_part as external_readme
-from eval.studies.multiagent_report import readme_part as multiagent_readme
-from eval.studies.prior_defaults import readme_part as prior_sensitivity_readme
-from eval.studies.regime_cards import regime_markdown
-from eval.studies.temporal import readme_part as temporal_readme
-from eval.studies.temporal import readme_part_lidar as temporal_lidar_readme
-from eval.studies.transfer_report import readme_part as transfer_readme
-from eval.studies.v2x_boxes import readme_part as v2x_boxes_readme
-from eval.studies.v2x_lidar import readme_part as v2x_lidar_readme
-from eval.studies.v2x_report import readme_part as v2x_readme
+from eval.studies.external.agreement import readme_part as agreement_readme
+from eval.studies.external.evaluation import readme_part as external_readme
+from eval.studies.external.prior_defaults import readme_part as prior_sensitivity_readme
+from eval.studies.multiagent.report import readme_part as multiagent_readme
+from eval.studies.table1.regime_cards import regime_markdown
+from eval.studies.temporal.evaluation import readme_part as temporal_readme
+from eval.studies.temporal.evaluation import readme_part_lidar as temporal_lidar_readme
+from eval.studies.transfer.report import readme_part as transfer_readme
+from eval.studies.v2x.boxes import readme_part as v2x_boxes_readme
+from eval.studies.v2x.lidar import readme_part as v2x_lidar_readme
+from eval.studies.v2x.report import readme_part as v2x_readme
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
 __all__ = [

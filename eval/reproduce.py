@@ -58,7 +58,7 @@ from eval.protocol.cues import EQUAL_CUE_OPTIONS
 from eval.protocol.variants import PAPER_OPTIONS
 from eval.readme_results import update_readme, write_report
 from eval.report.run_record import COLD_RECORD, StageTimer, keep_cold_record, write_run_record
-from eval.studies.evaluation import DEFAULT_CACHE, dataset_label, parse_matchers
+from eval.studies.table1.evaluation import DEFAULT_CACHE, dataset_label, parse_matchers
 
 log = logging.getLogger("eval.reproduce")
 

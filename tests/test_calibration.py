@@ -16,7 +16,7 @@ from eval.core.executor import SerialExecutor
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec, PairOutcome, RunResult, RunSpec
 from eval.protocol import calibration
-from eval.studies.evaluation import evaluate, open_entry
+from eval.studies.table1.evaluation import evaluate, open_entry
 from matchers.core.discretise import discretise
 
 

@@ -72,7 +72,7 @@ def test_claims_csv_is_written_with_its_columns(tmp_path):
 
 
 def test_the_realism_goals_read_the_episode_interval_of_the_auc(tmp_path):
-    from eval.studies.v2x_realism import realism_check
+    from eval.studies.v2x.realism import realism_check
 
     (tmp_path / "regime.csv").write_text(
         "dataset,appearance_auc,image_auc,same_class_auc\nCAD-V2X,0.84,0.745,\n"

@@ -24,7 +24,7 @@ from eval.protocol.cues import (
 )
 from eval.protocol.tuning import candidates_of
 from eval.report.tables import write_tables
-from eval.studies.evaluation import evaluate, open_entry
+from eval.studies.table1.evaluation import evaluate, open_entry
 from matchers import Problem, get
 from matchers.blocks.cue_terms import metric_factor, weighted_tensor
 from matchers.core.scale import median_spacing

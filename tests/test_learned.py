@@ -140,7 +140,7 @@ def test_none_appearance_and_learned_rows_share_one_calibration_path(
     from eval.core.tasks import MatcherSpec
     from eval.protocol import calibration
     from eval.protocol.model_options import with_model
-    from eval.studies.evaluation import evaluate, open_entry
+    from eval.studies.table1.evaluation import evaluate, open_entry
 
     calibrated = []
     real = calibration.calibrate

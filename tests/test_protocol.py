@@ -15,7 +15,7 @@ from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
 from eval.protocol.variants import paper_spec, variant_path
 from eval.report.tables import write_tables
-from eval.studies.evaluation import evaluate, open_entry
+from eval.studies.table1.evaluation import evaluate, open_entry
 
 
 @pytest.fixture

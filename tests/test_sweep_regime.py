@@ -16,8 +16,8 @@ from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
 from eval.protocol import calibration
 from eval.protocol.crossovers import crossings, find_crossovers
-from eval.studies import regime_cards
-from eval.studies.evaluation import open_entry
+from eval.studies.table1 import regime_cards
+from eval.studies.table1.evaluation import open_entry
 
 
 @pytest.fixture

@@ -1,4 +1,4 @@
-"""The temporal table (issue 41's study, ``eval/studies/temporal.py``) on a tiny fake sequence
+"""The temporal table (issue 41's study, ``eval/studies/temporal/evaluation.py``) on a tiny fake sequence
 dataset (the fake stages of tests/test_generate_fakes.py: no SUMO, no OpenGL): the table and its
 columns, W = 1 rows equal to the two-view matcher's per-frame outcome, τ from validation only,
 goal lines through goal_verdict, the README part; a prior reader under ``denied`` gets no number
@@ -17,7 +17,9 @@ from cadsim.dataset import Dataset
 from eval.engine import goal
 from eval.protocol import goal_verdict
 from eval.protocol.metrics import pair_metrics
-from eval.studies import temporal, temporal_report, temporal_runs
+from eval.studies.temporal import evaluation as temporal
+from eval.studies.temporal import report as temporal_report
+from eval.studies.temporal import runs as temporal_runs
 from matchers.core.registry import get
 
 METHODS = (("windowed:consistency", (1, 3, 10)), ("temporal_pose", (1, 10)))

@@ -16,7 +16,7 @@ from eval.core.executor import SerialExecutor
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
 from eval.protocol import calibration, tuning
-from eval.studies.evaluation import chosen_specs, evaluate, open_entry
+from eval.studies.table1.evaluation import chosen_specs, evaluate, open_entry
 from matchers.core.discretise import discretise
 from matchers.core.matching import Matching
 from matchers.core.problem import Problem

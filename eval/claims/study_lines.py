@@ -30,15 +30,15 @@ from eval.protocol.claims import (
     parse_goal_line,
 )
 from eval.report.run_part import read_record, study_seconds
-from eval.studies.external import readme_part as external_part
-from eval.studies.multiagent_report import readme_part as multiagent_part
-from eval.studies.prior_defaults import readme_part as prior_part
-from eval.studies.temporal import readme_part as temporal_part
-from eval.studies.temporal import readme_part_lidar as temporal_lidar_part
-from eval.studies.transfer_report import readme_part as transfer_part
-from eval.studies.v2x_boxes import readme_part as v2x_boxes_part
-from eval.studies.v2x_lidar import readme_part as v2x_lidar_part
-from eval.studies.v2x_report import readme_part as v2x_part
+from eval.studies.external.evaluation import readme_part as external_part
+from eval.studies.external.prior_defaults import readme_part as prior_part
+from eval.studies.multiagent.report import readme_part as multiagent_part
+from eval.studies.temporal.evaluation import readme_part as temporal_part
+from eval.studies.temporal.evaluation import readme_part_lidar as temporal_lidar_part
+from eval.studies.transfer.report import readme_part as transfer_part
+from eval.studies.v2x.boxes import readme_part as v2x_boxes_part
+from eval.studies.v2x.lidar import readme_part as v2x_lidar_part
+from eval.studies.v2x.report import readme_part as v2x_part
 
 COMPARATIVE = re.compile(
     r"\b(not met|not shown|met|ahead|behind|leaders?|leads|trails|overtakes|favours|gains?|"

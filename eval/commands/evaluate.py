@@ -28,7 +28,7 @@ from eval.core.tasks import MatcherSpec
 from eval.protocol.model_options import with_model
 from eval.protocol.variants import PROTOCOLS
 from eval.report.tables import PAPER_CSV, write_tables
-from eval.studies.evaluation import evaluate, open_entry, parse_matchers, val_dirs
+from eval.studies.table1.evaluation import evaluate, open_entry, parse_matchers, val_dirs
 from matchers.core.jit import cache_root
 from matchers.core.plugin_guard import DEFAULT_TIME_LIMIT_S, TIME_LIMIT_ENV, parse_time_limit
 

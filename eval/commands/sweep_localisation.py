@@ -37,7 +37,7 @@ from eval.core.result_files import write_csv
 from eval.core.runner import Runner, requests_for
 from eval.core.tasks import MatcherSpec, RunResult
 from eval.protocol import tuning
-from eval.studies.evaluation import (
+from eval.studies.table1.evaluation import (
     DatasetEntry,
     as_named,
     calibrate_named,

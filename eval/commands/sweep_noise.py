@@ -25,7 +25,7 @@ from eval.core.keyed_csv import upsert_csv
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
 from eval.protocol.metrics import METRICS
-from eval.studies.evaluation import (
+from eval.studies.table1.evaluation import (
     DatasetEntry,
     Named,
     calibrate_entry,

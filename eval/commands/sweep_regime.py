@@ -38,7 +38,7 @@ from eval.core.thinning import check_keep, noncovisible_share
 from eval.protocol.cluster_interval import t_interval
 from eval.protocol.crossovers import find_crossovers
 from eval.report.threshold_format import rounded
-from eval.studies.evaluation import (
+from eval.studies.table1.evaluation import (
     DatasetEntry,
     Named,
     calibrate_entry,

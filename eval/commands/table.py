@@ -10,8 +10,8 @@ import argparse
 from eval.protocol.variants import VARIANTS, variant_path
 from eval.report.figures import render_all
 from eval.report.tables import PAPER_CSV, write_tables
-from eval.studies.agreement import write_agreement
-from eval.studies.external import SUBDIR, write_table_external
+from eval.studies.external.agreement import write_agreement
+from eval.studies.external.evaluation import SUBDIR, write_table_external
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -7,14 +7,14 @@ from __future__ import annotations
 import logging
 
 from eval.pipeline.stage import RunState, shown
-from eval.studies.agreement import write_agreement
-from eval.studies.external import (
+from eval.studies.external.agreement import write_agreement
+from eval.studies.external.evaluation import (
     CALIBRATION_DIR,
     TEST_DIR,
     evaluate_external,
     external_matchers,
 )
-from eval.studies.prior_defaults import write_sensitivity
+from eval.studies.external.prior_defaults import write_sensitivity
 
 log = logging.getLogger("eval.reproduce")
 

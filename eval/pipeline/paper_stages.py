@@ -30,13 +30,13 @@ from eval.pipeline.stage import RunState, shown
 from eval.report.figures import render_all
 from eval.report.run_record import scenario_file
 from eval.report.tables import PAPER_CSV, write_tables
-from eval.studies.evaluation import (
+from eval.studies.table1.evaluation import (
     chosen_specs,
     evaluate,
     open_entry,
     parse_matchers,
 )
-from eval.studies.spread import spread_rows
+from eval.studies.table1.spread import spread_rows
 
 log = logging.getLogger("eval.reproduce")
 
@@ -196,7 +196,7 @@ def localisation_sweep(state: RunState) -> None:
 
 def tables_figures(state: RunState) -> None:
     """Table I and its companions, the regime cards and every figure, from the result files."""
-    from eval.studies.regime_cards import write_regime
+    from eval.studies.table1.regime_cards import write_regime
 
     state.table1_markdown = write_tables(state.out, PAPER_CSV)
     entries = state.entries + ([state.v2x_entry] if state.v2x_entry is not None else [])

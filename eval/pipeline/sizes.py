@@ -9,10 +9,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from eval.studies.multiagent import TEST_SNAPSHOTS as MA_TEST_SNAPSHOTS
-from eval.studies.multiagent import VAL_SNAPSHOTS as MA_VAL_SNAPSHOTS
-from eval.studies.temporal import TEST_SEQUENCES as TEMPORAL_TEST
-from eval.studies.temporal import VAL_SEQUENCES as TEMPORAL_VAL
+from eval.studies.multiagent.evaluation import TEST_SNAPSHOTS as MA_TEST_SNAPSHOTS
+from eval.studies.multiagent.evaluation import VAL_SNAPSHOTS as MA_VAL_SNAPSHOTS
+from eval.studies.temporal.evaluation import TEST_SEQUENCES as TEMPORAL_TEST
+from eval.studies.temporal.evaluation import VAL_SEQUENCES as TEMPORAL_VAL
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENARIOS = (
@@ -61,9 +61,9 @@ V2X_TRAIN_FACTOR = 1
 V2X_RUNS = 2  # runs only average the stochastic matchers; 100 clusters carry the precision
 # Multi-agent (cad-multi: 4 vehicles + 2 roadside units per snapshot): test and validation
 # snapshots on disjoint scenario seeds, two-view matchers on every pair of views, fused per
-# subset of N views (eval.studies.multiagent), MULTIAGENT_RUNS seeds.
+# subset of N views (eval.studies.multiagent.evaluation), MULTIAGENT_RUNS seeds.
 MULTIAGENT_RUNS = 2
-# Transfer of the learned matchers (eval.studies.transfer): CAD's training split on its own
+# Transfer of the learned matchers (eval.studies.transfer.evaluation): CAD's training split on its own
 # scenario seed (seed + CAD_TRAIN_SEED_OFFSET; 1000 is validation, 2000/3000 the spread sets),
 # CAD_TRAIN_PAIRS pairs; models trained into DATA/models.
 CAD_TRAIN_SEED_OFFSET = 4000

@@ -14,10 +14,10 @@ from eval.pipeline import (
     v2x_stages,
 )
 from eval.pipeline.stage import Stage
-from eval.studies.prior_defaults import SENSITIVITY
-from eval.studies.temporal import LIDAR_SCENARIO as TEMPORAL_LIDAR_SCENARIO
-from eval.studies.temporal import SCENARIO as TEMPORAL_SCENARIO
-from eval.studies.v2x_lidar import SCENARIO as LIDAR_SCENARIO
+from eval.studies.external.prior_defaults import SENSITIVITY
+from eval.studies.temporal.evaluation import LIDAR_SCENARIO as TEMPORAL_LIDAR_SCENARIO
+from eval.studies.temporal.evaluation import SCENARIO as TEMPORAL_SCENARIO
+from eval.studies.v2x.lidar import SCENARIO as LIDAR_SCENARIO
 
 TABLE1 = ("table1.{md,csv,tex}", "metrics_per_pair.csv", "thresholds.csv", "tuning.csv")
 

@@ -1,5 +1,5 @@
 """The stages of the temporal study: cad-v2x-seq's test and validation sequences, then every
-(method, window) under each preset (:mod:`eval.studies.temporal`); the same on LiDAR boxes
+(method, window) under each preset (:mod:`eval.studies.temporal.evaluation`); the same on LiDAR boxes
 (cad-v2x-seq-lidar) under the presets its goals name. They fill the run record's ``temporal``
 section (LiDAR under ``temporal.lidar``); each is skipped without its scenario file."""
 
@@ -8,18 +8,18 @@ from __future__ import annotations
 import logging
 
 from eval.pipeline.stage import RunState, generate_splits
-from eval.studies.temporal import LABEL as TEMPORAL_LABEL
-from eval.studies.temporal import (
+from eval.studies.temporal.evaluation import LABEL as TEMPORAL_LABEL
+from eval.studies.temporal.evaluation import (
     LIDAR_LABEL,
     LIDAR_SCENARIO,
     evaluate_temporal,
     evaluate_temporal_lidar,
     temporal_tuning_record,
 )
-from eval.studies.temporal import METHODS as TEMPORAL_METHODS
-from eval.studies.temporal import PRESETS as TEMPORAL_PRESETS
-from eval.studies.temporal import RUNS as TEMPORAL_RUNS
-from eval.studies.temporal import SCENARIO as TEMPORAL_SCENARIO
+from eval.studies.temporal.evaluation import METHODS as TEMPORAL_METHODS
+from eval.studies.temporal.evaluation import PRESETS as TEMPORAL_PRESETS
+from eval.studies.temporal.evaluation import RUNS as TEMPORAL_RUNS
+from eval.studies.temporal.evaluation import SCENARIO as TEMPORAL_SCENARIO
 
 log = logging.getLogger("eval.reproduce")
 

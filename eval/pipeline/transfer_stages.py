@@ -8,8 +8,8 @@ import logging
 
 from eval.pipeline.sizes import CAD_TRAIN_SEED_OFFSET, ROOT, SCENARIOS
 from eval.pipeline.stage import RunState, shown
-from eval.studies.external import CALIBRATION_DIR, TEST_DIR
-from eval.studies.transfer import evaluate_transfer, test_sets, train_models, train_sets
+from eval.studies.external.evaluation import CALIBRATION_DIR, TEST_DIR
+from eval.studies.transfer.evaluation import evaluate_transfer, test_sets, train_models, train_sets
 
 log = logging.getLogger("eval.reproduce")
 

@@ -24,13 +24,13 @@ from eval.pipeline.sizes import (
 )
 from eval.pipeline.stage import RunState, shown
 from eval.report.run_record import scenario_file
-from eval.studies.evaluation import chosen_specs, open_entry, parse_matchers
-from eval.studies.external import external_matchers
-from eval.studies.v2x_boxes import evaluate_boxes
-from eval.studies.v2x_lidar import SCENARIO as LIDAR_SCENARIO
-from eval.studies.v2x_lidar import evaluate_lidar, generate_lidar_splits
-from eval.studies.v2x_table import PRESETS as V2X_PRESETS
-from eval.studies.v2x_table import evaluate_v2x
+from eval.studies.external.evaluation import external_matchers
+from eval.studies.table1.evaluation import chosen_specs, open_entry, parse_matchers
+from eval.studies.v2x.boxes import evaluate_boxes
+from eval.studies.v2x.lidar import SCENARIO as LIDAR_SCENARIO
+from eval.studies.v2x.lidar import evaluate_lidar, generate_lidar_splits
+from eval.studies.v2x.table import PRESETS as V2X_PRESETS
+from eval.studies.v2x.table import evaluate_v2x
 
 log = logging.getLogger("eval.reproduce")
 
