@@ -24,7 +24,7 @@ from eval.core.cache import ResultCache
 from eval.core.executor import SerialExecutor
 from eval.core.runner import RunFailed, Runner, requests_for
 from eval.core.tasks import MatcherSpec
-from eval.studies.table1.evaluation import parse_matchers
+from eval.engine.matcher_list import parse_matchers
 from matchers import PluginError, PluginTimeout, Problem, get
 from matchers.core import named_lookup, registry
 from matchers.core.plugin_guard import TIME_LIMIT_ENV, check_matching, time_limit_s

@@ -35,3 +35,14 @@ def test_no_study_file_sits_outside_a_study_package():
     root = eval.studies.__path__[0]
     flat = [p.name for p in pathlib.Path(root).glob("*.py") if p.name != "__init__.py"]
     assert flat == []
+
+
+def test_the_engine_names_table1_re_exported_are_forwarded_with_a_warning():
+    from eval.engine.matcher_list import parse_matchers
+    from eval.engine.splits import open_entry
+    from eval.studies.table1 import evaluation
+
+    with pytest.warns(DeprecationWarning, match="eval.engine.matcher_list.parse_matchers"):
+        assert evaluation.parse_matchers is parse_matchers
+    with pytest.warns(DeprecationWarning, match="eval.engine.splits.open_entry"):
+        assert evaluation.open_entry is open_entry

@@ -158,7 +158,8 @@ def runner(tmp_path_factory):
 def main_tables(tmp_path_factory, runner) -> Path:
     """The main tables' external evaluation of three cheap hand-crafted matchers."""
     from eval.core.tasks import MatcherSpec
-    from eval.studies.table1.evaluation import evaluate, open_entry
+    from eval.engine.protocol_run import evaluate
+    from eval.engine.splits import open_entry
 
     folder = tmp_path_factory.mktemp("results") / "external"
     entry = open_entry(TEST_DIR, CALIBRATION_DIR)

@@ -26,6 +26,7 @@ import numpy as np
 
 from eval.core.tasks import MatcherSpec, PairOutcome, RunResult, RunSpec
 
+DEFAULT_CACHE = "cache/runs"  # make reproduce's, inside the repository; commands use user_cache()
 _FORMAT = 4  # 4: the positions, true pose, broadcast prior pose and camera mounts of every pair
 
 # Sources that cannot change a run's result (how tasks are dispatched, the CLI, drawing, benches):

@@ -6,13 +6,13 @@ from __future__ import annotations
 
 import logging
 
+from eval.engine.matcher_list import with_prior
 from eval.pipeline.stage import RunState, shown
 from eval.studies.external.agreement import write_agreement
 from eval.studies.external.evaluation import (
     CALIBRATION_DIR,
     TEST_DIR,
     evaluate_external,
-    external_matchers,
 )
 from eval.studies.external.prior_defaults import write_sensitivity
 
@@ -27,7 +27,7 @@ def external(state: RunState) -> None:
     """Every matcher on the DMGM CAD pairs, tuned and τ calibrated on sequence 070."""
     args, seeds = state.args, external_seeds(state)
     if seeds:
-        matchers = external_matchers(args.matchers)
+        matchers = with_prior(args.matchers)
         log.info(
             "[external] DMGM CAD: %d matchers × %d runs; τ and tuning on sequence 070",
             len(matchers), len(seeds),

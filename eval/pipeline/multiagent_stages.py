@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import logging
 
+from eval.engine.matcher_list import parse_matchers
+from eval.engine.validation_choice import chosen_specs
 from eval.pipeline.stage import RunState, generate_splits
 from eval.studies.multiagent.evaluation import LABEL as MA_LABEL
 from eval.studies.multiagent.evaluation import MATCHERS as MA_MATCHERS
@@ -13,7 +15,6 @@ from eval.studies.multiagent.evaluation import PRESETS as MA_PRESETS
 from eval.studies.multiagent.evaluation import SCENARIO as MA_SCENARIO
 from eval.studies.multiagent.evaluation import SUBSETS as MA_SUBSETS
 from eval.studies.multiagent.evaluation import evaluate_multiagent
-from eval.studies.table1.evaluation import chosen_specs, parse_matchers
 from matchers.fusion import usable_fusions
 
 log = logging.getLogger("eval.reproduce")

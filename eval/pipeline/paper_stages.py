@@ -18,6 +18,10 @@ from eval.commands.sweep_localisation import write_sweep as write_localisation_s
 from eval.commands.sweep_noise import parse_rates, sweep
 from eval.commands.sweep_regime import parse_keep, sweep_regime, write_sweep
 from eval.core.result_files import write_csv
+from eval.engine.matcher_list import parse_matchers
+from eval.engine.protocol_run import evaluate
+from eval.engine.splits import open_entry
+from eval.engine.validation_choice import chosen_specs
 from eval.pipeline.sizes import (
     LOCALISATION_DATASET,
     REGIME_VAL_RUNS,
@@ -30,12 +34,6 @@ from eval.pipeline.stage import RunState, shown
 from eval.report.figures import render_all
 from eval.report.run_record import scenario_file
 from eval.report.tables import PAPER_CSV, write_tables
-from eval.studies.table1.evaluation import (
-    chosen_specs,
-    evaluate,
-    open_entry,
-    parse_matchers,
-)
 from eval.studies.table1.spread import spread_rows
 
 log = logging.getLogger("eval.reproduce")

@@ -15,6 +15,9 @@ from eval.commands.sweep_localisation import (
     write_preset_sweep,
 )
 from eval.commands.sweep_localisation import DEFAULT_MATCHERS as LOCALISATION_MATCHERS
+from eval.engine.matcher_list import parse_matchers, with_prior
+from eval.engine.splits import open_entry
+from eval.engine.validation_choice import chosen_specs
 from eval.pipeline.sizes import (
     ROOT,
     V2X_LABEL,
@@ -24,8 +27,6 @@ from eval.pipeline.sizes import (
 )
 from eval.pipeline.stage import RunState, shown
 from eval.report.run_record import scenario_file
-from eval.studies.external.evaluation import external_matchers
-from eval.studies.table1.evaluation import chosen_specs, open_entry, parse_matchers
 from eval.studies.v2x.boxes import evaluate_boxes
 from eval.studies.v2x.lidar import SCENARIO as LIDAR_SCENARIO
 from eval.studies.v2x.lidar import evaluate_lidar, generate_lidar_splits
@@ -91,7 +92,7 @@ def v2x_table(state: RunState) -> None:
     entry, seeds = state.v2x_entry, v2x_seeds(state)
     if entry is None:
         return
-    matchers = external_matchers(state.args.matchers)
+    matchers = with_prior(state.args.matchers)
     log.info(
         "[v2x table] %s: %d matchers × %d presets × %d runs",
         V2X_LABEL, len(matchers), len(V2X_PRESETS), len(seeds),
@@ -109,7 +110,7 @@ def v2x_boxes(state: RunState) -> None:
     if entry is None:
         return
     _, state.record["v2x"]["boxes"] = evaluate_boxes(
-        entry.test_dir, entry.val_dir, state.data, external_matchers(state.args.matchers),
+        entry.test_dir, entry.val_dir, state.data, with_prior(state.args.matchers),
         v2x_seeds(state), state.runner, state.out, tune=state.args.tune,
     )  # fmt: skip
 
@@ -126,7 +127,7 @@ def v2x_lidar(state: RunState) -> None:
     entry = state.v2x_entry
     camera_table = None if entry is None else (entry.test_dir, entry.val_dir)
     _, used = evaluate_lidar(
-        test, val, external_matchers(state.args.matchers), seeds, state.runner, state.out,
+        test, val, with_prior(state.args.matchers), seeds, state.runner, state.out,
         tune=state.args.tune, camera_table=camera_table,
     )  # fmt: skip
     state.record.setdefault("v2x", {})["lidar"] = record | used

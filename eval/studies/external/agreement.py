@@ -142,7 +142,8 @@ def write_agreement(out_dir: str | Path, paper_csv: str | Path = PAPER_CSV) -> p
     ``out_dir/v2x/metrics_per_pair.csv`` under its own preset, when there) and
     ``out_dir/external/metrics_per_pair.csv``; an empty table when either of the first and the
     last is missing."""
-    from eval.studies.external.evaluation import SUBDIR, prior_matchers
+    from eval.engine.matcher_list import prior_matchers
+    from eval.studies.external.evaluation import SUBDIR
     from eval.studies.v2x.table import SUBDIR as V2X_SUBDIR
     from eval.studies.v2x.table import TUNE_PRESET as V2X_PRESET
 

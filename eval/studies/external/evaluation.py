@@ -25,10 +25,12 @@ import pandas as pd
 from eval.core.result_files import write_csv, write_text
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
+from eval.engine.matcher_list import prior_matchers, with_prior
+from eval.engine.protocol_run import evaluate
+from eval.engine.splits import open_entry
 from eval.protocol.metrics import POOLED
 from eval.report.tables import build_table, params_text, pooled_text
 from eval.report.threshold_format import rounded, tau_text
-from eval.studies.table1.evaluation import evaluate, open_entry, parse_matchers
 
 log = logging.getLogger(__name__)
 
@@ -65,22 +67,7 @@ TABLE_COLUMNS = [
 ]
 
 
-def prior_matchers() -> list[str]:
-    """Registered matchers that need the localisation prior (``matchers.requires`` names it) and
-    no option (the learned matchers need a model: named with it); broken entry points are left
-    out (``matchers.usable``)."""
-    from matchers.core.registry import required_options, requires, usable
-
-    return [n for n in usable() if "world1" in requires(n) and not required_options(n)]
-
-
-def external_matchers(text: str = "all") -> list[MatcherSpec]:
-    """``all``: every matcher of ``cadsim evaluate --matchers all`` plus the prior matchers;
-    otherwise the comma list as given."""
-    specs = parse_matchers(text)
-    if text.strip() == "all":
-        specs += [MatcherSpec(n) for n in prior_matchers()]
-    return list(dict.fromkeys(specs))
+external_matchers = with_prior  # its previous name (one release)
 
 
 def evaluate_external(

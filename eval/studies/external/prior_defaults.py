@@ -59,8 +59,8 @@ def code_defaults(name: str) -> dict:
 def derive(runner: Runner, calibration_dir: str | Path | None = None) -> dict:
     """Tune every prior matcher on the calibration split (module docstring); returns the record
     :data:`DEFAULTS_FILE` holds."""
+    from eval.engine.splits import open_entry
     from eval.studies.external.evaluation import CALIBRATION_DIR
-    from eval.studies.table1.evaluation import open_entry
 
     calibration_dir = Path(calibration_dir or CALIBRATION_DIR)
     entry = open_entry(calibration_dir, calibration_dir)  # tuning reads only the val side
@@ -104,9 +104,9 @@ def write_sensitivity(out_dir: str | Path, runner: Runner, seed: int = 0) -> pd.
     """Every grid configuration of the prior matchers that ``OUT/external/tuning.csv`` lists,
     run on the external test pairs (`seed`) and scored at the τ of its calibration run; writes
     ``OUT/external/prior_sensitivity.csv`` and the figure. Empty without the tuning file."""
+    from eval.engine.named_runs import run_named, score_runs
     from eval.protocol.metrics import summarise_pooled
     from eval.studies.external.evaluation import SUBDIR, TEST_DIR
-    from eval.studies.table1.evaluation import run_named, score_runs
 
     out_dir = Path(out_dir)
     path = out_dir / SUBDIR / "tuning.csv"

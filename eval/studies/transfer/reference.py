@@ -112,7 +112,7 @@ def choose_reference(
 def reference_for(test: TestSet, test_checksum: str, runner: Runner | None) -> dict[bool, dict]:
     """:func:`choose_reference` on ``test``'s main tables; empty where they have not run, or
     ran on another test dataset than the one at ``test_checksum``."""
-    from eval.studies.external.evaluation import prior_matchers
+    from eval.engine.matcher_list import prior_matchers
 
     record = _evaluation_record(Path(test.reference_dir), test.reference_label)
     if record is None:
