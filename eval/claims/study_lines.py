@@ -18,6 +18,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from eval.engine.study import ReportContext
 from eval.protocol.claims import (
     AHEAD,
     BEHIND,
@@ -30,15 +31,7 @@ from eval.protocol.claims import (
     parse_goal_line,
 )
 from eval.report.run_part import read_record, study_seconds
-from eval.studies.external.evaluation import readme_part as external_part
-from eval.studies.external.prior_defaults import readme_part as prior_part
-from eval.studies.multiagent.report import readme_part as multiagent_part
-from eval.studies.temporal.evaluation import readme_part as temporal_part
-from eval.studies.temporal.evaluation import readme_part_lidar as temporal_lidar_part
-from eval.studies.transfer.report import readme_part as transfer_part
-from eval.studies.v2x.boxes import readme_part as v2x_boxes_part
-from eval.studies.v2x.lidar import readme_part as v2x_lidar_part
-from eval.studies.v2x.report import readme_part as v2x_part
+from eval.studies import studies
 
 COMPARATIVE = re.compile(
     r"\b(not met|not shown|met|ahead|behind|leaders?|leads|trails|overtakes|favours|gains?|"
@@ -51,39 +44,30 @@ _MEASURED = re.compile(r"^(?P<what>.+?): (?P<seconds>\d+(?:\.\d+)?) s\b.* — a 
 _BLOCKS = re.compile(r"over (\d+) blocks of (\d+) pairs")
 
 
+# report part (``Part.name``) -> (its claims' study, the file they read), in claims.csv's order
+_SOURCES = {
+    "v2x": ("v2x", "table_v2x.csv"),
+    "v2x boxes": ("v2x_boxes", "table_v2x_boxes.csv"),
+    "v2x lidar": ("v2x_lidar", "table_v2x_sensors.csv"),
+    "multiagent": ("multiagent", "table_multiagent.csv"),
+    "temporal": ("temporal", "table_temporal_gain.csv"),
+    "temporal_lidar": ("temporal_lidar", "table_temporal_lidar_gain.csv"),
+    "transfer": ("transfer", "table_transfer.csv"),
+    "external": ("external", "table_external.csv"),
+    "prior sensitivity": ("prior_sensitivity", "external/prior_sensitivity.csv"),
+}
+
+
 def _parts(results: Path) -> list[tuple[str, str, Callable[[], list[str]]]]:
-    """(study, the file its claims read, its part's lines) for every study part."""
-    seconds = study_seconds(results, read_record(results))
+    """(study, the file its claims read, its part's lines) for every study part that states
+    claims, the parts taken from the list of studies."""
+    record = read_record(results)
+    context = ReportContext(results, ".", record, study_seconds(results, record), None)
+    parts = {part.name: part for study in studies() for part in study.parts}
     return [
-        ("v2x", "table_v2x.csv", lambda: v2x_part(results, ".")),
-        (
-            "v2x_boxes",
-            "table_v2x_boxes.csv",
-            lambda: v2x_boxes_part(results, ".", seconds["v2x_boxes"]),
-        ),  # fmt: skip
-        ("v2x_lidar", "table_v2x_sensors.csv", lambda: v2x_lidar_part(results, ".")),
-        (
-            "multiagent",
-            "table_multiagent.csv",
-            lambda: multiagent_part(results, ".", seconds["multiagent"]),
-        ),  # fmt: skip
-        (
-            "temporal",
-            "table_temporal_gain.csv",
-            lambda: temporal_part(results, ".", seconds["temporal"]),
-        ),  # fmt: skip
-        (
-            "temporal_lidar",
-            "table_temporal_lidar_gain.csv",
-            lambda: temporal_lidar_part(results, ".", seconds["temporal_lidar"]),
-        ),  # fmt: skip
-        (
-            "transfer",
-            "table_transfer.csv",
-            lambda: transfer_part(results, ".", seconds["transfer"], seconds["transfer_runs"]),
-        ),  # fmt: skip
-        ("external", "table_external.csv", lambda: external_part(results, ".")),
-        ("prior_sensitivity", "external/prior_sensitivity.csv", lambda: prior_part(results, ".")),
+        (study, source, lambda part=parts[name]: part.build(context))
+        for name, (study, source) in _SOURCES.items()
+        if name in parts
     ]
 
 

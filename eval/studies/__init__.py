@@ -3,6 +3,12 @@ cards), ``v2x/`` (camera, boxes, LiDAR, sensors, realism, the GNSS calibration c
 ``multiagent/``, ``temporal/`` (camera and LiDAR), ``transfer/`` and ``external/`` (the DMGM CAD
 pairs, the prior matchers' defaults and whether the rankings hold there).
 
+Each package declares itself in its ``study.py`` (``STUDY``, an :class:`eval.engine.study.Study`:
+data and splits, methods, conditions, goals, the claims it emits, its report parts and its
+stages); :data:`STUDIES` lists them and :func:`studies` reads them. ``make reproduce``'s stages,
+``claims.csv`` and the report are derived from that list, so nothing outside a study imports a
+study module.
+
 The flat modules of the previous release (``eval.studies.v2x_table``, ``eval.studies.temporal``
 as a module, …) still import for one release, as the module that replaced them, with a
 :class:`DeprecationWarning` (:data:`MOVED`).
@@ -15,6 +21,12 @@ import importlib.abc
 import importlib.util
 import sys
 import warnings
+
+from eval.engine.study import Study
+
+STUDIES = ("table1", "v2x", "external", "multiagent", "transfer", "temporal")
+"""The studies, in the order ``make reproduce`` walks their stages (a study after those it reads:
+``Study.needs``) and the report shows their parts within a group."""
 
 # old flat module (under eval.studies) -> the module that replaced it; removed in the next release
 MOVED = {
@@ -112,3 +124,18 @@ def forwarding(package: str):
         return getattr(module, name)
 
     return forward
+
+
+def study(name: str) -> Study:
+    """The declaration of study ``name`` (``eval/studies/<name>/study.py``'s ``STUDY``); a
+    ValueError naming the known ones for any other name. The registry names each study by its
+    package, as the matcher registry names a matcher, so this package imports no study module
+    until it is asked for one."""
+    if name not in STUDIES:
+        raise ValueError(f"unknown study {name!r}; known: {', '.join(STUDIES)}")
+    return importlib.import_module(f"{__name__}.{name}.study").STUDY
+
+
+def studies() -> tuple[Study, ...]:
+    """Every study's declaration, in :data:`STUDIES` order."""
+    return tuple(study(name) for name in STUDIES)

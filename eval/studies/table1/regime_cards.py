@@ -154,3 +154,21 @@ def regime_markdown(path: str | Path) -> str:
                 cells.append(f"{v:.1f}")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+def readme_part(results: Path) -> list[str]:
+    """The report's "Regime of each dataset" section from ``results/regime.csv`` (none without
+    it)."""
+    if not (Path(results) / "regime.csv").is_file():
+        return []
+    return [
+        "### Regime of each dataset",
+        "",
+        regime_markdown(Path(results) / "regime.csv").strip(),
+        "",
+        "Means over test frame pairs; non-covisible share pooled over both views; appearance "
+        "AUC: how well feature similarity alone separates true from false candidate pairs "
+        "(0.5 = not at all); position error: covisible objects' 3-D disagreement after "
+        "aligning the views with the true poses.",
+        "",
+    ]
