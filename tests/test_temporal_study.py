@@ -18,7 +18,6 @@ from eval.engine import goal
 from eval.protocol import goal_verdict
 from eval.protocol.metrics import pair_metrics
 from eval.studies.temporal import evaluation as temporal
-from eval.studies.temporal import report as temporal_report
 from eval.studies.temporal import runs as temporal_runs
 from matchers.core.registry import get
 
@@ -219,8 +218,7 @@ def test_goal_lines_go_through_goal_verdict(monkeypatch, tmp_path):
         calls.append((args, kwargs))
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(temporal_report, "goal_line", spy)
-    monkeypatch.setattr(goal, "goal_line", spy)  # the declared goals' lines
+    monkeypatch.setattr(goal, "goal_line", spy)  # every goal is declared (eval.engine.goal)
     lines = temporal.goals(_table(0.81, 0.9), tmp_path)
     assert len(lines) == len(calls) == 3  # no per-frame or gain files: those goals left out
     assert lines[0].startswith("`denied`, W = 10: best pooled F1 ≥ 80: met")

@@ -38,6 +38,7 @@ DATA = Path(__file__).resolve().parents[2] / "data" / "dmgm-cad"
 CALIBRATION_DIR = DATA / "val-070"
 TEST_DIR = DATA / "test-069-071"
 SUBDIR = "external"
+SOURCE = "table_external.csv"
 DMGM_PUBLISHED = {"precision": 0.776, "recall": 0.820, "f1": 0.797, "threshold": 0.11}
 PUBLISHED_NOTE = (
     "DMGM (published): max F1 of a threshold sweep on all 9,209 of its test pairs — threshold "
@@ -203,68 +204,3 @@ def best_pooled(table: pd.DataFrame) -> tuple[str, float]:
     ours = table[table["source"] == "ours"]
     best = ours.loc[ours["f1_pooled_mean"].idxmax()]
     return str(best["method"]), float(best["f1_pooled_mean"])
-
-
-def findings(table: pd.DataFrame) -> list[str]:
-    """Sentences computed from the external table (pooled F1, percent): the best matcher without
-    the prior, the prior alone, the best with it, and DMGM's figure."""
-    ours = table[table["source"] == "ours"]
-    free = ours[~ours["uses_prior"].astype(bool) & (ours["matcher"] != "none")]
-    prior = ours[ours["uses_prior"].astype(bool)]
-    out = []
-
-    def best(rows: pd.DataFrame) -> pd.Series:
-        return rows.loc[rows["f1_pooled_mean"].idxmax()]
-
-    if len(free):
-        b = best(free)
-        out.append(
-            f"without the prior (camera-frame geometry and appearance), the best matcher is "
-            f"{b['method']} at pooled F1 {100 * b['f1_pooled_mean']:.1f}"
-        )
-    pose = prior[prior["matcher"] == "pose"]
-    if len(pose):
-        out.append(
-            f"Hungarian on the noisy world positions alone (pose) reaches "
-            f"{100 * pose['f1_pooled_mean'].iloc[0]:.1f}"
-        )
-    if len(prior):
-        b = best(prior)
-        out.append(
-            f"the best matcher with the prior is {b['method']} at {100 * b['f1_pooled_mean']:.1f}"
-        )
-    maximin_pose = prior[prior["matcher"] == "maximin_pose"]
-    if len(maximin_pose) and len(prior):
-        gap = 100 * (best(prior)["f1_pooled_mean"] - maximin_pose["f1_pooled_mean"].iloc[0])
-        if gap > 0:
-            out.append(f"maximin given the prior is {gap:.1f} points below that")
-    out.append(
-        f"DMGM's published figure is {100 * DMGM_PUBLISHED['f1']:.1f} (threshold chosen on its "
-        "test set, all 9,209 pairs)"
-    )
-    return out
-
-
-def readme_part(results: Path, rel: str) -> list[str]:
-    """README lines for the external benchmark (none without ``table_external.md``)."""
-    results = Path(results)
-    path = results / "table_external.md"
-    if not path.is_file():
-        return []
-    table = pd.read_csv(results / "table_external.csv", keep_default_na=False, na_values=[""])
-    text = "; ".join(findings(table))
-    return [
-        "### External data: the DMGM CAD pairs",
-        "",
-        "310 frame pairs of the same research group's public CAD test data, shipped converted in "
-        "`eval/data/dmgm-cad/` (MIT licence, provenance in its README): **independently simulated "
-        "data (CARLA + SUMO), not real-world recordings**. τ and parameters from driving sequence "
-        "070, test on 069 + 071; matchers marked *prior* get the vehicles' own noisy GPS poses "
-        "(σ 1.2 m, 0.2°) that come with the data.",
-        "",
-        path.read_text().strip(),
-        "",
-        f"On these pairs: {text}. (`{rel}/table_external.csv`, "
-        f"`{rel}/external/`: per-pair metrics, τ, tuning.)",
-        "",
-    ]

@@ -14,9 +14,10 @@ from eval.studies.external import stages
 from eval.studies.external.agreement import readme_part as agreement_part
 from eval.studies.external.agreement import write_agreement
 from eval.studies.external.evaluation import SUBDIR, write_table_external
-from eval.studies.external.evaluation import readme_part as external_part
 from eval.studies.external.prior_defaults import SENSITIVITY
 from eval.studies.external.prior_defaults import readme_part as prior_part
+from eval.studies.external.report import claims as external_claims
+from eval.studies.external.report import readme_part as external_part
 
 GROUP = "External data"
 
@@ -39,6 +40,7 @@ STUDY = Study(
         Data("dmgm-cad/test-069-071", "eval/data/dmgm-cad/test-069-071"),
     ),
     methods=("all", "every prior matcher"),
+    claims=external_claims,
     parts=(
         Part(
             "external",

@@ -10,9 +10,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from eval.engine.goal import Goal
 from eval.engine.result_table import numeric_column
-from eval.protocol.claims import measurement_line
-from eval.protocol.goal_verdict import NOT_SHOWN, goal_line
+from eval.protocol.claims import Claim, claims_in, lines_of, measurement_claim
 from eval.studies.multiagent.evaluation import COUNT_BAR, GAIN_BAR, LABEL, SUBSETS
 from eval.studies.multiagent.gains import BASELINE
 from eval.studies.multiagent.markdown import gain_family, to_markdown
@@ -26,10 +26,6 @@ def best_on_validation(rows: pd.DataFrame, column: str, lowest: bool) -> pd.Seri
     if known.empty:
         return None
     return known.loc[known[column].idxmin() if lowest else known[column].idxmax()]
-
-
-def _not_shown(goal: str, why: str) -> str:
-    return f"{goal}: {NOT_SHOWN} — {why}"
 
 
 def invariant_line(table: pd.DataFrame) -> str:
@@ -54,30 +50,48 @@ def invariant_line(table: pd.DataFrame) -> str:
 
 
 def goals(table: pd.DataFrame, stage_s: float | None = None) -> list[str]:
-    """Plain statements of the table's goals, each met, not met or not shown by its interval
+    """The lines of :func:`goal_items`, as the report prints them."""
+    return lines_of(goal_items(table, stage_s))
+
+
+def claims(results: Path, stage_s: float | None = None) -> list[Claim]:
+    """The claims of the multi-agent part (none without ``table_multiagent.csv``)."""
+    path = Path(results) / SOURCE
+    table = pd.read_csv(path) if path.is_file() else None
+    return [] if table is None or table.empty else claims_in(goal_items(table, stage_s))
+
+
+def goal_items(table: pd.DataFrame, stage_s: float | None = None) -> list[Claim | str]:
+    """The table's goals, each a claim met, not met or not shown by its interval
     (:mod:`eval.protocol.goal_verdict`), every "best" chosen on the validation snapshots and
-    reported on test; first the cycle-consistency invariant."""
+    reported on test; first the cycle-consistency invariant (a plain line: it holds by
+    construction). A goal without validation figures to choose on is a plain "not shown"
+    line."""
     fused = table[table["fusion"] != BASELINE]
-    lines = [invariant_line(table)]
-    goal = (
+    lines: list[Claim | str] = [invariant_line(table)]
+    gain_goal = Goal(
+        "N ≥ 4",
         f"fusion raises pooled F1 over `independent` by ≥ {100 * GAIN_BAR:.0f} points at N ≥ 4 "
-        "for some matcher"
+        "for some matcher",
+        ("f1_gain", "gain_ci_low", "gain_ci_high"),
+        GAIN_BAR,
+        unit=" points",
     )
+    goal = gain_goal.text
     wide = fused[fused["n_agents"] >= 4]
     if len(wide):
         best = best_on_validation(wide, "val_f1_gain", lowest=False)
         if best is None:
-            lines.append(_not_shown(goal, "no validation figures to choose the method on"))
+            why = "no validation figures to choose the method on"
+            lines.append(gain_goal.not_shown(why, study="multiagent", subject=goal, source=SOURCE))
         else:
             p_holm = best.get("gain_p_holm", np.nan)
             lines.append(
-                goal_line(
-                    goal,
-                    best.f1_gain,
-                    best.gain_ci_low,
-                    best.gain_ci_high,
-                    GAIN_BAR,
-                    unit=" points",
+                gain_goal.claim(
+                    best,
+                    study="multiagent",
+                    subject=f"{best.matcher} + {best.fusion}",
+                    source=SOURCE,
                     detail=f"{best.matcher} + {best.fusion}, N = {best.n_agents}, {best.preset}: "
                     f"the largest gain on the validation snapshots ({100 * best.val_f1_gain:+.1f} "
                     "points), scored on test with its 95 % episode-bootstrap interval; Holm-"
@@ -85,23 +99,31 @@ def goals(table: pd.DataFrame, stage_s: float | None = None) -> list[str]:
                 )
             )
     high = table["n_agents"].max()
-    goal = f"object-count error ≤ {100 * COUNT_BAR:.0f} % at N = {high} with the best method"
+    count_goal = Goal(
+        f"N = {high}",
+        f"object-count error ≤ {100 * COUNT_BAR:.0f} % at N = {high} with the best method",
+        ("count_error", "count_error_ci_low", "count_error_ci_high"),
+        COUNT_BAR,
+        at_least=False,
+        unit=" %",
+    )
+    goal = count_goal.text
     top = table[table["n_agents"] == high]
     if len(top):
         known = top[numeric_column(top, "val_f1_pooled") > 0]
         best = best_on_validation(known, "val_count_error", lowest=True)
         if best is None:
-            lines.append(_not_shown(goal, "no validation figures to choose the method on"))
+            why = "no validation figures to choose the method on"
+            lines.append(count_goal.not_shown(why, study="multiagent", subject=goal, source=SOURCE))
         else:
             lines.append(
-                goal_line(
-                    goal,
+                count_goal.claim_of(
                     best.count_error,
                     best.get("count_error_ci_low", np.nan),
                     best.get("count_error_ci_high", np.nan),
-                    COUNT_BAR,
-                    at_least=False,
-                    unit=" %",
+                    study="multiagent",
+                    subject=f"{best.matcher} + {best.fusion}",
+                    source=SOURCE,
                     detail=f"{best.matcher} + {best.fusion}, {best.preset}: the lowest on the "
                     f"validation snapshots ({100 * best.val_count_error:.1f} %; methods that "
                     "match something there), scored on test with its 95 % episode-bootstrap "
@@ -112,8 +134,9 @@ def goals(table: pd.DataFrame, stage_s: float | None = None) -> list[str]:
     return lines
 
 
-def _time_lines(table: pd.DataFrame, stage_s: float | None) -> list[str]:
-    """The time goals: N = max against N = min per snapshot, and the stage's wall time."""
+def _time_lines(table: pd.DataFrame, stage_s: float | None) -> list[Claim]:
+    """The time goals: N = max against N = min per snapshot (the largest ratio over every
+    matcher and fusion: no choice, ``fixed``), and the stage's wall time."""
     lines = []
     pairs = len(SUBSETS[max(SUBSETS)]) * (len(SUBSETS[max(SUBSETS)]) - 1) // 2
     low, high = table["n_agents"].min(), table["n_agents"].max()
@@ -123,17 +146,28 @@ def _time_lines(table: pd.DataFrame, stage_s: float | None) -> list[str]:
     rows = rows[np.isfinite(numeric_column(rows, "time_ratio"))]
     if len(rows) and low != high:
         fusion_ms = table.loc[table["n_agents"] == high, "fusion_ms_per_snapshot"].max()
+        text = (
+            f"time per snapshot at N = {high} ≤ {pairs} × the two-view time (N = {low}) for "
+            "every matcher and fusion"
+        )
+        ratio = Goal(
+            f"N = {high}",
+            text,
+            ("time_ratio", "time_ratio_ci_low", "time_ratio_ci_high"),
+            pairs,
+            at_least=False,
+            chosen_on="fixed",
+            scale=1.0,
+            unit="×",
+        )
         lines.append(
-            goal_line(
-                f"time per snapshot at N = {high} ≤ {pairs} × the two-view time (N = {low}) for "
-                "every matcher and fusion",
+            ratio.claim_of(
                 rows["time_ratio"].max(),
                 rows["time_ratio_ci_low"].max(),
                 rows["time_ratio_ci_high"].max(),
-                pairs,
-                at_least=False,
-                scale=1.0,
-                unit="×",
+                study="multiagent",
+                subject=text.split(" (")[0],
+                source=SOURCE,
                 detail=f"the largest ratio over the matchers and fusions, its interval the "
                 "largest ends of their 95 % episode-bootstrap intervals; the smallest ratio "
                 f"{rows['time_ratio'].min():.1f}×; the fusions themselves take at most "
@@ -144,7 +178,8 @@ def _time_lines(table: pd.DataFrame, stage_s: float | None) -> list[str]:
         )
     if stage_s is not None:  # given only from a cold run (eval.readme_results)
         lines.append(
-            measurement_line(
+            measurement_claim(
+                "multiagent",
                 "this table's stages (generation and runs)",
                 stage_s,
                 120.0,
@@ -185,4 +220,14 @@ def readme_part(results: Path, rel: str, stage_s: float | None = None) -> list[s
     ]
 
 
-__all__ = ["best_on_validation", "goals", "invariant_line", "readme_part", "to_markdown"]
+SOURCE = "table_multiagent.csv"  # the file the multi-agent claims read
+
+__all__ = [
+    "best_on_validation",
+    "claims",
+    "goal_items",
+    "goals",
+    "invariant_line",
+    "readme_part",
+    "to_markdown",
+]

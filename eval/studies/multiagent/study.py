@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from eval.engine.study import Data, Part, Study
 from eval.pipeline.stage import Stage
+from eval.report.run_part import read_record, study_seconds
 from eval.studies.multiagent import stages
 from eval.studies.multiagent.evaluation import (
     MATCHERS,
@@ -16,6 +17,7 @@ from eval.studies.multiagent.evaluation import (
     TEST_SNAPSHOTS,
     VAL_SNAPSHOTS,
 )
+from eval.studies.multiagent.report import claims as part_claims
 from eval.studies.multiagent.report import readme_part
 
 STUDY = Study(
@@ -25,6 +27,9 @@ STUDY = Study(
         Data("cad-multi", SCENARIO, {"test": TEST_SNAPSHOTS, "val": VAL_SNAPSHOTS}, "snapshots"),
     ),
     methods=MATCHERS,
+    claims=lambda results: part_claims(
+        results, study_seconds(results, read_record(results))["multiagent"]
+    ),
     conditions=(*PRESETS, *(f"N = {n}" for n in sorted(SUBSETS))),
     parts=(
         Part(

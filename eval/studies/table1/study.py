@@ -6,7 +6,6 @@ Its ``tables_figures`` stage closes every run (the tables and figures read every
 
 from __future__ import annotations
 
-from eval.claims.benchmark import benchmark_claims
 from eval.engine.matcher_list import PAPER_ORDER
 from eval.engine.study import Data, Part, Study
 from eval.pipeline.sizes import DEFAULT_VAL_PAIRS, SCENARIOS
@@ -24,6 +23,7 @@ from eval.report.benchmark_parts import (
     table1_part,
 )
 from eval.studies.table1 import stages
+from eval.studies.table1.claims import benchmark_claims
 from eval.studies.table1.regime_cards import readme_part as regime_part
 
 TABLE1 = ("table1.{md,csv,tex}", "metrics_per_pair.csv", "thresholds.csv", "tuning.csv")

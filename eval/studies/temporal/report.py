@@ -13,13 +13,10 @@ import pandas as pd
 
 from eval.core.abstention import NO_NUMBER
 from eval.engine.cells import cell, ranged
-from eval.engine.goal import Goal
 from eval.engine.result_table import bullets
-from eval.protocol.goal_verdict import goal_line
-from eval.studies.temporal.gain import best_long
-from eval.studies.temporal.scores import finite_interval
+from eval.protocol.claims import Claim, difference_verdict
+from eval.studies.temporal.goals import goal_claims, goals, study_of
 from eval.studies.temporal.table import (
-    FIXED,
     GAIN_COLUMNS,
     LIDAR_SCENARIO,
     LIDAR_TABLE,
@@ -27,141 +24,9 @@ from eval.studies.temporal.table import (
     ORACLE_ROW,
     SCENARIO,
     TABLE,
-    TUNED,
     abstains,
-    folder_of,
 )
 from matchers.core.search_spaces import TUNING_BUDGET
-
-CHOSEN_GOALS = (
-    Goal(
-        "denied",
-        "`denied`, W = 10: best pooled F1 ≥ 80",
-        ("f1_pooled", "f1_pooled_low", "f1_pooled_high"),
-        0.80,
-    ),
-    Goal(
-        "gnss-urban",
-        "`gnss-urban`, W = 10: success@(1 m, 2°) ≥ 60",
-        ("success_1m_2deg", "success_low", "success_high"),
-        0.60,
-    ),
-)  # at W = 10, of the method with the best validation F1 there (:func:`best_long`)
-
-
-def _per_frame(results: Path, name: str = TABLE) -> pd.DataFrame | None:
-    path = Path(results) / folder_of(name) / "per_frame.csv"
-    return pd.read_csv(path) if path.is_file() else None
-
-
-def goals(table: pd.DataFrame, results: Path, name: str = TABLE) -> list[str]:
-    """The issue's goal lines (each through :func:`goal_line`) of table ``name``."""
-    per_frame = _per_frame(results, name)
-    lines = []
-    for goal in CHOSEN_GOALS:
-        best = best_long(table, goal.condition)
-        if best is not None:
-            row = _row(table, best, LONG, goal.condition)
-            lines.append(goal.line(row, f"`{best}`, chosen on validation"))
-    urban = best_long(table, "gnss-urban")
-    if urban is not None:
-        row = _row(table, urban, LONG, "gnss-urban")
-        if per_frame is not None:
-            mine = _frames(per_frame, urban, LONG, "gnss-urban")
-            oracle = _frames(per_frame, ORACLE_ROW, 0, "gnss-urban")
-            if mine is not None and oracle is not None and len(mine) == len(oracle):
-                diff = mine["success"].to_numpy(float) - 0.9 * oracle["success"].to_numpy(float)
-                mean, low, high, _ = finite_interval(diff, mine["episode"], bounds=(-1.0, 1.0))
-                lines.append(
-                    goal_line(
-                        "`gnss-urban`, W = 10: success − 0.9 × the oracle's ≥ 0",
-                        mean,
-                        low,
-                        high,
-                        0.0,
-                        detail=f"`{urban}`; share of the oracle {cell(row.share_of_oracle, digits=0)} %",
-                    )
-                )
-        lines.append(
-            goal_line(
-                "`gnss-urban`, W = 10: partner changes ≤ 1 per 100 object-frames",
-                row.partner_changes_per_100,
-                row.partner_changes_low,
-                row.partner_changes_high,
-                1.0,
-                at_least=False,
-                scale=1.0,
-                digits=2,
-                detail=f"`{urban}`",
-            )
-        )
-    continuity = Path(results) / folder_of(name) / "continuity.csv"
-    if continuity.is_file():
-        c = pd.read_csv(continuity)
-        c = c[(c["preset"] == "gnss-urban") & (c["band"] == "fast") & (c["links"] > 0)]
-        if len(c):
-            c = c.iloc[0]
-            lines.append(
-                goal_line(
-                    "own tracker: ≥ 90 % of consecutive detections on one track for objects "
-                    "moving ≥ 10 m/s",
-                    c.continuity,
-                    c.continuity_low,
-                    c.continuity_high,
-                    0.90,
-                    detail=f"{int(c.kept)} of {int(c.links)} links, `gnss-urban` test split",
-                )
-            )
-    gain = Path(results) / f"{name}_gain.csv"
-    if gain.is_file():
-        every = pd.read_csv(gain)
-        fixed = every[(every["preset"] == "gnss-urban") & (every["parameters"] == FIXED)]
-        if len(fixed):
-            f = fixed.iloc[0]
-            lines.append(
-                goal_line(
-                    "`gnss-urban`: W = 10 ≥ W = 1 at fixed parameters (pooled F1)",
-                    f.pooled_diff,
-                    f.pooled_low,
-                    f.pooled_high,
-                    0.0,
-                    detail=f"`{f.method}`, W = 10's parameters and τ at both",
-                )
-            )
-        g = every[(every["preset"] == "denied") & (every["parameters"] == TUNED)]
-        if len(g):
-            g = g.iloc[0]
-            low = g.pooled_low
-            above = "above 0" if np.isfinite(low) and low > 0 else "not above 0"
-            lines.append(
-                goal_line(
-                    "`denied`: W = 10 beats W = 1 by ≥ +10 pooled F1 points",
-                    g.pooled_diff,
-                    g.pooled_low,
-                    g.pooled_high,
-                    0.10,
-                    detail=f"`{g.method}`; interval {above}",
-                )
-            )
-    return lines
-
-
-def _row(table: pd.DataFrame, method: str, window: int, preset: str):
-    rows = table[
-        (table["method"] == method) & (table["window"] == window) & (table["preset"] == preset)
-    ]
-    return next(rows.itertuples(index=False))
-
-
-def _frames(per_frame: pd.DataFrame, method: str, window: int, preset: str) -> pd.DataFrame | None:
-    rows = per_frame[
-        (per_frame["method"] == method)
-        & (per_frame["window"] == window)
-        & (per_frame["preset"] == preset)
-    ]
-    if not len(rows):
-        return None
-    return rows.sort_values(["seed", "sequence", "frame"]).reset_index(drop=True)
 
 
 def readme_part(
@@ -214,20 +79,7 @@ def readme_part(
             f"| {ranged(g.pooled_diff, g.pooled_low, g.pooled_high)} "
             f"| {ranged(g.diff, g.ci_low, g.ci_high)} | {cell(success)} | {cell(ceiling)} |"
         )
-    findings = []
-    for g in gain.itertuples(index=False):
-        if not (np.isfinite(g.pooled_low) and np.isfinite(g.pooled_high)):
-            verdict = "no interval (one episode)"
-        elif g.pooled_low > 0:
-            verdict = "a gain, interval above 0"
-        elif g.pooled_high < 0:
-            verdict = "a loss, interval below 0"
-        else:
-            verdict = "no measurable change, interval across 0"
-        findings.append(
-            f"`{g.preset}`: W = 10 against W = 1 ({g.parameters}) for `{g.method}`: "
-            f"{100 * g.pooled_diff:+.1f} pooled F1 points — {verdict}"
-        )
+    findings: list[str] = [c.statement for c in gain_claims(gain, name)]
     abstained = table[
         [
             m != ORACLE_ROW and abstains(m, p)
@@ -252,6 +104,58 @@ def readme_part(
     )
     lines += ["", *bullets(findings + goals(table, results, name) + timing), ""]
     return lines
+
+
+def gain_claims(gain: pd.DataFrame, name: str = TABLE) -> list[Claim]:
+    """Per row of the gain table ``<name>_gain.csv``: W = 10 against W = 1 (tuned per W, or at
+    W = 10's parameters and τ) for the method chosen on validation, the pooled-F1 difference
+    with its episode-bootstrap interval as a claim."""
+    out = []
+    for g in gain.itertuples(index=False):
+        if not (np.isfinite(g.pooled_low) and np.isfinite(g.pooled_high)):
+            verdict = "no interval (one episode)"
+        elif g.pooled_low > 0:
+            verdict = "a gain, interval above 0"
+        elif g.pooled_high < 0:
+            verdict = "a loss, interval below 0"
+        else:
+            verdict = "no measurable change, interval across 0"
+        statement = (
+            f"`{g.preset}`: W = 10 against W = 1 ({g.parameters}) for `{g.method}`: "
+            f"{100 * g.pooled_diff:+.1f} pooled F1 points — {verdict}"
+        )
+        out.append(
+            Claim(
+                study_of(name),
+                f"{g.method} W = 10 ({g.preset}, {g.parameters})",
+                "W = 1",
+                "pooled F1 points",
+                100 * g.pooled_diff,
+                100 * g.pooled_low,
+                100 * g.pooled_high,
+                0.0,
+                "diff",
+                difference_verdict(g.pooled_low, g.pooled_high),
+                "validation",
+                f"{int(g.episodes)} simulation episodes (bootstrap)",
+                f"{name}_gain.csv",
+                statement,
+            )  # fmt: skip
+        )
+    return out
+
+
+def claims(results: Path, name: str = TABLE) -> list[Claim]:
+    """The claims of table ``name``'s part, in the report's order: W = 10 against W = 1, then
+    the goals (none without ``<name>.csv``)."""
+    results = Path(results)
+    path = results / f"{name}.csv"
+    if not path.is_file():
+        return []
+    table = pd.read_csv(path, keep_default_na=False, na_values=[""])
+    gain_path = results / f"{name}_gain.csv"
+    gain = pd.read_csv(gain_path) if gain_path.is_file() else pd.DataFrame(columns=GAIN_COLUMNS)
+    return [*gain_claims(gain, name), *goal_claims(table, results, name)]
 
 
 def temporal_tuning_record(table: pd.DataFrame) -> dict:

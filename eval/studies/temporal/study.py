@@ -18,7 +18,9 @@ from eval.studies.temporal.evaluation import (
     readme_part,
     readme_part_lidar,
 )
-from eval.studies.temporal.report import CHOSEN_GOALS
+from eval.studies.temporal.goals import GOALS
+from eval.studies.temporal.report import claims as table_claims
+from eval.studies.temporal.table import LIDAR_TABLE
 
 SPLITS = {"test": TEST_SEQUENCES, "val": VAL_SEQUENCES}
 
@@ -31,7 +33,8 @@ STUDY = Study(
     ),
     methods=tuple(name for name, _ in METHODS),
     conditions=(*PRESETS, *sorted({f"W = {w}" for _, ws in METHODS for w in ws})),
-    goals=CHOSEN_GOALS,
+    goals=GOALS,
+    claims=lambda results: [*table_claims(results), *table_claims(results, LIDAR_TABLE)],
     parts=(
         Part(
             "temporal",

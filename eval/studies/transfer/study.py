@@ -8,9 +8,18 @@ from __future__ import annotations
 from eval.engine.study import Data, Part, Study
 from eval.pipeline.sizes import CAD_TRAIN_PAIRS, SCENARIOS
 from eval.pipeline.stage import Stage
+from eval.report.run_part import read_record, study_seconds
 from eval.studies.transfer import stages
 from eval.studies.transfer.reference import LEARNED
+from eval.studies.transfer.report import claims as part_claims
 from eval.studies.transfer.report import readme_part
+
+
+def claims(results):
+    """The transfer part's claims (its goals, the cold-run time when the run computed)."""
+    seconds = study_seconds(results, read_record(results))
+    return part_claims(results, seconds["transfer"], seconds["transfer_runs"])
+
 
 STUDY = Study(
     name="transfer",
@@ -20,6 +29,7 @@ STUDY = Study(
         Data("dmgm-cad/val-070", "eval/data/dmgm-cad/val-070"),
     ),
     methods=LEARNED,
+    claims=claims,
     parts=(
         Part(
             "transfer",

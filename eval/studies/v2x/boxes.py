@@ -30,7 +30,7 @@ from pathlib import Path
 import pandas as pd
 
 from eval.core.tasks import MatcherSpec
-from eval.protocol.claims import measurement_line
+from eval.protocol.claims import Claim, measurement_claim
 
 log = logging.getLogger(__name__)
 
@@ -135,6 +135,18 @@ def _delta_line(results: Path) -> list[str]:
     return out
 
 
+def timing_claims(seconds: float | None) -> list[Claim]:
+    """The stage's time in the last cold run against its 120 s goal (a point measurement;
+    none without a cold run)."""
+    if seconds is None:
+        return []
+    return [
+        measurement_claim(
+            NAME, "stage time (export, import, evaluation)", seconds, 120.0, "last cold run"
+        )
+    ]
+
+
 def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[str]:
     """Report lines for the box-only table (none without ``table_v2x_boxes.md``); ``seconds``:
     the stage's time in the last cold run (export, import and evaluation)."""
@@ -163,17 +175,7 @@ def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[s
             markdown,
             "",
             *bullets(_delta_line(results) + power),
-            *(
-                [
-                    "- "
-                    + measurement_line(
-                        "stage time (export, import, evaluation)", seconds, 120.0, "last cold run"
-                    )
-                    + "."
-                ]
-                if seconds is not None
-                else []
-            ),
+            *(f"- {c.statement}." for c in timing_claims(seconds)),
             "",
             f"(`{rel}/table_{NAME}.csv`, `{rel}/table_{NAME}_intervals.csv`, `{rel}/{NAME}/`.)",
             "",
@@ -181,4 +183,12 @@ def readme_part(results: Path, rel: str, seconds: float | None = None) -> list[s
     )
 
 
-__all__ = ["LABEL", "NAME", "as_boxes", "box_matchers", "evaluate_boxes", "readme_part"]
+__all__ = [
+    "LABEL",
+    "NAME",
+    "as_boxes",
+    "box_matchers",
+    "evaluate_boxes",
+    "readme_part",
+    "timing_claims",
+]

@@ -8,7 +8,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from eval.protocol.goal_verdict import goal_line
+from eval.engine.goal import Goal
+from eval.protocol.claims import Claim
 from eval.studies.table1.regime_cards import AUC_FILE
 
 AUC_BAND = (0.60, 0.80)
@@ -16,9 +17,9 @@ IMAGE_AUC_MAX = 0.75
 REALISM_LABEL = "CAD-V2X"
 
 
-def realism_check(results: Path) -> list[str]:
+def realism_check(results: Path) -> list[Claim]:
     """The appearance-realism goals on the held-out test split (``regime.csv``'s CAD-V2X row;
-    its settings were chosen on validation seeds, docs/scenarios.md): whole-feature AUC within
+    its settings were chosen on validation seeds, docs/scenarios.md), as claims: whole-feature AUC within
     :data:`AUC_BAND`, image-only AUC at most :data:`IMAGE_AUC_MAX`, each read off its
     episode-bootstrap interval (``regime_auc_intervals.csv``); without that file the values are
     points and every goal is *not shown* (a point value never meets a goal)."""
@@ -50,11 +51,14 @@ def realism_check(results: Path) -> list[str]:
         )
     )
 
-    def goal(name: str, key: str, bar: float, at_least: bool, detail: str) -> str:
-        return goal_line(
-            f"appearance realism, {name} {'≥' if at_least else '≤'} {bar:.2f}", row[key],
-            row.get(f"{key}_low", nan), row.get(f"{key}_high", nan), bar, at_least,
-            scale=1.0, digits=3, detail=detail,
+    def goal(name: str, key: str, bar: float, at_least: bool, detail: str) -> Claim:
+        text = f"appearance realism, {name} {'≥' if at_least else '≤'} {bar:.2f}"
+        declared = Goal(
+            "", text, (key, f"{key}_low", f"{key}_high"), bar, at_least, "fixed", 1.0, 3
+        )
+        return declared.claim_of(
+            row[key], row.get(f"{key}_low", nan), row.get(f"{key}_high", nan), detail,
+            study="v2x", subject=text, source="table_v2x.csv", clusters="simulation episodes",
         )  # fmt: skip
 
     return [

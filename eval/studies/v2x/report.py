@@ -16,7 +16,7 @@ from eval.engine.goal import Goal
 from eval.engine.power import power_line
 from eval.engine.result_table import bullets, read_result
 from eval.engine.validation_choice import recorded_validation, runnable
-from eval.protocol.claims import difference_verdict
+from eval.protocol.claims import Claim, difference_verdict, printed
 from eval.studies.v2x.markdown import to_markdown
 from eval.studies.v2x.realism import realism_check
 from eval.studies.v2x.table import (
@@ -26,6 +26,8 @@ from eval.studies.v2x.table import (
     SUBDIR,
     reads_prior,
 )
+
+SOURCE = "table_v2x.csv"  # the file the V2X claims read
 
 
 def read_intervals(results: Path, name: str) -> pd.DataFrame:
@@ -145,7 +147,14 @@ GOALS = (
 def goals(
     table: pd.DataFrame, validation: Mapping[str, Mapping[str, float]] | None = None
 ) -> list[str]:
-    """The :data:`GOALS` lines, each with its interval and a verdict that reads it
+    """The statements of :func:`goal_claims`, as the report prints them."""
+    return [claim.statement for claim in goal_claims(table, validation)]
+
+
+def goal_claims(
+    table: pd.DataFrame, validation: Mapping[str, Mapping[str, float]] | None = None
+) -> list[Claim]:
+    """The :data:`GOALS` as claims, each with its interval and a verdict that reads it
     (:mod:`eval.protocol.goal_verdict`); the method is the one chosen on validation."""
     out = []
     chosen = chosen_by_preset(table, {g.condition: None for g in GOALS}, validation)
@@ -156,11 +165,11 @@ def goals(
             if goal.metric == SUCCESS
             else f"`{name}`, chosen on validation"
         )
-        out.append(goal.line(row, detail))
+        out.append(goal.claim(row, detail, study=SUBDIR, subject=name, source=SOURCE))
     return out
 
 
-def runner_up_lines(intervals: pd.DataFrame) -> list[str]:
+def runner_up_claims(intervals: pd.DataFrame) -> list[Claim]:
     """Per preset of ``table_v2x_intervals.csv``: the matcher chosen on validation against the
     runner-up, test F1 difference with its episode interval — ahead / behind only where the
     interval excludes 0 (:func:`eval.protocol.claims.difference_verdict`)."""
@@ -171,12 +180,45 @@ def runner_up_lines(intervals: pd.DataFrame) -> list[str]:
             if has_interval(row.ci_low, row.ci_high)
             else f"{100 * row.f1_diff:+.1f} (no interval)"
         )
-        out.append(
+        statement = (
             f"`{row.preset}`: `{row.best}` (chosen on validation) − the runner-up `{row.runner_up}`,"
             f" test F1 {interval} points over {int(row.episodes)} episodes — "
             f"{difference_verdict(row.ci_low, row.ci_high)}"
         )
+        out.append(
+            Claim(
+                SUBDIR,
+                row.preset,
+                "difference",
+                "f1 points",
+                printed(row.f1_diff),
+                printed(row.ci_low),
+                printed(row.ci_high),
+                0.0,
+                "diff",
+                difference_verdict(row.ci_low, row.ci_high),
+                "validation",
+                "simulation episodes",
+                SOURCE,
+                statement,
+            )  # fmt: skip
+        )
     return out
+
+
+def claims(results: Path) -> list[Claim]:
+    """The claims of the V2X part (its goals, best against runner-up, appearance realism), in
+    the order the report states them; none without ``table_v2x.md``."""
+    results = Path(results)
+    table = read_result(results, "table_v2x.csv", allow_empty=True)
+    if table is None or not (results / "table_v2x.md").is_file():
+        return []
+    validation = recorded_validation(results, SUBDIR)
+    return [
+        *goal_claims(table, validation),
+        *runner_up_claims(read_intervals(results, SUBDIR)),
+        *realism_check(results),
+    ]
 
 
 def readme_part(results: Path, rel: str) -> list[str]:
@@ -187,9 +229,10 @@ def readme_part(results: Path, rel: str) -> list[str]:
         return []
     validation = recorded_validation(results, SUBDIR)
     intervals = read_intervals(results, SUBDIR)
-    lines = goals(table, validation) + runner_up_lines(intervals)
+    said = (*goal_claims(table, validation), *runner_up_claims(intervals))
+    lines = [c.statement for c in said]
     lines += [line for line in (power_line(results, SUBDIR),) if line]
-    lines += realism_check(results)
+    lines += [c.statement for c in realism_check(results)]
     episodes = int(intervals["episodes"].max()) if len(intervals) else 0
     return [
         "### The V2X task",
@@ -221,8 +264,10 @@ __all__ = [
     "compact",
     "compact_markdown",
     "findings",
+    "goal_claims",
     "goals",
     "read_intervals",
     "readme_part",
-    "runner_up_lines",
+    "runner_up_claims",
+    "claims",
 ]

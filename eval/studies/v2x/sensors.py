@@ -7,8 +7,10 @@ Protocol. For each (preset, matcher) evaluated on both sensors: F1 per frame pai
 the runs (seeds), d = F1(LiDAR) − F1(camera) per frame pair (a difference of fractions), its
 mean with the cluster-robust t-interval over episodes (:mod:`eval.protocol.cluster_interval`:
 equal episode sizes give the t-interval of episode means), and the two-sided p-value of the
-same t-statistic. Holm's adjustment (:mod:`eval.protocol.holm`) runs over every comparison of
-the file; a sensor is said to favour a matcher only where the Holm-adjusted p is at most
+same t-statistic. Holm's adjustment (:mod:`eval.protocol.holm`) runs over the file's distinct
+comparisons: a matcher that reads no prior gives the same per-pair differences under every preset
+with the prior (``exact``, ``rtk``, …), and such repeated rows are one comparison in the family,
+their adjusted p shared; a sensor is said to favour a matcher only where the Holm-adjusted p is at most
 :data:`ALPHA` (so the 95 % interval excludes 0 too). A matcher that cannot run under a preset
 (a prior reader under ``denied``, :func:`eval.core.abstention.cannot_run`) is not compared
 there: no input, no number (DESIGN §3).
@@ -29,8 +31,9 @@ import numpy as np
 import pandas as pd
 
 from eval.core.result_files import write_csv
+from eval.protocol.claims import AHEAD, BEHIND, NOT_SHOWN, Claim, printed
 from eval.protocol.cluster_interval import t_interval, t_p_value
-from eval.protocol.holm import holm
+from eval.protocol.holm import holm_distinct
 
 NAME = "v2x_sensors"
 ALPHA = 0.05
@@ -94,7 +97,7 @@ def sensor_differences(
             f"frame pair {bad.pair} of preset {bad.preset!r}: episode/simulation seed differ "
             "between the LiDAR and the camera runs: not the same frames"
         )
-    rows = []
+    rows, keys = [], []
     for (preset, matcher), group in joined.groupby(["preset", "matcher"], sort=False):
         if cannot_run(matcher, preset):
             continue  # no input, no number (eval.core.abstention)
@@ -102,6 +105,7 @@ def sensor_differences(
         d = (group["f1_lidar"] - group["f1_camera"]).to_numpy()
         episodes = group["episode_lidar"].to_numpy()
         diff, low, high, clusters = t_interval(d, episodes, level, bounds=(-1.0, 1.0))
+        keys.append((matcher, tuple(group["pair"]), d.tobytes()))  # the same comparison
         rows.append(
             {"preset": preset, "matcher": matcher, "family": dict(FAMILIES)[prior]}
             | {"lidar_f1": group["f1_lidar"].mean(), "camera_f1": group["f1_camera"].mean()}
@@ -109,7 +113,7 @@ def sensor_differences(
             | {"pairs": len(group), "p_value": t_p_value(d, episodes)}
         )
     table = pd.DataFrame(rows, columns=[c for c in COLUMNS if c not in ("chosen", "p_holm", "verdict")])  # fmt: skip
-    table["p_holm"] = holm(table["p_value"].to_numpy()) if len(table) else []
+    table["p_holm"] = holm_distinct(table["p_value"].to_numpy(), keys) if len(table) else []
     table["verdict"] = [_verdict(r) for r in table.itertuples(index=False)]
     table["chosen"] = _chosen(table, validation or {})
     return table.reindex(columns=list(COLUMNS))
@@ -194,8 +198,15 @@ def _pp(value: float) -> str:
 
 
 def sensor_lines(results: Path) -> list[str]:
-    """Per preset and family, the ``chosen`` row of ``table_v2x_sensors.csv``: the paired
-    difference LiDAR − camera with its interval and verdict — read from that file alone."""
+    """The statements of :func:`sensor_claims`, as the report prints them."""
+    return [claim.statement for claim in sensor_claims(results)]
+
+
+def sensor_claims(results: Path) -> list[Claim]:
+    """Per preset and family, the ``chosen`` row of ``table_v2x_sensors.csv`` as a claim: the
+    paired difference LiDAR − camera with its interval and verdict (ahead where LiDAR is
+    favoured after Holm's adjustment, behind where cameras are, else not shown) — read from
+    that file alone."""
     path = Path(results) / f"table_{NAME}.csv"
     if not path.is_file():
         return []
@@ -211,11 +222,31 @@ def sensor_lines(results: Path) -> list[str]:
             if np.isfinite(row.ci_low) and np.isfinite(row.ci_high)
             else "(no interval)"
         )
-        out.append(
+        statement = (
             f"`{row.preset}`, {row.family} (`{row.matcher}`, chosen on validation): F1 on "
             f"LiDAR boxes − on camera detections, same frames, {_pp(row.diff)} {interval} "
             f"points over {int(row.clusters)} episodes (LiDAR {100 * row.lidar_f1:.1f}, camera "
             f"{100 * row.camera_f1:.1f}; Holm-adjusted p {row.p_holm:.3f}) — {row.verdict}"
+        )
+        state = {LIDAR_FAVOURS: AHEAD, CAMERA_FAVOURS: BEHIND}.get(row.verdict, NOT_SHOWN)
+        subject = f"{row.preset}, {row.family} ({row.matcher}, chosen on validation)"
+        out.append(
+            Claim(
+                "v2x_lidar",
+                subject,
+                "difference",
+                "f1 points",
+                printed(row.diff),
+                printed(row.ci_low),
+                printed(row.ci_high),
+                0.0,
+                "diff",
+                state,
+                "validation",
+                "simulation episodes",
+                f"table_{NAME}.csv",
+                statement,
+            )  # fmt: skip
         )
     return out
 
@@ -224,6 +255,7 @@ __all__ = [
     "COLUMNS",
     "NAME",
     "mean_validation",
+    "sensor_claims",
     "sensor_differences",
     "sensor_lines",
     "write_sensor_table",

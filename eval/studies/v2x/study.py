@@ -6,18 +6,39 @@ starts from CAD's), so Table I runs first.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from eval.engine.study import Data, Part, Study
 from eval.pipeline.sizes import V2X_PAIRS, V2X_SCENARIO, V2X_VAL_PAIRS
 from eval.pipeline.stage import Stage
+from eval.protocol.claims import Claim
+from eval.report.run_part import read_record, study_seconds
 from eval.studies.v2x import stages
 from eval.studies.v2x.boxes import readme_part as boxes_part
+from eval.studies.v2x.boxes import timing_claims
 from eval.studies.v2x.lidar import SCENARIO as LIDAR_SCENARIO
 from eval.studies.v2x.lidar import readme_part as lidar_part
 from eval.studies.v2x.report import GOALS
+from eval.studies.v2x.report import claims as camera_claims
 from eval.studies.v2x.report import readme_part as camera_part
+from eval.studies.v2x.sensors import sensor_claims
 from eval.studies.v2x.table import PRESETS
 
 GROUP = "Localisation and V2X"
+
+
+def claims(results: Path) -> list[Claim]:
+    """The V2X study's claims, as its three parts state them: the camera table's goals,
+    best-against-runner-up and realism, the box table's stage time, camera against LiDAR."""
+    results = Path(results)
+    seconds = study_seconds(results, read_record(results))
+    shown = lambda name: (results / f"table_{name}.md").is_file()  # noqa: E731
+    return [
+        *camera_claims(results),
+        *(timing_claims(seconds["v2x_boxes"]) if shown("v2x_boxes") else []),
+        *(sensor_claims(results) if shown("v2x_lidar") else []),
+    ]
+
 
 STUDY = Study(
     name="v2x",
@@ -31,6 +52,7 @@ STUDY = Study(
     methods=("all", "every prior matcher"),
     conditions=PRESETS,
     goals=GOALS,
+    claims=claims,
     parts=(
         Part("v2x", lambda c: camera_part(c.results, c.rel), GROUP, "The V2X task", "table_v2x.md"),
         Part(
