@@ -126,16 +126,33 @@ def forwarding(package: str):
     return forward
 
 
+_REGISTERED: dict[str, Study] = {}  # studies declared outside this package (register)
+
+
+def register(declared: Study) -> Study:
+    """Add a study declared outside this package (your own, e.g. ``examples/dense_arena``) to
+    the list, after the built-in ones, so that its claims and report parts are derived like
+    theirs; a built-in name is refused. Returns ``declared``."""
+    if declared.name in STUDIES:
+        raise ValueError(f"study {declared.name!r}: a built-in study has that name")
+    _REGISTERED[declared.name] = declared
+    return declared
+
+
 def study(name: str) -> Study:
-    """The declaration of study ``name`` (``eval/studies/<name>/study.py``'s ``STUDY``); a
-    ValueError naming the known ones for any other name. The registry names each study by its
-    package, as the matcher registry names a matcher, so this package imports no study module
-    until it is asked for one."""
+    """The declaration of study ``name`` (``eval/studies/<name>/study.py``'s ``STUDY``, or one
+    registered with :func:`register`); a ValueError naming the known ones for any other name.
+    The registry names each built-in study by its package, as the matcher registry names a
+    matcher, so this package imports no study module until it is asked for one."""
+    if name in _REGISTERED:
+        return _REGISTERED[name]
     if name not in STUDIES:
-        raise ValueError(f"unknown study {name!r}; known: {', '.join(STUDIES)}")
+        known = ", ".join([*STUDIES, *_REGISTERED])
+        raise ValueError(f"unknown study {name!r}; known: {known}")
     return importlib.import_module(f"{__name__}.{name}.study").STUDY
 
 
 def studies() -> tuple[Study, ...]:
-    """Every study's declaration, in :data:`STUDIES` order."""
-    return tuple(study(name) for name in STUDIES)
+    """Every study's declaration: the built-in ones in :data:`STUDIES` order, then the
+    registered ones in the order they were registered."""
+    return tuple(study(name) for name in (*STUDIES, *_REGISTERED))
