@@ -85,18 +85,18 @@ def test_claims_csv_is_written_with_its_columns(tmp_path):
 
 
 def test_the_realism_goals_read_the_episode_interval_of_the_auc(tmp_path):
-    from eval.studies.v2x.realism import realism_check
+    from eval.studies.v2x.realism import realism_check, realism_claims
 
     (tmp_path / "regime.csv").write_text(
         "dataset,appearance_auc,image_auc,same_class_auc\nCAD-V2X,0.84,0.745,\n"
     )
-    point = [c.statement for c in realism_check(tmp_path)]
+    point = realism_check(tmp_path)
     assert all(": not shown — " in line and "(no interval)" in line for line in point)
     (tmp_path / "regime_auc_intervals.csv").write_text(
         "dataset,appearance_auc,appearance_auc_low,appearance_auc_high,image_auc,image_auc_low,"
         "image_auc_high,episodes\nCAD-V2X,0.84,0.81,0.87,0.745,0.696,0.792,13\n"
     )
-    claims = realism_check(tmp_path)
+    claims = realism_claims(tmp_path)
     assert [(c.bar, c.direction, c.chosen_on) for c in claims] == [
         (0.6, ">=", "fixed"), (0.8, "<=", "fixed"), (0.75, "<=", "fixed")
     ]  # fmt: skip

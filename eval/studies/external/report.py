@@ -13,7 +13,12 @@ from eval.protocol.claims import Claim, claims_in, lines_of, point_claim, printe
 from eval.studies.external.evaluation import DMGM_PUBLISHED, SOURCE, SUBDIR
 
 
-def findings(table: pd.DataFrame) -> list[Claim | str]:
+def findings(table: pd.DataFrame) -> list[str]:
+    """The sentences of :func:`finding_items`, as the report prints them."""
+    return lines_of(finding_items(table))
+
+
+def finding_items(table: pd.DataFrame) -> list[Claim | str]:
     """What the external table says (pooled F1, percent), in order: the best matcher without
     the prior and the best with it — claims chosen on the test pairs themselves, so point values
     labelled so —, the prior alone, maximin given the prior against that best (a point value)
@@ -89,7 +94,7 @@ def claims(results: Path) -> list[Claim]:
     if not (results / "table_external.md").is_file():
         return []
     table = pd.read_csv(results / SOURCE, keep_default_na=False, na_values=[""])
-    return claims_in(findings(table))
+    return claims_in(finding_items(table))
 
 
 def readme_part(results: Path, rel: str) -> list[str]:
@@ -99,7 +104,7 @@ def readme_part(results: Path, rel: str) -> list[str]:
     if not path.is_file():
         return []
     table = pd.read_csv(results / SOURCE, keep_default_na=False, na_values=[""])
-    text = "; ".join(lines_of(findings(table)))
+    text = "; ".join(findings(table))
     return [
         "### External data: the DMGM CAD pairs",
         "",

@@ -17,7 +17,12 @@ IMAGE_AUC_MAX = 0.75
 REALISM_LABEL = "CAD-V2X"
 
 
-def realism_check(results: Path) -> list[Claim]:
+def realism_check(results: Path) -> list[str]:
+    """The statements of :func:`realism_claims`, as the report prints them."""
+    return [claim.statement for claim in realism_claims(results)]
+
+
+def realism_claims(results: Path) -> list[Claim]:
     """The appearance-realism goals on the held-out test split (``regime.csv``'s CAD-V2X row;
     its settings were chosen on validation seeds, docs/scenarios.md), as claims: whole-feature AUC within
     :data:`AUC_BAND`, image-only AUC at most :data:`IMAGE_AUC_MAX`, each read off its
@@ -70,4 +75,4 @@ def realism_check(results: Path) -> list[Claim]:
     ]
 
 
-__all__ = ["AUC_BAND", "IMAGE_AUC_MAX", "REALISM_LABEL", "realism_check"]
+__all__ = ["AUC_BAND", "IMAGE_AUC_MAX", "REALISM_LABEL", "realism_check", "realism_claims"]

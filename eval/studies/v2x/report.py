@@ -18,7 +18,7 @@ from eval.engine.result_table import bullets, read_result
 from eval.engine.validation_choice import recorded_validation, runnable
 from eval.protocol.claims import Claim, difference_verdict, printed
 from eval.studies.v2x.markdown import to_markdown
-from eval.studies.v2x.realism import realism_check
+from eval.studies.v2x.realism import realism_claims
 from eval.studies.v2x.table import (
     ORACLE_ROW,
     PRESETS,
@@ -206,6 +206,11 @@ def runner_up_claims(intervals: pd.DataFrame) -> list[Claim]:
     return out
 
 
+def runner_up_lines(intervals: pd.DataFrame) -> list[str]:
+    """The statements of :func:`runner_up_claims`, as the report prints them."""
+    return [claim.statement for claim in runner_up_claims(intervals)]
+
+
 def claims(results: Path) -> list[Claim]:
     """The claims of the V2X part (its goals, best against runner-up, appearance realism), in
     the order the report states them; none without ``table_v2x.md``."""
@@ -217,7 +222,7 @@ def claims(results: Path) -> list[Claim]:
     return [
         *goal_claims(table, validation),
         *runner_up_claims(read_intervals(results, SUBDIR)),
-        *realism_check(results),
+        *realism_claims(results),
     ]
 
 
@@ -232,7 +237,7 @@ def readme_part(results: Path, rel: str) -> list[str]:
     said = (*goal_claims(table, validation), *runner_up_claims(intervals))
     lines = [c.statement for c in said]
     lines += [line for line in (power_line(results, SUBDIR),) if line]
-    lines += [c.statement for c in realism_check(results)]
+    lines += [c.statement for c in realism_claims(results)]
     episodes = int(intervals["episodes"].max()) if len(intervals) else 0
     return [
         "### The V2X task",
@@ -269,5 +274,6 @@ __all__ = [
     "read_intervals",
     "readme_part",
     "runner_up_claims",
+    "runner_up_lines",
     "claims",
 ]
