@@ -1,7 +1,7 @@
 """``python -m eval.studies.<study>``: one study alone, against the datasets under ``--data`` and
 an existing results folder ``--out`` (``make reproduce``'s options and defaults, the same result
-cache). It runs the study's own stages — and the dataset stages of the studies it reads, which
-only generate what is missing — then writes ``claims.csv``, the report and, for the
+cache). It runs the study's own stages — and the dataset stages of the studies whose datasets it
+reads (transfer: cad-v2x's training split), which only generate what is missing — then writes ``claims.csv``, the report and, for the
 repository's ``results/``, README.md's results section again. Where the study reads another
 study's results (``Study.needs``: V2X and multi-agent read Table I's chosen configurations,
 ``tuning.csv``) and ``--out`` lacks them, it stops with one line naming the study to run first.
@@ -72,8 +72,9 @@ def run_study(name: str | Study, argv: list[str] | None = None) -> int:
         if missing:
             raise ValueError("; ".join(missing))
         state, _ = _start(args)
-        needed = [declared(n) for n in study.needs]
-        stages = [s for other in needed for s in other.stages if not s.executor]  # datasets
+        # the dataset stages of a study whose datasets (not results) this one reads
+        needed = [declared(n) for n, path in study.needs.items() if not path]
+        stages = [s for other in needed for s in other.stages if not s.executor]
         stages += [*study.stages, *study.closing_stages]
         timer = StageTimer()
         walk(stages, state, timer)
