@@ -38,12 +38,10 @@ def readme_part(
     :data:`LIDAR_TABLE`: the same for the LiDAR table (:func:`readme_part_lidar`)."""
     results = Path(results)
     lidar = name == LIDAR_TABLE
-    path = results / f"{name}.csv"
-    if not path.is_file():
+    written = _tables(results, name)
+    if written is None:
         return []
-    table = pd.read_csv(path, keep_default_na=False, na_values=[""])
-    gain_path = results / f"{name}_gain.csv"
-    gain = pd.read_csv(gain_path) if gain_path.is_file() else pd.DataFrame(columns=GAIN_COLUMNS)
+    table, gain = written
     lines = [
         "### The temporal table on LiDAR boxes" if lidar else "### The temporal table",
         "",
@@ -148,14 +146,23 @@ def gain_claims(gain: pd.DataFrame, name: str = TABLE) -> list[Claim]:
 def claims(results: Path, name: str = TABLE) -> list[Claim]:
     """The claims of table ``name``'s part, in the report's order: W = 10 against W = 1, then
     the goals (none without ``<name>.csv``)."""
-    results = Path(results)
+    written = _tables(Path(results), name)
+    if written is None:
+        return []
+    table, gain = written
+    return [*gain_claims(gain, name), *goal_claims(table, Path(results), name)]
+
+
+def _tables(results: Path, name: str) -> tuple[pd.DataFrame, pd.DataFrame] | None:
+    """(``<name>.csv``, ``<name>_gain.csv`` or an empty gain table), or None without the
+    first."""
     path = results / f"{name}.csv"
     if not path.is_file():
-        return []
+        return None
     table = pd.read_csv(path, keep_default_na=False, na_values=[""])
     gain_path = results / f"{name}_gain.csv"
     gain = pd.read_csv(gain_path) if gain_path.is_file() else pd.DataFrame(columns=GAIN_COLUMNS)
-    return [*gain_claims(gain, name), *goal_claims(table, results, name)]
+    return table, gain
 
 
 def temporal_tuning_record(table: pd.DataFrame) -> dict:
