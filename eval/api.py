@@ -20,8 +20,10 @@ import pandas as pd
 from eval.core.cache import ResultCache
 from eval.core.executor import make_executor
 from eval.core.runner import Runner
+from eval.engine.matcher_list import parse_matchers
+from eval.engine.protocol_run import evaluate
+from eval.engine.splits import open_entry
 from eval.report.tables import build_table, write_tables
-from eval.studies.evaluation import evaluate, open_entry, parse_matchers
 
 
 def evaluate_matchers(

@@ -30,21 +30,10 @@ import pandas as pd
 
 from eval.claims import build_claims
 from eval.core.result_files import write_csv, write_text
+from eval.engine.study import ReportContext
 from eval.protocol.claims import FILE as CLAIMS
 from eval.protocol.claims import to_frame
-from eval.report import levels_part
-from eval.report.agreement_part import agreement_part
 from eval.report.appendix import REPORT, SITE, appendix
-from eval.report.benchmark_parts import (
-    localisation_part,
-    noise_part,
-    paired_part,
-    paper_protocol_part,
-    qualitative_part,
-    regime_sweep_part,
-    spread_part,
-    table1_part,
-)
 from eval.report.guarded import guarded
 from eval.report.run_part import (
     cold_time,
@@ -57,17 +46,7 @@ from eval.report.run_part import (
 )
 from eval.report.site import headings, write_site
 from eval.report.summary_captions import SUMMARIES
-from eval.studies.agreement import readme_part as agreement_readme
-from eval.studies.external import readme_part as external_readme
-from eval.studies.multiagent_report import readme_part as multiagent_readme
-from eval.studies.prior_defaults import readme_part as prior_sensitivity_readme
-from eval.studies.regime_cards import regime_markdown
-from eval.studies.temporal import readme_part as temporal_readme
-from eval.studies.temporal import readme_part_lidar as temporal_lidar_readme
-from eval.studies.transfer_report import readme_part as transfer_readme
-from eval.studies.v2x_boxes import readme_part as v2x_boxes_readme
-from eval.studies.v2x_lidar import readme_part as v2x_lidar_readme
-from eval.studies.v2x_report import readme_part as v2x_readme
+from eval.studies import studies
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
 __all__ = [
@@ -85,22 +64,6 @@ ROOT = Path(__file__).resolve().parents[1]
 SELF_LINK = f"The same page with sortable tables: [{SITE}](./{SITE})."
 SITE_SELF_LINK = f"The same report as Markdown: [{REPORT}](./{REPORT})."
 log = logging.getLogger(__name__)
-
-
-def regime_part(results: Path) -> list[str]:
-    if not (results / "regime.csv").is_file():
-        return []
-    return [
-        "### Regime of each dataset",
-        "",
-        regime_markdown(results / "regime.csv").strip(),
-        "",
-        "Means over test frame pairs; non-covisible share pooled over both views; appearance "
-        "AUC: how well feature similarity alone separates true from false candidate pairs "
-        "(0.5 = not at all); position error: covisible objects' 3-D disagreement after "
-        "aligning the views with the true poses.",
-        "",
-    ]
 
 
 def claims_of(results: Path) -> pd.DataFrame:
@@ -121,113 +84,35 @@ def results_section(results: Path, readme_dir: Path) -> str:
     return "\n".join(_sections(results, Path(readme_dir), claims_of(results))).strip()
 
 
+GROUPS = (
+    "The paper's benchmark",
+    "External data",
+    "Localisation and V2X",
+    "Multi-agent",
+    "Temporal",
+    "Transfer",
+)
+"""The report's groups of study parts, in order (``Part.group``; a group no study names is left
+out, a new one goes after these); within a group the parts come in the studies' order."""
+
+
 def _sections(
     results: Path, readme_dir: Path, claims: pd.DataFrame, groups: bool = False
 ) -> list[str]:
     """The report's lines; ``groups`` adds a ``##`` heading above each group of parts."""
     rel = Path(os.path.relpath(results, readme_dir)).as_posix()
     record = read_record(results)
-    seconds = study_seconds(results, record)  # "≤ N min cold" goals: the last cold run's times
-    multi_s, temporal_s, boxes_s = seconds["multiagent"], seconds["temporal"], seconds["v2x_boxes"]
-    temporal_lidar_s = seconds["temporal_lidar"]
-    transfer_s, transfer_runs = seconds["transfer"], seconds["transfer_runs"]
-
-    def part(name, build, heading=None, table=None):
-        return guarded(name, build, results, heading, table)
-
-    plan = [
-        ("The run", [part("run", lambda: run_part(results, record))]),
-        (
-            "The paper's benchmark",
-            [
-                part("regime", lambda: regime_part(results)),
-                part("table1", lambda: table1_part(results, rel, record), "Table I", "table1.md"),
-                part("levels", lambda: levels_part.report_part(results, rel)),
-                part("paired", lambda: paired_part(results, rel)),
-                part("spread", lambda: spread_part(results)),
-                part("paper protocol", lambda: paper_protocol_part(results)),
-                part("regime sweep", lambda: regime_sweep_part(results, rel, record)),
-                part("noise", lambda: noise_part(rel, record)),
-                part("qualitative", lambda: qualitative_part(rel)),
-                part("agreement", lambda: agreement_part(results, claims)),
-            ],
-        ),
-        (
-            "External data",
-            [
-                part(
-                    "external",
-                    lambda: external_readme(results, rel),
-                    "External data: the DMGM CAD pairs",
-                    "table_external.md",
-                ),
-                part("prior sensitivity", lambda: prior_sensitivity_readme(results, rel)),
-                part(
-                    "external agreement",
-                    lambda: agreement_readme(results, rel),
-                    "Do these rankings hold on external data?",
-                ),
-            ],
-        ),
-        (
-            "Localisation and V2X",
-            [
-                part("localisation", lambda: localisation_part(results, rel, record)),
-                part("v2x", lambda: v2x_readme(results, rel), "The V2X task", "table_v2x.md"),
-                part(
-                    "v2x boxes",
-                    lambda: v2x_boxes_readme(results, rel, boxes_s),
-                    "The V2X task with boxes only",
-                    "table_v2x_boxes.md",
-                ),
-                part(
-                    "v2x lidar",
-                    lambda: v2x_lidar_readme(results, rel),
-                    "The V2X task on LiDAR boxes",
-                    "table_v2x_lidar.md",
-                ),
-            ],
-        ),
-        (
-            "Multi-agent",
-            [
-                part(
-                    "multiagent",
-                    lambda: multiagent_readme(results, rel, multi_s),
-                    "Multi-agent matching",
-                    "table_multiagent.md",
-                )
-            ],
-        ),
-        (
-            "Temporal",
-            [
-                part(
-                    "temporal",
-                    lambda: temporal_readme(results, rel, temporal_s),
-                    "The temporal table",
-                    "table_temporal.md",
-                ),
-                part(
-                    "temporal_lidar",
-                    lambda: temporal_lidar_readme(results, rel, temporal_lidar_s),
-                    "The temporal table on LiDAR boxes",
-                    "table_temporal_lidar.md",
-                ),
-            ],
-        ),
-        (
-            "Transfer",
-            [
-                part(
-                    "transfer",
-                    lambda: transfer_readme(results, rel, transfer_s, transfer_runs),
-                    "Does simulation transfer?",
-                    "table_transfer.md",
-                )
-            ],
-        ),
-    ]
+    # "≤ N min cold" goals: the last cold run's times
+    context = ReportContext(results, rel, record, study_seconds(results, record), claims)
+    parts = [part for study in studies() for part in study.parts]
+    plan = [("The run", [guarded("run", lambda: run_part(results, record), results)])]
+    for title in dict.fromkeys([*GROUPS, *(part.group for part in parts)]):
+        built = [
+            guarded(p.name, lambda p=p: p.build(context), results, p.heading, p.table)
+            for p in parts
+            if p.group == title
+        ]
+        plan.append((title, built))
     out: list[str] = []
     for title, parts in plan:
         lines = [line for p in parts for line in p]

@@ -31,8 +31,10 @@ from cadsim.user_errors import is_user_error, one_line
 from eval.commands.sweep_localisation import DEFAULT_SIGMAS, parse_sigmas
 from eval.commands.sweep_noise import DEFAULT_RATES, parse_rates
 from eval.commands.sweep_regime import DEFAULT_KEEP, parse_keep
-from eval.core.cache import code_version
+from eval.core.cache import DEFAULT_CACHE, code_version
 from eval.core.executor import add_scheduler_argument
+from eval.engine.matcher_list import parse_matchers
+from eval.engine.splits import dataset_label
 from eval.pipeline.sizes import (
     DEFAULT_VAL_PAIRS,
     EXTERNAL_RUNS,
@@ -60,7 +62,6 @@ from eval.protocol.cues import EQUAL_CUE_OPTIONS
 from eval.protocol.variants import PAPER_OPTIONS
 from eval.readme_results import update_readme, write_report
 from eval.report.run_record import COLD_RECORD, StageTimer, keep_cold_record, write_run_record
-from eval.studies.evaluation import DEFAULT_CACHE, dataset_label, parse_matchers
 
 log = logging.getLogger("eval.reproduce")
 

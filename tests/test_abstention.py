@@ -74,8 +74,8 @@ VALIDATION = {p: {"pose": 0.99, "freealign": 0.7, "sm": 0.5} for p in ("gnss-urb
 
 
 def test_a_prior_reader_under_denied_gets_no_number_in_the_v2x_table(tmp_path):
-    from eval.studies.v2x_markdown import to_markdown
-    from eval.studies.v2x_table import COLUMNS, v2x_table
+    from eval.studies.v2x.markdown import to_markdown
+    from eval.studies.v2x.table import COLUMNS, v2x_table
 
     table = v2x_table(_per_pair())
     rows = table.set_index(["preset", "matcher"])
@@ -91,8 +91,8 @@ def test_a_prior_reader_under_denied_gets_no_number_in_the_v2x_table(tmp_path):
 
 
 def test_a_prior_reader_under_denied_is_in_no_ranking_and_no_comparison():
-    from eval.studies.v2x_report import chosen_row, compact, goals
-    from eval.studies.v2x_table import best_against_runner_up, ranked_on_validation, v2x_table
+    from eval.studies.v2x.report import chosen_row, compact, goals
+    from eval.studies.v2x.table import best_against_runner_up, ranked_on_validation, v2x_table
 
     per_pair = _per_pair()
     table = v2x_table(per_pair)
@@ -110,9 +110,9 @@ def test_a_prior_reader_under_denied_is_in_no_ranking_and_no_comparison():
 
 def test_the_readme_parts_say_n_a_for_a_prior_reader_under_denied(tmp_path):
     from eval.report import summary
-    from eval.studies.v2x_markdown import to_markdown
-    from eval.studies.v2x_report import readme_part
-    from eval.studies.v2x_table import v2x_table
+    from eval.studies.v2x.markdown import to_markdown
+    from eval.studies.v2x.report import readme_part
+    from eval.studies.v2x.table import v2x_table
 
     table = v2x_table(_per_pair())
     table = table.assign(matcher=table["matcher"].replace({"pose": "pose_refine"}))
@@ -138,8 +138,8 @@ def test_the_readme_parts_say_n_a_for_a_prior_reader_under_denied(tmp_path):
 def test_a_prior_reader_under_denied_gets_no_number_in_the_multiagent_table():
     from test_multiagent_study import snapshot_row
 
-    from eval.studies import multiagent as ma
-    from eval.studies import multiagent_report as mar
+    from eval.studies.multiagent import evaluation as ma
+    from eval.studies.multiagent import report as mar
 
     rows = []
     for matcher in ("maximin", "pose_refine"):

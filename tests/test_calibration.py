@@ -15,8 +15,9 @@ from eval.core.cache import ResultCache
 from eval.core.executor import SerialExecutor
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec, PairOutcome, RunResult, RunSpec
+from eval.engine.protocol_run import evaluate
+from eval.engine.splits import open_entry
 from eval.protocol import calibration
-from eval.studies.evaluation import evaluate, open_entry
 from matchers.core.discretise import discretise
 
 

@@ -26,7 +26,20 @@ def test_every_comparative_phrase_of_the_generated_report_is_a_claim():
     assert unbacked(text, claims) == []
     assert len(claims) > 40  # every study of the committed run states some
     assert set(claims["verdict"]) <= set(VERDICTS)
-    assert "test" not in set(claims["chosen_on"])
+    # chosen on test only for a point value that says so: Fig. 4's and the external leaders
+    on_test = claims[claims["chosen_on"] == "test"]
+    assert set(on_test["verdict"]) == {"point value"} and set(on_test["study"]) == {
+        "fig4",
+        "external",
+    }
+    assert on_test["statement"].str.contains("chosen on test|a point value").all()
+    # every goal's bar is its declaration's: none read from a second number of its text
+    goals = claims[claims["comparison"] == "goal"].set_index("metric")
+    tracker = (
+        "own tracker: ≥ 90 % of consecutive detections on one track for objects moving ≥ 10 m/s"
+    )
+    assert set(goals.loc[[tracker], "bar"]) == {90.0}
+    assert goals["bar"].notna().all()
     # the findings: Table I's rival chosen on validation with its interval, Fig. 4's leaders
     # labelled point values, the image-only AUC's verdict read off its interval, timing goals
     # point measurements, DMGM's blocks not independent
@@ -65,14 +78,14 @@ def test_claims_csv_is_written_with_its_columns(tmp_path):
     claims = read_claims(path)
     assert list(claims.columns) == list(COLUMNS)
     assert list(claims["statement"]) == [
-        "F1 leader at 0: Maximin 80.0 (point value)",
-        "F1 leader at 0.1: MOS 30.0 (point value)",
+        "F1 leader at 0: Maximin 80.0 (point value, chosen on test)",
+        "F1 leader at 0.1: MOS 30.0 (point value, chosen on test)",
     ]
-    assert claims["ci_low"].isna().all() and set(claims["chosen_on"]) == {"fixed"}
+    assert claims["ci_low"].isna().all() and set(claims["chosen_on"]) == {"test"}
 
 
 def test_the_realism_goals_read_the_episode_interval_of_the_auc(tmp_path):
-    from eval.studies.v2x_realism import realism_check
+    from eval.studies.v2x.realism import realism_check, realism_claims
 
     (tmp_path / "regime.csv").write_text(
         "dataset,appearance_auc,image_auc,same_class_auc\nCAD-V2X,0.84,0.745,\n"
@@ -83,7 +96,11 @@ def test_the_realism_goals_read_the_episode_interval_of_the_auc(tmp_path):
         "dataset,appearance_auc,appearance_auc_low,appearance_auc_high,image_auc,image_auc_low,"
         "image_auc_high,episodes\nCAD-V2X,0.84,0.81,0.87,0.745,0.696,0.792,13\n"
     )
-    whole_low, whole_high, image = realism_check(tmp_path)
+    claims = realism_claims(tmp_path)
+    assert [(c.bar, c.direction, c.chosen_on) for c in claims] == [
+        (0.6, ">=", "fixed"), (0.8, "<=", "fixed"), (0.75, "<=", "fixed")
+    ]  # fmt: skip
+    whole_low, whole_high, image = (c.statement for c in claims)
     assert "AUC ≥ 0.60: met — 0.840 [0.810, 0.870]" in whole_low
     assert "AUC ≤ 0.80: not met — 0.840 [0.810, 0.870]" in whole_high
     # the point value 0.745 is within the goal, its interval is not: not shown

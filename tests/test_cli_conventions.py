@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from cadsim.cli import main
-from eval.studies.evaluation import parse_matchers
+from eval.engine.matcher_list import parse_matchers
 
 
 def test_version_and_help(capsys):
@@ -60,8 +60,8 @@ def test_every_matcher_has_its_own_colour_and_marker():
 def test_a_users_scenario_keeps_its_name_and_gets_no_paper_columns():
     import pandas as pd
 
+    from eval.engine.splits import dataset_label
     from eval.report.tables import to_markdown
-    from eval.studies.evaluation import dataset_label
 
     assert dataset_label("my-busy-3lane") == "my-busy-3lane"
     assert (dataset_label("cad-intersection"), dataset_label("mrc-arena")) == ("CAD", "MRC")

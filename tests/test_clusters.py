@@ -12,9 +12,9 @@ from cadsim.dataset import Dataset
 from cadsim.generation.pipeline import generate_dataset
 from cadsim.scenario import load_scenario
 from eval.pipeline.sizes import SCENARIOS, V2X_SCENARIO
-from eval.studies.multiagent import SCENARIO as MULTIAGENT
-from eval.studies.temporal import LIDAR_SCENARIO, SCENARIO
-from eval.studies.v2x_lidar import SCENARIO as BOTH
+from eval.studies.multiagent.evaluation import SCENARIO as MULTIAGENT
+from eval.studies.temporal.evaluation import LIDAR_SCENARIO, SCENARIO
+from eval.studies.v2x.lidar import SCENARIO as BOTH
 
 ROOT = Path(__file__).resolve().parents[1]
 STUDIED = (*SCENARIOS, V2X_SCENARIO, BOTH, MULTIAGENT, SCENARIO, LIDAR_SCENARIO)

@@ -124,7 +124,7 @@ def test_datasets_are_byte_identical_on_every_dispatch_level(tmp_path):
         "import hashlib, sys\nimport numpy as np\n"
         "from cadsim.dataset import Dataset\n"
         "from cadsim.dataset.sequence_odometry import redraw_odometry\n"
-        "from eval.studies.temporal import sequence_problem\n"
+        "from eval.studies.temporal.evaluation import sequence_problem\n"
         "ds = Dataset(sys.argv[1])\nh = hashlib.sha256()\n"
         "for k in range(ds.sequences):\n"
         "    for seed in (None, 0, 1):\n"

@@ -25,7 +25,7 @@ from eval.commands.sweep_noise import sweep  # noqa: E402
 from eval.core.cache import ResultCache  # noqa: E402
 from eval.core.runner import Runner, requests_for  # noqa: E402
 from eval.core.tasks import MatcherSpec, RunTask, execute  # noqa: E402
-from eval.studies.evaluation import open_entry  # noqa: E402
+from eval.engine.splits import open_entry  # noqa: E402
 
 pytestmark = [pytest.mark.slow, pytest.mark.render]
 

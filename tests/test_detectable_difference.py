@@ -15,7 +15,7 @@ from eval.protocol.detectable_difference import (
     minimum_detectable_difference,
 )
 from eval.protocol.paired_differences import COLUMNS, paired_differences
-from eval.studies.v2x_table import INTERVAL_COLUMNS, best_against_runner_up
+from eval.studies.v2x.table import INTERVAL_COLUMNS, best_against_runner_up
 
 
 def test_equal_clusters_give_the_textbook_formula():
@@ -103,7 +103,7 @@ def test_paired_differences_and_intervals_files_carry_mdd_and_clusters():
 
 
 def test_the_mdd_of_a_bootstrap_interval_is_its_normal_standard_error_times_2_80():
-    from eval.studies.temporal_gain import bootstrap_mdd
+    from eval.studies.temporal.gain import bootstrap_mdd
 
     # a 95 % interval of half-width 1.96 is a standard error of 1: MDD = 1.960 + 0.842
     assert bootstrap_mdd(-1.96, 1.96) == pytest.approx(2.8016, abs=1e-4)

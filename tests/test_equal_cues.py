@@ -14,6 +14,8 @@ from eval.core.cache import ResultCache
 from eval.core.executor import SerialExecutor
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
+from eval.engine.protocol_run import evaluate
+from eval.engine.splits import open_entry
 from eval.protocol.cues import (
     EQUAL_CUE_OPTIONS,
     EQUAL_CUES,
@@ -24,7 +26,6 @@ from eval.protocol.cues import (
 )
 from eval.protocol.tuning import candidates_of
 from eval.report.tables import write_tables
-from eval.studies.evaluation import evaluate, open_entry
 from matchers import Problem, get
 from matchers.blocks.cue_terms import metric_factor, weighted_tensor
 from matchers.core.scale import median_spacing

@@ -26,7 +26,7 @@ def test_the_api_tour_runs_and_writes_table1(tmp_path):
 
 
 def test_a_matcher_named_by_import_path_is_evaluated():
-    from eval.studies.evaluation import parse_matchers
+    from eval.engine.matcher_list import parse_matchers
     from matchers import get
 
     assert [m.name for m in parse_matchers("matchers.rrwm:rrwm")] == ["matchers.rrwm:rrwm"]

@@ -24,12 +24,18 @@ from eval.core.cache import ResultCache
 from eval.core.executor import SerialExecutor
 from eval.core.runner import Runner, requests_for
 from eval.core.tasks import MatcherSpec, RunSpec
+from eval.engine.splits import open_entry
 from eval.protocol.metrics import summarise_pooled
 from eval.report.figures import write_fig_localisation
 from eval.report.tables import write_table1
-from eval.studies.agreement import agreement, pair_f1, paper_f1, spearman_rows, write_agreement
-from eval.studies.evaluation import open_entry
-from eval.studies.external import DMGM_PUBLISHED, best_pooled, write_table_external
+from eval.studies.external.agreement import (
+    agreement,
+    pair_f1,
+    paper_f1,
+    spearman_rows,
+    write_agreement,
+)
+from eval.studies.external.evaluation import DMGM_PUBLISHED, best_pooled, write_table_external
 from matchers import search_space
 
 

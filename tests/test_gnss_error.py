@@ -202,7 +202,7 @@ def test_a_validation_and_a_test_split_never_share_a_runs_localisation_draw(tmp_
 
 
 def test_the_calibration_statistic_grows_with_the_presets_error(tmp_path):
-    from eval.studies.gnss_calibration import match_disagreement, summary
+    from eval.studies.v2x.gnss_calibration import match_disagreement, summary
 
     data = _generated(tmp_path, {})
     exact = match_disagreement([data.path], "exact")

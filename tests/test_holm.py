@@ -45,3 +45,15 @@ def test_holm_is_never_below_the_raw_p_nor_above_bonferroni():
 def test_p_values_outside_the_unit_interval_are_refused():
     with pytest.raises(ValueError, match=r"\[0, 1\]"):
         holm([0.2, 1.5])
+
+
+def test_repeated_comparisons_count_once_in_the_family():
+    from eval.protocol.holm import holm_distinct
+
+    p = [0.01, 0.02, 0.01, 0.04]  # the first comparison repeated (e.g. a no-prior matcher)
+    keys = ["a", "b", "a", "c"]
+    adjusted = holm_distinct(p, keys)
+    assert adjusted == pytest.approx([0.03, 0.04, 0.03, 0.04])  # m = 3, not 4
+    assert list(holm_distinct(p, range(4))) == pytest.approx(list(holm(p)))
+    with pytest.raises(ValueError, match="keys"):
+        holm_distinct(p, ["a"])

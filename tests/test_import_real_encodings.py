@@ -259,7 +259,7 @@ def test_near_orthonormal_rotations_are_polar_decomposed_and_far_ones_refused(tm
 def test_temporal_methods_run_on_an_imported_v2x_seq_split(tmp_path):
     """An imported V2X-Seq split loads as the temporal table loads its splits, and every
     temporal method of the table runs on it and assigns the covisible objects."""
-    from eval.studies.temporal import METHODS, load_split, run_method
+    from eval.studies.temporal.evaluation import METHODS, load_split, run_method
 
     out = import_v2x_seq(write_v2x_seq(tmp_path / "spd"), tmp_path / "out").out
     [(seed, item)] = load_split(out, "gnss-urban", (0,))

@@ -138,9 +138,10 @@ def test_none_appearance_and_learned_rows_share_one_calibration_path(
     from eval.core.executor import make_executor
     from eval.core.runner import Runner
     from eval.core.tasks import MatcherSpec
+    from eval.engine.protocol_run import evaluate
+    from eval.engine.splits import open_entry
     from eval.protocol import calibration
     from eval.protocol.model_options import with_model
-    from eval.studies.evaluation import evaluate, open_entry
 
     calibrated = []
     real = calibration.calibrate

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import pandas as pd
 
-from eval.studies.v2x_lidar import NAME, readme_part
-from eval.studies.v2x_sensors import sensor_lines
+from eval.studies.v2x.lidar import NAME, readme_part
+from eval.studies.v2x.sensors import sensor_lines
 
 
 def test_marginal_tables_alone_state_no_sensor_verdict(tmp_path):

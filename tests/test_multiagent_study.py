@@ -1,4 +1,4 @@
-"""The multi-agent table's statistics (eval.studies.multiagent): gains on pooled F1 with the
+"""The multi-agent table's statistics (eval.studies.multiagent.evaluation): gains on pooled F1 with the
 episode bootstrap and Holm, the count error's interval, the cycle-consistency invariant, every
 "best" chosen on validation, and goal verdicts read off intervals."""
 
@@ -9,8 +9,8 @@ import pandas as pd
 import pytest
 
 from eval.protocol.holm import holm
-from eval.studies import multiagent as ma
-from eval.studies import multiagent_report as mar
+from eval.studies.multiagent import evaluation as ma
+from eval.studies.multiagent import report as mar
 
 FIELDS = (
     "true_positives",

@@ -24,7 +24,7 @@ from eval.core.cache import ResultCache
 from eval.core.executor import SerialExecutor
 from eval.core.runner import RunFailed, Runner, requests_for
 from eval.core.tasks import MatcherSpec
-from eval.studies.evaluation import parse_matchers
+from eval.engine.matcher_list import parse_matchers
 from matchers import PluginError, PluginTimeout, Problem, get
 from matchers.core import named_lookup, registry
 from matchers.core.plugin_guard import TIME_LIMIT_ENV, check_matching, time_limit_s
@@ -313,7 +313,7 @@ def test_a_broken_fusion_entry_point_is_left_out_and_named(broken_entry_points, 
     assert universe.count == 4
 
 
-# --- fusions: each family through the multi-agent study's call (eval.studies.multiagent) ---
+# --- fusions: each family through the multi-agent study's call (eval.studies.multiagent.evaluation) ---
 
 
 def _evidence() -> PairwiseEvidence:
@@ -361,7 +361,7 @@ def test_a_plugin_fusion_that_never_returns_meets_the_time_limit():
 
 def test_the_study_runs_plugin_fusions_through_the_guard_and_says_where():
     from eval.core.tasks import PairOutcome
-    from eval.studies import multiagent
+    from eval.studies.multiagent import evaluation as multiagent
 
     def outcome(n1, n2):
         pairs = np.stack([np.arange(min(n1, n2))] * 2, axis=1)

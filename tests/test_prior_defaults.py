@@ -5,8 +5,8 @@ default is the recorded option."""
 from __future__ import annotations
 
 from cadsim.dataset import Dataset
-from eval.studies.external import CALIBRATION_DIR, TEST_DIR
-from eval.studies.prior_defaults import PRIOR_MATCHERS, code_defaults, load_defaults
+from eval.studies.external.evaluation import CALIBRATION_DIR, TEST_DIR
+from eval.studies.external.prior_defaults import PRIOR_MATCHERS, code_defaults, load_defaults
 from matchers import search_space
 
 

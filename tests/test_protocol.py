@@ -13,9 +13,10 @@ from eval.core.cache import ResultCache
 from eval.core.executor import SerialExecutor
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
+from eval.engine.protocol_run import evaluate
+from eval.engine.splits import open_entry
 from eval.protocol.variants import paper_spec, variant_path
 from eval.report.tables import write_tables
-from eval.studies.evaluation import evaluate, open_entry
 
 
 @pytest.fixture

@@ -14,10 +14,10 @@ from eval.core.cache import ResultCache
 from eval.core.executor import SerialExecutor
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
+from eval.engine.splits import open_entry
 from eval.protocol import calibration
 from eval.protocol.crossovers import crossings, find_crossovers
-from eval.studies import regime_cards
-from eval.studies.evaluation import open_entry
+from eval.studies.table1 import regime_cards
 
 
 @pytest.fixture

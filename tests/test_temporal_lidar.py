@@ -13,7 +13,7 @@ import pytest
 import test_sequences as seqs
 
 from cadsim.scenario import ScenarioError, load_scenario
-from eval.studies import temporal
+from eval.studies.temporal import evaluation as temporal
 
 SCENARIO = Path(__file__).resolve().parents[1] / "scenarios" / "cad-v2x-seq-lidar.toml"
 
@@ -59,7 +59,7 @@ def test_the_lidar_study_writes_its_own_files(tmp_path):
 
 
 def test_the_regime_card_states_the_own_trackers_continuity_of_a_sequence_dataset(tmp_path):
-    from eval.studies.regime_cards import continuity_text, regime_of
+    from eval.studies.table1.regime_cards import continuity_text, regime_of
 
     seqs._generate(tmp_path / "seq", seqs._scenario(frames=3), pairs=2)
     text = continuity_text(tmp_path / "seq")

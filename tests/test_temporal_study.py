@@ -1,4 +1,4 @@
-"""The temporal table (issue 41's study, ``eval/studies/temporal.py``) on a tiny fake sequence
+"""The temporal table (issue 41's study, ``eval/studies/temporal/evaluation.py``) on a tiny fake sequence
 dataset (the fake stages of tests/test_generate_fakes.py: no SUMO, no OpenGL): the table and its
 columns, W = 1 rows equal to the two-view matcher's per-frame outcome, τ from validation only,
 goal lines through goal_verdict, the README part; a prior reader under ``denied`` gets no number
@@ -17,7 +17,8 @@ from cadsim.dataset import Dataset
 from eval.engine import goal
 from eval.protocol import goal_verdict
 from eval.protocol.metrics import pair_metrics
-from eval.studies import temporal, temporal_report, temporal_runs
+from eval.studies.temporal import evaluation as temporal
+from eval.studies.temporal import runs as temporal_runs
 from matchers.core.registry import get
 
 METHODS = (("windowed:consistency", (1, 3, 10)), ("temporal_pose", (1, 10)))
@@ -217,8 +218,7 @@ def test_goal_lines_go_through_goal_verdict(monkeypatch, tmp_path):
         calls.append((args, kwargs))
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(temporal_report, "goal_line", spy)
-    monkeypatch.setattr(goal, "goal_line", spy)  # the declared goals' lines
+    monkeypatch.setattr(goal, "goal_line", spy)  # every goal is declared (eval.engine.goal)
     lines = temporal.goals(_table(0.81, 0.9), tmp_path)
     assert len(lines) == len(calls) == 3  # no per-frame or gain files: those goals left out
     assert lines[0].startswith("`denied`, W = 10: best pooled F1 ≥ 80: met")

@@ -56,7 +56,7 @@ def test_a_wrong_prior_does_not_pull_the_motion_far():
 
 def test_refuses_none_of_the_presets():
     from eval.core.abstention import cannot_run
-    from eval.studies.temporal import PRESETS
+    from eval.studies.temporal.evaluation import PRESETS
 
     assert get_temporal("trajectory_pose").requires == frozenset()
     assert not any(cannot_run("trajectory_pose", p, temporal=True) for p in (*PRESETS, "exact"))

@@ -1,4 +1,4 @@
-"""The transfer study (eval/studies/transfer.py): the hand-crafted reference is chosen on the
+"""The transfer study (eval/studies/transfer/evaluation.py): the hand-crafted reference is chosen on the
 validation split, no model's τ comes from a pair it was trained on, and every goal line carries
 the interval of its difference and the verdict of eval.protocol.goal_verdict."""
 
@@ -12,8 +12,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from eval.studies import transfer, transfer_report
-from eval.studies.external import CALIBRATION_DIR, TEST_DIR
+from eval.studies.external.evaluation import CALIBRATION_DIR, TEST_DIR
+from eval.studies.transfer import evaluation as transfer
+from eval.studies.transfer import report as transfer_report
 
 # --- intervals -------------------------------------------------------------------------------
 
@@ -157,7 +158,8 @@ def runner(tmp_path_factory):
 def main_tables(tmp_path_factory, runner) -> Path:
     """The main tables' external evaluation of three cheap hand-crafted matchers."""
     from eval.core.tasks import MatcherSpec
-    from eval.studies.evaluation import evaluate, open_entry
+    from eval.engine.protocol_run import evaluate
+    from eval.engine.splits import open_entry
 
     folder = tmp_path_factory.mktemp("results") / "external"
     entry = open_entry(TEST_DIR, CALIBRATION_DIR)

@@ -15,8 +15,10 @@ from eval.core.cache import ResultCache
 from eval.core.executor import SerialExecutor
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
+from eval.engine.protocol_run import evaluate
+from eval.engine.splits import open_entry
+from eval.engine.validation_choice import chosen_specs
 from eval.protocol import calibration, tuning
-from eval.studies.evaluation import chosen_specs, evaluate, open_entry
 from matchers.core.discretise import discretise
 from matchers.core.matching import Matching
 from matchers.core.problem import Problem

@@ -351,7 +351,7 @@ def test_the_cache_keeps_the_pose_fields(tmp_path):
 def test_the_v2x_table_has_its_columns_a_prior_row_and_an_interval():
     import pandas as pd
 
-    from eval.studies.v2x_table import (
+    from eval.studies.v2x.table import (
         COLUMNS,
         ORACLE_ROW,
         PRIOR_ROW,
@@ -497,7 +497,7 @@ def test_the_prior_row_is_read_off_a_matcher_that_reads_the_prior():
     broadcast poses are exact, so the prior row must come from a prior-reading matcher's rows."""
     import pandas as pd
 
-    from eval.studies.v2x_table import PRIOR_ROW, v2x_table
+    from eval.studies.v2x.table import PRIOR_ROW, v2x_table
 
     rows = []
     for matcher, prior_rte in (("sm", 0.0), ("pose", 3.0)):  # sm first, as in the table

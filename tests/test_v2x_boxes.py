@@ -13,7 +13,7 @@ from cadsim.generation.pipeline import generate_dataset
 from eval.core.cache import ResultCache
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
-from eval.studies.v2x_boxes import as_boxes, box_matchers, evaluate_boxes, readme_part
+from eval.studies.v2x.boxes import as_boxes, box_matchers, evaluate_boxes, readme_part
 
 
 def test_pixel_matchers_are_left_out():

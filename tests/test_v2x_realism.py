@@ -271,7 +271,7 @@ def test_a_version_2_dataset_is_read_but_refused_under_a_latency_preset(v2x_pair
     from dataset_forgery import as_older_version
 
     from cadsim.dataset import Dataset
-    from eval.studies.evaluation import open_entry
+    from eval.engine.splits import open_entry
 
     old = tmp_path / "old"
     shutil.copytree(v2x_pair["plain"], old)

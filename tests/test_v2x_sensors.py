@@ -16,7 +16,7 @@ from cadsim.cli import main
 from cadsim.dataset import Dataset
 from cadsim.sensing.box_features import BOX_CUES
 from eval.core.tasks import MatcherSpec, RunSpec
-from eval.studies.v2x_sensors import (
+from eval.studies.v2x.sensors import (
     CAMERA_FAVOURS,
     INCLUDES_ZERO,
     LIDAR_FAVOURS,
@@ -162,7 +162,7 @@ def _planted(diffs: dict[str, list[float]]) -> tuple[pd.DataFrame, pd.DataFrame]
 
 
 def test_holm_withholds_a_verdict_the_single_interval_would_give():
-    from eval.studies.v2x_sensors import NOT_AFTER_HOLM
+    from eval.studies.v2x.sensors import NOT_AFTER_HOLM
 
     effect = {"consistency": [0.1, 0.2, 0.05, 0.15]}  # t = 3.9 on 3 df: p = 0.03
     single = sensor_differences(*_planted(effect)).iloc[0]
@@ -196,7 +196,7 @@ def _sensor_rows(rows) -> pd.DataFrame:
 
 
 def test_the_report_lines_come_from_the_paired_rows_only(tmp_path):
-    from eval.studies.v2x_lidar import NAME as LIDAR
+    from eval.studies.v2x.lidar import NAME as LIDAR
 
     # marginal tables that would tell another story (disjoint intervals the other way)
     marginal = ["preset", "matcher", "f1_mean", "f1_low", "f1_high"]
@@ -222,7 +222,7 @@ def test_the_report_lines_come_from_the_paired_rows_only(tmp_path):
 
 @pytest.mark.render
 def test_the_two_sensor_scenario_has_the_camera_scenarios_frames(both_dataset, tmp_path):
-    from eval.studies.v2x_sensors import same_camera_frames
+    from eval.studies.v2x.sensors import same_camera_frames
 
     shutil.copy(SCENARIOS / "cad-vtypes.add.xml", tmp_path / "cad-vtypes.add.xml")
     scenario = tmp_path / "camera.toml"
@@ -241,8 +241,8 @@ def test_the_two_sensor_scenario_has_the_camera_scenarios_frames(both_dataset, t
 
 
 def test_the_camera_tables_runs_stand_in_only_when_they_cover_every_compared_run(tmp_path):
-    from eval.studies.v2x_lidar import _camera_runs_cover
-    from eval.studies.v2x_table import PRESETS
+    from eval.studies.v2x.lidar import _camera_runs_cover
+    from eval.studies.v2x.table import PRESETS
 
     specs = [MatcherSpec("sm"), MatcherSpec("pose_refine")]
     rows = [(m, s, p) for m in ("sm", "pose_refine", "mos") for s in (0, 1) for p in PRESETS]
@@ -272,8 +272,9 @@ def test_the_two_sensor_scenario_is_cad_v2x_with_a_lidar():
 
 @pytest.mark.render
 def test_the_common_readings_keep_what_lies_in_both_sensors_coverage_by_geometry(both_dataset):
-    from cadsim.dataset.sensor_view import _lidar_boxes
     from eval.studies.v2x_sensors import COVERED, camera_fully_covered, coverage_counts
+
+    from cadsim.dataset.sensor_view import _lidar_boxes
 
     stored = Dataset(both_dataset)
     lidar, common = (

@@ -104,7 +104,7 @@ def measure_scaleout(
     from cadsim.generation.local_executor import LocalProcessExecutor, SerialExecutor
     from cadsim.generation.pipeline import generate_dataset
     from eval.core.runner import requests_for
-    from eval.studies.evaluation import parse_matchers
+    from eval.engine.matcher_list import parse_matchers
 
     with tempfile.TemporaryDirectory(prefix="cadsim-scaleout-") as tmp:
         tmp = Path(tmp)

@@ -25,10 +25,12 @@ from eval.core.executor import add_scheduler_argument, make_executor
 from eval.core.result_files import check_outputs
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
+from eval.engine.matcher_list import parse_matchers
+from eval.engine.protocol_run import evaluate
+from eval.engine.splits import open_entry, val_dirs
 from eval.protocol.model_options import with_model
 from eval.protocol.variants import PROTOCOLS
 from eval.report.tables import PAPER_CSV, write_tables
-from eval.studies.evaluation import evaluate, open_entry, parse_matchers, val_dirs
 from matchers.core.jit import cache_root
 from matchers.core.plugin_guard import DEFAULT_TIME_LIMIT_S, TIME_LIMIT_ENV, parse_time_limit
 

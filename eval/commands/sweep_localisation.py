@@ -36,17 +36,11 @@ from eval.core.pose_metrics import summarise_pose
 from eval.core.result_files import write_csv
 from eval.core.runner import Runner, requests_for
 from eval.core.tasks import MatcherSpec, RunResult
+from eval.engine.matcher_list import parse_matchers
+from eval.engine.named_runs import as_named, calibrate_named, score_runs
+from eval.engine.splits import DatasetEntry, open_entry, val_dirs
+from eval.engine.validation_choice import chosen_specs
 from eval.protocol import tuning
-from eval.studies.evaluation import (
-    DatasetEntry,
-    as_named,
-    calibrate_named,
-    chosen_specs,
-    open_entry,
-    parse_matchers,
-    score_runs,
-    val_dirs,
-)
 
 DEFAULT_SIGMAS = (0.0, 0.5, 1.2, 2.5, 5.0)
 YAW_PER_METRE = 0.2 / 1.2

@@ -24,18 +24,11 @@ from eval.core.executor import make_executor
 from eval.core.keyed_csv import upsert_csv
 from eval.core.runner import Runner
 from eval.core.tasks import MatcherSpec
+from eval.engine.matcher_list import parse_matchers
+from eval.engine.named_runs import calibrate_entry, run_named, score_runs
+from eval.engine.splits import DatasetEntry, Named, open_entry, val_dirs
+from eval.engine.validation_choice import chosen_specs
 from eval.protocol.metrics import METRICS
-from eval.studies.evaluation import (
-    DatasetEntry,
-    Named,
-    calibrate_entry,
-    chosen_specs,
-    open_entry,
-    parse_matchers,
-    run_named,
-    score_runs,
-    val_dirs,
-)
 
 # Fig. 4's default x axis: σ = rate · d² (metres) — at 20 m depth, 0.12 m … 40 m. On CAD, 3e-4 has
 # no visible effect and ≥ 0.03 is severe (docs/evaluation.md).

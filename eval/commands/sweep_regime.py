@@ -35,20 +35,13 @@ from eval.core.executor import make_executor
 from eval.core.keyed_csv import upsert_csv
 from eval.core.runner import Runner
 from eval.core.thinning import check_keep, noncovisible_share
+from eval.engine.matcher_list import parse_matchers
+from eval.engine.named_runs import calibrate_entry, run_named, score_runs
+from eval.engine.splits import DatasetEntry, Named, open_entry, val_dirs
+from eval.engine.validation_choice import chosen_specs
 from eval.protocol.cluster_interval import t_interval
 from eval.protocol.crossovers import find_crossovers
 from eval.report.threshold_format import rounded
-from eval.studies.evaluation import (
-    DatasetEntry,
-    Named,
-    calibrate_entry,
-    chosen_specs,
-    open_entry,
-    parse_matchers,
-    run_named,
-    score_runs,
-    val_dirs,
-)
 
 DEFAULT_KEEP = (1.0, 0.75, 0.5, 0.25, 0.0)
 SWEEP_COLUMNS = (

@@ -1,6 +1,7 @@
 """``cadsim table DIR``: re-render Table I (every variant present: tuned, untuned, paper protocol),
-the paired differences, the external table and the ranking agreement (when
-``DIR/external/`` holds an evaluation) and every figure from the CSV/JSON files an evaluation wrote
+the paired differences, every study's tables that its files allow (``Study.tables``: the
+external table and the ranking agreement when ``DIR/external/`` holds an evaluation) and every
+figure from the CSV/JSON files an evaluation wrote
 into DIR (no matcher is run, no cache is needed; the qualitative figure needs the dataset)."""
 
 from __future__ import annotations
@@ -10,8 +11,7 @@ import argparse
 from eval.protocol.variants import VARIANTS, variant_path
 from eval.report.figures import render_all
 from eval.report.tables import PAPER_CSV, write_tables
-from eval.studies.agreement import write_agreement
-from eval.studies.external import SUBDIR, write_table_external
+from eval.studies import studies
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -30,17 +30,15 @@ def run(args: argparse.Namespace) -> int:
         (out / n).is_file()
         for n in ("noise_runs.csv", "regime_sweep.csv", "localisation_sweep.csv")
     )
-    external = (out / SUBDIR / "metrics_per_pair.csv").is_file()
-    if not evaluated and not swept and not external:
+    markdown = write_tables(out, args.paper_table) if evaluated else ""
+    written = [path for study in studies() if study.tables for path in study.tables(out)]
+    if not evaluated and not swept and not written:
         raise SystemExit(
             f"{out}: no metrics_per_pair*.csv, noise_runs.csv or regime_sweep.csv "
             "(run `cadsim evaluate`)"
         )
-    markdown = write_tables(out, args.paper_table) if evaluated else ""
-    if external:
-        write_table_external(out)
-        write_agreement(out)
-        print(out / "table_external.md")
+    for path in written:
+        print(path)
     for path in render_all(out):
         print(path)
     print(markdown)

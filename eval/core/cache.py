@@ -32,6 +32,7 @@ import numpy as np
 from eval.core.cache_checks import StaleEntry, check_arrays_bounded, check_result, is_hungarian
 from eval.core.tasks import MatcherSpec, PairOutcome, RunResult, RunSpec
 
+DEFAULT_CACHE = "cache/runs"  # make reproduce's, inside the repository; commands use user_cache()
 # 4: the positions, true pose, broadcast prior pose and camera mounts of every pair;
 # 5: whether each pair's assignment is the Hungarian of its scores ("hungarian")
 _FORMAT = 5

@@ -11,7 +11,10 @@ data, methods, conditions, metrics and comparisons.
 - episode-level intervals of per-pair values (:mod:`eval.engine.episode_interval`) and the
   best-against-runner-up comparison with its MDD (:mod:`eval.engine.comparison`);
 - a study's result files read back and the Markdown cells of its tables
-  (:mod:`eval.engine.result_table`, :mod:`eval.engine.cells`).
+  (:mod:`eval.engine.result_table`, :mod:`eval.engine.cells`);
+- which matchers a ``--matchers`` list names (:mod:`eval.engine.matcher_list`);
+- a study as one declaration (:mod:`eval.engine.study`: ``Study``, its ``Data``, report
+  parts and the ``ReportContext`` they are built from).
 
 Imports ``eval/protocol/`` and ``eval/core/`` only; never ``eval/studies/`` (studies import it).
 """

@@ -9,10 +9,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from eval.studies.multiagent import TEST_SNAPSHOTS as MA_TEST_SNAPSHOTS
-from eval.studies.multiagent import VAL_SNAPSHOTS as MA_VAL_SNAPSHOTS
-from eval.studies.temporal import TEST_SEQUENCES as TEMPORAL_TEST
-from eval.studies.temporal import VAL_SEQUENCES as TEMPORAL_VAL
+from eval.studies import study
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENARIOS = (
@@ -65,9 +62,9 @@ V2X_TRAIN_FACTOR = 1
 V2X_RUNS = 2  # runs only average the stochastic matchers; 100 clusters carry the precision
 # Multi-agent (cad-multi: 4 vehicles + 2 roadside units per snapshot): test and validation
 # snapshots on disjoint scenario seeds, two-view matchers on every pair of views, fused per
-# subset of N views (eval.studies.multiagent), MULTIAGENT_RUNS seeds.
+# subset of N views (eval.studies.multiagent.evaluation), MULTIAGENT_RUNS seeds.
 MULTIAGENT_RUNS = 2
-# Transfer of the learned matchers (eval.studies.transfer): CAD's training split on its own
+# Transfer of the learned matchers (eval.studies.transfer.evaluation): CAD's training split on its own
 # scenario seed (seed + CAD_TRAIN_SEED_OFFSET; 1000 is validation, 2000/3000 the spread sets),
 # CAD_TRAIN_PAIRS pairs; models trained into DATA/models.
 CAD_TRAIN_SEED_OFFSET = 4000
@@ -152,6 +149,8 @@ def plan_sizes(args: argparse.Namespace, scenarios: Sequence[tuple[str, int]]) -
         unscaled.append((label, pairs, args.val_pairs or min(DEFAULT_VAL_PAIRS, pairs)))
     spread_test = next((test for label, test, _ in unscaled if label == SPREAD_DATASET), 0)
     v2x = _capped(args.pairs, V2X_PAIRS) * k
+    multi = study("multiagent").data_named("cad-multi").splits  # as each study declares them
+    sequences = study("temporal").data_named("cad-v2x-seq").splits
     v2x_val = _capped(args.pairs, V2X_VAL_PAIRS) * k
     return SplitSizes(
         scale=k,
@@ -160,12 +159,12 @@ def plan_sizes(args: argparse.Namespace, scenarios: Sequence[tuple[str, int]]) -
         v2x={"test": v2x, "val": v2x_val, "train": V2X_TRAIN_FACTOR * v2x},
         lidar={"test": v2x, "val": v2x_val},
         multiagent={
-            "test": _capped(args.pairs, MA_TEST_SNAPSHOTS) * k,
-            "val": _capped(args.pairs, MA_VAL_SNAPSHOTS) * k,
+            "test": _capped(args.pairs, multi["test"]) * k,
+            "val": _capped(args.pairs, multi["val"]) * k,
         },
         temporal={
-            "test": _capped(args.pairs, TEMPORAL_TEST) * k,
-            "val": _capped(args.pairs, TEMPORAL_VAL) * k,
+            "test": _capped(args.pairs, sequences["test"]) * k,
+            "val": _capped(args.pairs, sequences["val"]) * k,
         },
         cad_train=_capped(args.pairs, CAD_TRAIN_PAIRS) * k,
         sweep=_subset(args.sweep_pairs, k),

@@ -5,8 +5,9 @@ A claim is a goal verdict ("met / not met / not shown"), a difference between tw
 (``subject`` against ``comparison`` on ``metric``), the value and its 95 % interval (the units
 of the result CSV it was read from: fractions, seconds, ranks), the bar and its ``direction``
 (``>=`` / ``<=`` for a goal, ``diff`` for a difference, ``point`` for a labelled point value),
-the ``verdict``, the split its method was chosen on (``chosen_on``: ``validation`` or ``fixed``,
-never ``test``), what the interval resamples (``clusters``), the results file it reads
+the ``verdict``, the split its method was chosen on (``chosen_on``: ``validation``, ``fixed``, or
+``test`` for a point value that names a leader on the test figures themselves and says so in its
+statement), what the interval resamples (``clusters``), the results file it reads
 (``source``) and the ``statement``: the exact text the report prints for it. The report prints
 statements, so a comparative sentence without a claim behind it is not written
 (``tests/test_claims_report.py`` scans the generated report).
@@ -20,7 +21,6 @@ measurement`` for a time) and never a verdict.
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -49,7 +49,7 @@ AHEAD, BEHIND = "ahead", "behind"
 POINT_VALUE, POINT_MEASUREMENT = "point value", "point measurement"
 CROSSES = "crosses"  # a crossover whose interval excludes "no crossing"
 VERDICTS = (MET, NOT_MET, NOT_SHOWN, AHEAD, BEHIND, CROSSES, POINT_VALUE, POINT_MEASUREMENT)
-CHOICES = ("validation", "fixed")
+CHOICES = ("validation", "fixed", "test")
 NAN = float("nan")
 
 
@@ -73,6 +73,10 @@ class Claim:
     statement: str
 
     def __post_init__(self) -> None:
+        if self.chosen_on == "test" and self.direction != "point":
+            raise ValueError(
+                f"claim {self.statement!r}: chosen on test, so a point value, never a verdict"
+            )
         if self.verdict not in VERDICTS:
             raise ValueError(
                 f"claim {self.statement!r}: verdict {self.verdict!r} not in {VERDICTS}"
@@ -163,6 +167,22 @@ def point_claim(
     )  # fmt: skip
 
 
+def printed(value: float, scale: float = 100.0, digits: int = 1) -> float:
+    """``value`` as a report line prints it (× ``scale``, ``digits`` decimals): the number a
+    claim records beside its statement; NaN when not finite."""
+    return float(f"{scale * float(value):.{digits}f}") if finite(value) else NAN
+
+
+def measurement_claim(study: str, what: str, seconds: float, bar_s: float, detail: str) -> Claim:
+    """A stage time against its cold-run goal, labelled a point measurement (no interval, no
+    verdict); its statement is :func:`measurement_line`'s."""
+    return point_claim(
+        study, what, "goal", "seconds (last cold run)", printed(seconds, 1.0, 0),
+        statement=measurement_line(what, seconds, bar_s, detail), chosen_on="fixed",
+        source="cold_run.json", bar=bar_s, measurement=True,
+    )  # fmt: skip
+
+
 def measurement_line(what: str, seconds: float, bar_s: float, detail: str) -> str:
     """A time without a sampling interval, labelled as a point measurement (never "met"):
     ``what: 42 s (detail) — a point measurement (goal ≤ 120 s cold; no interval, no verdict)``."""
@@ -170,37 +190,6 @@ def measurement_line(what: str, seconds: float, bar_s: float, detail: str) -> st
         f"{what}: {seconds:.0f} s ({detail}) — a point measurement (goal ≤ {bar_s:.0f} s cold; no interval, "
         "so no verdict)"
     )
-
-
-# ``goal: <verdict> — <value>[unit] [<low>, <high>] (<detail>)``, the one format of
-# :func:`eval.protocol.goal_verdict.goal_line`.
-_GOAL = re.compile(r"^(?P<goal>.+?): (?P<verdict>not met|not shown|met) — (?P<rest>.*)$")
-_NUMBER = r"[-+]?(?:\d+(?:\.\d*)?|–)"
-_SHOWN = re.compile(
-    rf"^(?P<value>{_NUMBER})(?P<unit>[^\[(]*?)(?: \[(?P<low>{_NUMBER}), (?P<high>{_NUMBER})\])?"
-    r"(?: \((?P<detail>.*)\))?$"
-)
-
-
-def parse_goal_line(line: str) -> dict | None:
-    """A goal line's parts (goal, verdict, value, low, high, unit, detail; numbers as printed),
-    or None when ``line`` is not one."""
-    line = line.strip().removeprefix("- ").rstrip(".")
-    head = _GOAL.match(line)
-    if head is None:
-        return None
-    out = {"goal": head["goal"], "verdict": head["verdict"], "statement": line}
-    shown = _SHOWN.match(head["rest"])
-    number = lambda s: float(s) if s not in (None, "–") else NAN  # noqa: E731
-    if shown is None:
-        return out | {"value": NAN, "low": NAN, "high": NAN, "unit": "", "detail": head["rest"]}
-    return out | {
-        "value": number(shown["value"]),
-        "low": number(shown["low"]),
-        "high": number(shown["high"]),
-        "unit": shown["unit"].strip(),
-        "detail": shown["detail"] or "",
-    }
 
 
 def to_frame(claims: list[Claim]) -> pd.DataFrame:
@@ -233,3 +222,14 @@ def statements(
     if metric is not None:
         keep &= frame["metric"] == metric
     return [str(s) for s in frame.loc[keep, "statement"]]
+
+
+def lines_of(items) -> list[str]:
+    """A report part's lines from its items: a claim prints its statement, a plain line (no
+    comparison: a definition, a note) itself."""
+    return [item.statement if isinstance(item, Claim) else str(item) for item in items]
+
+
+def claims_in(items) -> list[Claim]:
+    """The claims among a report part's items (:func:`lines_of`)."""
+    return [item for item in items if isinstance(item, Claim)]

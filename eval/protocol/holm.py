@@ -25,3 +25,20 @@ def holm(p_values) -> np.ndarray:
     steps = (m - np.arange(m)) * flat[order]
     out.reshape(-1)[order] = np.minimum(1.0, np.maximum.accumulate(steps))
     return out
+
+
+def holm_distinct(p_values, keys) -> np.ndarray:
+    """Holm-adjusted p-values over the *distinct* comparisons: entries with equal ``keys`` (one
+    hashable per p-value: the same comparison repeated, e.g. a matcher that reads no prior under
+    several presets) count once in the family and share their adjusted value (that of the first
+    of them); order and length as the input's."""
+    p = np.asarray(p_values, dtype=float).reshape(-1)
+    keys = list(keys)
+    if len(keys) != len(p):
+        raise ValueError(f"keys: expected {len(p)}, got {len(keys)}")
+    first: dict = {}
+    index = np.array([first.setdefault(k, i) for i, k in enumerate(keys)], dtype=int)
+    distinct = np.unique(index)
+    adjusted = np.full(len(p), np.nan)
+    adjusted[distinct] = holm(p[distinct])
+    return adjusted[index]

@@ -12,7 +12,7 @@ the defaults never win a tie). Every tunable built-in matcher has the same budge
 its defaults is run as it is and left out of ``tuning.csv``; a grid of another size (a matcher
 of your own) is tuned as given, with a warning that the budgets differ. The test dataset is
 never opened here. τ is then calibrated as usual, on every seed of the validation runs of the chosen
-configuration (``eval.studies.evaluation``).
+configuration (``eval.engine.protocol_run``).
 
 Because configurations are matcher options, they are part of each run's cache key, and the
 defaults' validation runs are the same runs the untuned table uses.
@@ -95,7 +95,7 @@ def tune_entry(
     """Pick each matcher's configuration on `entry`'s validation dataset (seed 0 runs only; its
     first `limit` frame pairs, None: all; with ``localisation`` = (position σ m, yaw σ °) the
     validation records' prior re-drawn at that error, as a sweep level sees it). `entry` is an
-    ``eval.studies.evaluation.DatasetEntry``; `matchers` a list of specs (labelled by their own
+    ``eval.engine.splits.DatasetEntry``; `matchers` a list of specs (labelled by their own
     label) or {row label: spec}; returns {matcher label: choice}."""
     if entry.val_dir is None:
         raise ValueError(f"{entry.test_dir}: tuning needs a validation dataset")

@@ -394,7 +394,9 @@ def write_fig_prior_sensitivity(out_dir: str | Path) -> list[Path]:
     """``fig_prior_sensitivity.png/.pdf``: per prior matcher, pooled test F1 of every grid
     configuration (dots), the one chosen on sequence 070 ringed, the defaults marked."""
     out_dir = Path(out_dir)
-    path = out_dir / "external" / "prior_sensitivity.csv"  # eval.studies.prior_defaults writes it
+    path = (
+        out_dir / "external" / "prior_sensitivity.csv"
+    )  # eval.studies.external.prior_defaults writes it
     if not path.is_file():
         return []
     table = pd.read_csv(path)

@@ -148,7 +148,7 @@ def noise(results: Path, claims: pd.DataFrame | None = None) -> list[str]:
     lines = [
         "| Dataset | "
         + " | ".join(f"{method_name(m)} F1, {lo:g} → {hi:g}" for m in shown)
-        + f" | F1 leader at {lo:g} (point value) | at {hi:g} (point value) |",
+        + f" | F1 leader at {lo:g} on test (point value) | at {hi:g} on test (point value) |",
         "|:---|" + "---:|" * len(shown) + ":---|:---|",
     ]
     for dataset, rows in runs.groupby("dataset", sort=False):
