@@ -25,7 +25,7 @@ def _error_line(capsys, command: str) -> str:
 
 
 def test_an_import_path_that_does_not_import_says_why_and_how(tmp_path, capsys):
-    from eval.studies.evaluation import parse_matchers
+    from eval.engine.matcher_list import parse_matchers
 
     with pytest.raises(ValueError) as caught:
         parse_matchers("sm,no_such_module_for_newcomers:match")

@@ -83,9 +83,8 @@ def test_help_names_the_metrics_and_options_need_the_protocol(capsys, tmp_path):
 
 
 def test_the_v2x_tables_carry_the_protocol_columns_and_the_baseline_row():
-    from eval.studies.v2x_table import COLUMNS
-
-    from eval.studies.external import external_matchers
+    from eval.engine.matcher_list import with_prior
+    from eval.studies.v2x.table import COLUMNS
 
     assert {"reg_success_1m", "reg_success_2m", "reg_success_3m"} <= set(COLUMNS)
-    assert "v2x_reg" in [m.name for m in external_matchers("all")]
+    assert "v2x_reg" in [m.name for m in with_prior("all")]

@@ -272,7 +272,7 @@ def test_the_two_sensor_scenario_is_cad_v2x_with_a_lidar():
 
 @pytest.mark.render
 def test_the_common_readings_keep_what_lies_in_both_sensors_coverage_by_geometry(both_dataset):
-    from eval.studies.v2x_sensors import COVERED, camera_fully_covered, coverage_counts
+    from eval.studies.v2x.sensors import COVERED, camera_fully_covered, coverage_counts
 
     from cadsim.dataset.sensor_view import _lidar_boxes
 
@@ -318,7 +318,7 @@ def test_the_common_readings_keep_what_lies_in_both_sensors_coverage_by_geometry
 
 
 def test_the_sensor_table_says_which_objects_it_covers(tmp_path):
-    from eval.studies.v2x_sensors import COLUMNS, COVERED
+    from eval.studies.v2x.sensors import COLUMNS, COVERED
 
     rng = np.random.default_rng(0)
     rows = [
