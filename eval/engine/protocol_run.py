@@ -31,9 +31,16 @@ from eval.protocol.variants import (
 
 
 def evaluate_entry(
-    entry: DatasetEntry, named: Named, seeds: Sequence[int], runner: Runner, calibrate: bool
+    entry: DatasetEntry,
+    named: Named,
+    seeds: Sequence[int],
+    runner: Runner,
+    calibrate: bool,
+    score_validation: bool = False,
 ) -> EntryResult:
-    """Validation runs and τ (when `calibrate`), then the test runs scored at τ."""
+    """Validation runs and τ (when `calibrate`), then the test runs scored at τ;
+    ``score_validation``: the validation runs scored at τ too (``EntryResult.val_per_pair``: the
+    equal-cue variant's, which the headline's difficulty level is chosen on)."""
     val_runs, fits = calibrate_entry(entry, named, seeds, runner) if calibrate else ({}, {})
     test_runs = run_named(
         runner,
@@ -62,7 +69,7 @@ def evaluate_entry(
         qualitative=qualitative_entry(entry, test_runs, taus),
         val_per_pair=(
             score_runs(val_runs, taus, dataset=entry.label, split="validation")
-            if val_runs
+            if val_runs and score_validation
             else None
         ),
     )
@@ -123,11 +130,11 @@ def evaluate(
                     evaluate_entry(entry, base, seeds, runner, calibrate)
                 )
             results.setdefault(main_variant, []).append(
-                evaluate_entry(entry, named, seeds, runner, calibrate)
+                evaluate_entry(entry, named, seeds, runner, calibrate, main_variant == EQUAL)
             )
         else:
             results.setdefault(main_variant, []).append(
-                evaluate_entry(entry, base, seeds, runner, calibrate)
+                evaluate_entry(entry, base, seeds, runner, calibrate, main_variant == EQUAL)
             )
     for variant, variant_results in results.items():
         settings = {
