@@ -69,8 +69,6 @@ def table1(results: Path, claims: pd.DataFrame | None = None) -> list[str]:
     level = choice["level"]
     at = summary[summary["level"] == level]
     out = [
-        f"Level **{level}** (chosen on validation: {choice['criterion']}).",
-        "",
         "| Dataset | pairs on the level | top method, F1 [95 % CI] | pairs it scores perfectly "
         "| top − runner-up [95 % CI] | Maximin F1 | Maximin − best rival [95 % CI] (MDD; "
         "clusters for MDD 5) |",
@@ -81,9 +79,8 @@ def table1(results: Path, claims: pd.DataFrame | None = None) -> list[str]:
         dataset = cell(str(r["dataset"]))
         if float(r["top_perfect_share"]) > CEILING_SHARE:
             left_out.append(
-                f"- {dataset} stays at the ceiling on this level: {_name(r['top'])} is perfect "
-                f"on {_pct(r['top_perfect_share'])} % of its {int(r['pairs'])} test pairs; it is "
-                "left out of the headline (its per-level table is in the report)."
+                f"{dataset} ({_name(r['top'])} perfect on {_pct(r['top_perfect_share'])} % of "
+                f"{int(r['pairs'])} pairs)"
             )
             continue
         mine = rows[(rows["dataset"] == r["dataset"]) & (rows["level"] == level)]
@@ -107,12 +104,18 @@ def table1(results: Path, claims: pd.DataFrame | None = None) -> list[str]:
             )
         out.append(
             f"| {dataset} | {int(r['pairs'])} | {_name(r['top'])} {_pct(top['f1'])} "
-            f"{_interval(top['low'], top['high'], signed=False)} | {_pct(r['top_perfect_share'])} % | {runner} "
-            f"| {maximin_f1} | {rival} |"
+            f"{_interval(top['low'], top['high'], signed=False)} | "
+            f"{_pct(r['top_perfect_share'])} % | {runner} | {maximin_f1} | {rival} |"
         )
-    if len(out) == 4:
-        out = out[:1]
-    return out + ([""] + left_out if left_out else [])
+    if len(out) == 2:
+        out = []
+    note = f"Level **{level}**, chosen on validation ({choice['criterion']})"
+    if left_out:
+        note += (
+            "; at the ceiling on it, so left out of the headline (rows in the report): "
+            + ", ".join(left_out)
+        )
+    return [*out, *([""] if out else []), note + "."]
 
 
 def _level_markdown(rows: pd.DataFrame, summary: pd.DataFrame, by: list[str]) -> list[str]:

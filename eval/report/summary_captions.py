@@ -62,13 +62,6 @@ SUMMARIES = (
         "Pooled pairwise F1 in percent per two-view matcher and fusion (`independent`: no fusion).",
     ),
     (
-        "Transfer — learned matchers on external data",
-        summary.transfer,
-        "Does simulation transfer?",
-        "Pooled F1 in percent; the last row is the hand-crafted matcher each column is compared "
-        "with.",
-    ),
-    (
         "Temporal — association over sequences of 10 frames",
         summary.temporal,
         "The temporal table",
