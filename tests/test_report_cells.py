@@ -44,9 +44,8 @@ def test_escaped_characters_read_back_as_themselves_in_the_site():
 
 
 def test_the_report_modules_escape_dataset_labels():
-    from eval.studies.external.agreement import to_markdown as agreement_markdown
-
     from eval.report.benchmark_parts import paired_markdown
+    from eval.studies.external.agreement import to_markdown as agreement_markdown
 
     table = pd.DataFrame(
         [{"dataset": "cad|<x>", "reference": "[r](javascript:1)", "matchers": "sm;rrwm",

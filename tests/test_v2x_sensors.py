@@ -272,9 +272,8 @@ def test_the_two_sensor_scenario_is_cad_v2x_with_a_lidar():
 
 @pytest.mark.render
 def test_the_common_readings_keep_what_lies_in_both_sensors_coverage_by_geometry(both_dataset):
-    from eval.studies.v2x.sensors import COVERED, camera_fully_covered, coverage_counts
-
     from cadsim.dataset.sensor_view import _lidar_boxes
+    from eval.studies.v2x.sensors import COVERED, camera_fully_covered, coverage_counts
 
     stored = Dataset(both_dataset)
     lidar, common = (
