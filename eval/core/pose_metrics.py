@@ -46,6 +46,7 @@ has with no matching at all.
 
 from __future__ import annotations
 
+import hashlib
 import math
 from collections.abc import Sequence
 
@@ -284,6 +285,23 @@ def planar_fit(
     return np.linalg.inv(dst_to_body) @ body @ src_to_body
 
 
+_PLANAR_MEMO: dict[bytes, tuple[float, float]] = {}
+_PLANAR_MEMO_LIMIT = 200_000
+"""Planar fits remembered per process, by the content of their inputs: the oracle's fit (the
+true matches) is the same for every matcher of a frame pair, and matchers that declare the
+same matches share theirs — each is fitted once. Cleared when full."""
+
+
+def _content_key(*arrays: np.ndarray) -> bytes:
+    """A digest of the shapes and float64 bytes of ``arrays``."""
+    digest = hashlib.blake2b(digest_size=20)
+    for array in arrays:
+        array = np.ascontiguousarray(array, dtype=np.float64)
+        digest.update(repr(array.shape).encode())
+        digest.update(array.tobytes())
+    return digest.digest()
+
+
 def matched_planar_error(
     points1: np.ndarray,
     points2: np.ndarray,
@@ -293,13 +311,18 @@ def matched_planar_error(
 ) -> tuple[float, float]:
     """(RTE, RRE) of the planar fit (:func:`planar_fit`) to the matches ``pairs`` ((k, 2) int
     (i, j)), view 2 into view 1; ``extrinsics`` (2, 4, 4): each view's camera → body transform.
-    (nan, nan) for a failed fit."""
+    (nan, nan) for a failed fit. The same inputs are fitted once per process
+    (:data:`_PLANAR_MEMO`)."""
     pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
-    fit = planar_fit(
-        np.asarray(points2)[pairs[:, 1]], np.asarray(points1)[pairs[:, 0]],
-        extrinsics[1], extrinsics[0],
-    )  # fmt: skip
-    return pose_error(fit, truth)
+    src, dst = np.asarray(points2)[pairs[:, 1]], np.asarray(points1)[pairs[:, 0]]
+    key = _content_key(src, dst, extrinsics, truth)
+    found = _PLANAR_MEMO.get(key)
+    if found is None:
+        found = pose_error(planar_fit(src, dst, extrinsics[1], extrinsics[0]), truth)
+        if len(_PLANAR_MEMO) >= _PLANAR_MEMO_LIMIT:
+            _PLANAR_MEMO.clear()
+        _PLANAR_MEMO[key] = found
+    return found
 
 
 def prior_transform(

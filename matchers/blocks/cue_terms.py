@@ -51,14 +51,27 @@ def check_distance_scale(distance_scale: float | None) -> float | None:
     return float(distance_scale)
 
 
-def _edge_lengths(points: np.ndarray, first: np.ndarray, second: np.ndarray) -> np.ndarray:
-    """‖points[first] − points[second]‖ per row, summed coordinate by coordinate (one fixed order
-    of IEEE operations: the same bits on every CPU)."""
-    diff = points[first] - points[second]
-    squared = np.zeros(diff.shape[0])
-    for axis in range(diff.shape[1]):
-        squared = squared + diff[:, axis] * diff[:, axis]
+def _distances(points: np.ndarray) -> np.ndarray:
+    """(n, n) ‖p_i − p_j‖ of one view's positions, summed coordinate by coordinate (one fixed
+    order of IEEE operations: the same bits on every CPU)."""
+    points = np.asarray(points, dtype=float)
+    diff = points[:, None, :] - points[None, :, :]
+    squared = np.zeros(diff.shape[:2])
+    for axis in range(diff.shape[2]):
+        squared = squared + diff[..., axis] * diff[..., axis]
     return np.sqrt(squared)
+
+
+def _squared_gaps(
+    d1: np.ndarray,
+    d2: np.ndarray,
+    first: tuple[np.ndarray, np.ndarray],
+    second: tuple[np.ndarray, np.ndarray],
+) -> np.ndarray:
+    """(‖p_i − p_j‖ − ‖q_i' − q_j'‖)² per edge between candidate matches ``first`` = (i, i')
+    and ``second`` = (j, j') (index arrays), from the two views' distance matrices."""
+    gap = d1[first[0], second[0]] - d2[first[1], second[1]]
+    return gap * gap
 
 
 def metric_factor(
@@ -68,9 +81,31 @@ def metric_factor(
     (a = i*m + i'): exp(-(d1 − d2)² / σ_d²), σ_d = distance_scale × median spacing."""
     m = problem.n2
     width = distance_scale * median_spacing(problem.points1, problem.points2)
-    d1 = _edge_lengths(problem.points1, first // m, second // m)
-    d2 = _edge_lengths(problem.points2, first % m, second % m)
-    return exp_nonpositive(-((d1 - d2) ** 2) / (width * width))
+    d1, d2 = _distances(problem.points1), _distances(problem.points2)
+    squared = _squared_gaps(d1, d2, np.divmod(first, m), np.divmod(second, m))
+    return exp_nonpositive(-squared / (width * width))
+
+
+_GAP_TABLE_LIMIT = 1 << 22
+"""Candidate-match counts nm with nm² ≤ this get their squared gaps tabulated once (≤ 32 MiB)."""
+
+
+def _edge_sums(problem: Problem, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """g_ab² + g_bc² + g_ac² per tensor entry (a, b, c), g the edge-length gap of
+    :func:`_squared_gaps`: read from an (nm, nm) table of every candidate pair's squared gap when
+    it is small enough, else computed per entry."""
+    n, m = problem.n1, problem.n2
+    d1, d2 = _distances(problem.points1), _distances(problem.points2)
+    if (n * m) ** 2 <= _GAP_TABLE_LIMIT:
+        own, other = np.divmod(np.arange(n * m), m)
+        gap = d1[np.ix_(own, own)] - d2[np.ix_(other, other)]
+        table = (gap * gap).reshape(-1)
+        nm = n * m
+        return table[a * nm + b] + table[b * nm + c] + table[a * nm + c]
+    ends = [np.divmod(slot, m) for slot in (a, b, c)]
+    squared = _squared_gaps(d1, d2, ends[0], ends[1])
+    squared += _squared_gaps(d1, d2, ends[1], ends[2])
+    return squared + _squared_gaps(d1, d2, ends[0], ends[2])
 
 
 def weighted_tensor(
@@ -81,15 +116,20 @@ def weighted_tensor(
 ) -> SparseTensor:
     """``tensor`` with the metric term (``distance_scale`` not None) and/or the appearance
     factor (``appearance``) of the module docstring; the same tensor when neither is asked for
-    or it is empty. The info dict records both."""
+    or it is empty. The info dict records both.
+
+    The three edge factors of an entry are taken as one exponential of their summed exponents,
+    exp(−(g_ab² + g_bc² + g_ac²) / σ_d²) — the same product, one third of the exponentials; the
+    edge lengths are read from each view's distance matrix rather than recomputed per entry."""
     distance_scale = check_distance_scale(distance_scale)
     if not tensor.nnz or (distance_scale is None and not appearance):
         return tensor
     a, b, c = (tensor.indices[:, slot] for slot in range(3))
     values = tensor.values.copy()
     if distance_scale is not None:
-        for first, second in ((a, b), (b, c), (a, c)):
-            values *= metric_factor(problem, first, second, distance_scale)
+        width = distance_scale * median_spacing(problem.points1, problem.points2)
+        squared = _edge_sums(problem, a, b, c)
+        values *= exp_nonpositive(-squared / (width * width))
     if appearance:
         similarity = appearance_similarity(problem).reshape(-1)
         values *= similarity[a] * similarity[b] * similarity[c]
