@@ -30,6 +30,7 @@ import pandas as pd
 
 from eval.claims import build_claims
 from eval.core.result_files import write_csv, write_text
+from eval.engine.power_analysis import write_power_analysis
 from eval.engine.study import ReportContext
 from eval.protocol.claims import FILE as CLAIMS
 from eval.protocol.claims import to_frame
@@ -153,9 +154,15 @@ def _site_links(markdown: str, rel: str = ".") -> dict[str, str]:
 
 
 def write_report(results: Path) -> tuple[Path, Path]:
-    """Write ``<results>/claims.csv``, then ``<results>/README.md`` and ``<results>/index.html``
-    rendered from those claims and the folder's files."""
+    """Write ``<results>/power_analysis.csv`` (the clusters each study's covered comparisons
+    would need, :mod:`eval.engine.power_analysis`) and ``<results>/claims.csv``, then
+    ``<results>/README.md`` and ``<results>/index.html`` rendered from those claims and the
+    folder's files."""
     results = Path(results)
+    try:
+        write_power_analysis(results)
+    except Exception as error:  # a file format this code does not read: the report goes on
+        log.warning("power_analysis.csv left out: %s: %s", type(error).__name__, error)
     claims = claims_of(results)
     write_csv(claims, results / CLAIMS)
     markdown = report_markdown(results, claims)
