@@ -136,3 +136,14 @@ def test_the_csv_is_written_from_a_results_folder(tmp_path):
 def test_nothing_written_without_files(tmp_path):
     assert write_power_analysis(tmp_path) is None
     assert not (tmp_path / FILE).exists()
+
+
+def test_the_report_step_writes_the_csv_and_shows_its_table(tmp_path):
+    from eval.readme_results import write_report
+
+    _plant(tmp_path, np.random.default_rng(5))
+    report, _ = write_report(tmp_path)
+    assert len(pd.read_csv(tmp_path / FILE)) == 3  # two V2X presets, one temporal goal
+    table = (tmp_path / "power_analysis.md").read_text()
+    assert "| v2x | camera: a − b | denied | half-width ≤ ±5 | 30 |" in table
+    assert table.strip() in report.read_text()  # in full in the report's appendix

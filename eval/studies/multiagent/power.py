@@ -22,8 +22,10 @@ def gain_rows(results: Path) -> list[dict]:
     if best is None:
         return []
     snapshots = read_csv(Path(results) / "multiagent" / "per_snapshot.csv")
-    if snapshots is not None and "episode" in snapshots.columns:
-        clusters = int(snapshots.loc[snapshots["split"] == "test", "episode"].nunique())
+    items = None
+    if snapshots is not None and {"episode", "snapshot"} <= set(snapshots.columns):
+        test = snapshots[snapshots["split"] == "test"]
+        clusters, items = int(test["episode"].nunique()), int(test["snapshot"].nunique())
     else:
         clusters = int(best.snapshots)
     comparison = f"pooled-F1 gain over {BASELINE}: {best.matcher} + {best.fusion}, N = {best.n_agents}"  # fmt: skip
@@ -36,7 +38,8 @@ def gain_rows(results: Path) -> list[dict]:
             best.gain_ci_high,
             clusters,
             "mdd",
-        )  # fmt: skip
+            items=items,
+        )
     ]
 
 

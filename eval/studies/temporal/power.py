@@ -13,20 +13,11 @@ import pandas as pd
 
 from eval.engine.power_analysis import PowerCheck, interval_row, pooled_f1_terms, read_csv
 from eval.protocol.cluster_correlation import intra_cluster_correlation
-from eval.studies.temporal.goals import DENIED_GAIN, FIXED_WINDOW
+from eval.studies.temporal.goals import DENIED_GAIN, FIXED_WINDOW, _frames
 from eval.studies.temporal.table import FIXED, LIDAR_TABLE, LONG, SHORT, TABLE, TUNED, folder_of
 
 GOAL_ROWS = ((FIXED_WINDOW, FIXED), (DENIED_GAIN, TUNED))
 """(goal, the gain table's ``parameters``) of every comparison covered."""
-
-
-def _frames(per_frame: pd.DataFrame, method: str, window: int, preset: str) -> pd.DataFrame:
-    rows = per_frame[
-        (per_frame["method"] == method)
-        & (per_frame["window"] == window)
-        & (per_frame["preset"] == preset)
-    ]
-    return rows.sort_values(["seed", "sequence", "frame"]).reset_index(drop=True)
 
 
 def window_icc(
@@ -37,7 +28,7 @@ def window_icc(
     if per_frame is None:
         return float("nan"), None
     long, short = (_frames(per_frame, method, w, preset) for w in (LONG, SHORT))
-    if not len(long) or len(long) != len(short):
+    if long is None or short is None or len(long) != len(short):
         return float("nan"), None
     diff = pooled_f1_terms(long) - pooled_f1_terms(short)
     return intra_cluster_correlation(diff, long["episode"].to_numpy()), len(diff)
