@@ -237,7 +237,10 @@ class PowerCheck:
 def power_table(results: Path, checks: Iterable[PowerCheck]) -> pd.DataFrame:
     """Every check's rows from ``results``, in :data:`COLUMNS` order."""
     rows = [row for check in checks for row in check.rows(Path(results))]
-    return pd.DataFrame(rows, columns=list(COLUMNS))
+    table = pd.DataFrame(rows, columns=list(COLUMNS))
+    counts = ["clusters", "items", "clusters_needed"]
+    table[counts] = table[counts].apply(pd.to_numeric).round().astype("Int64")
+    return table
 
 
 def write_power_analysis(results: Path, checks: Iterable[PowerCheck] | None = None) -> Path | None:
