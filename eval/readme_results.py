@@ -6,6 +6,8 @@ recomputing nothing.
 - The report: ``<results>/README.md`` and the same page as ``<results>/index.html`` (figures,
   sortable tables; :mod:`eval.report.site`), then every table and figure of the folder not
   shown in full above them.
+- ``power_analysis.csv`` and ``.md``: the test clusters each study's covered comparisons would
+  need (:mod:`eval.engine.power_analysis`), computed from the per-pair files in under a second.
 - The README's section, between ``<!-- results:begin -->`` and ``<!-- results:end -->``: one
   compact table per study (:mod:`eval.report.summary`) with links into the report.
 
@@ -30,11 +32,14 @@ import pandas as pd
 
 from eval.claims import build_claims
 from eval.core.result_files import write_csv, write_text
+from eval.engine.power_analysis import read_csv, write_power_analysis
 from eval.engine.study import ReportContext
 from eval.protocol.claims import FILE as CLAIMS
 from eval.protocol.claims import to_frame
 from eval.report.appendix import REPORT, SITE, appendix
 from eval.report.guarded import guarded
+from eval.report.power_table import FILE as POWER_TABLE
+from eval.report.power_table import power_markdown
 from eval.report.run_part import (
     cold_time,
     is_cold,
@@ -153,9 +158,17 @@ def _site_links(markdown: str, rel: str = ".") -> dict[str, str]:
 
 
 def write_report(results: Path) -> tuple[Path, Path]:
-    """Write ``<results>/claims.csv``, then ``<results>/README.md`` and ``<results>/index.html``
+    """Write ``<results>/power_analysis.csv`` (the clusters each study's covered comparisons
+    would need, :mod:`eval.engine.power_analysis`) with its Markdown table and
+    ``<results>/claims.csv``, then ``<results>/README.md`` and ``<results>/index.html``
     rendered from those claims and the folder's files."""
     results = Path(results)
+    try:
+        power = write_power_analysis(results)
+        if power is not None:  # shown in full in the report's appendix
+            write_text(results / POWER_TABLE, power_markdown(read_csv(power)))
+    except Exception as error:  # a file format this code does not read: the report goes on
+        log.warning("power_analysis.csv left out: %s: %s", type(error).__name__, error)
     claims = claims_of(results)
     write_csv(claims, results / CLAIMS)
     markdown = report_markdown(results, claims)

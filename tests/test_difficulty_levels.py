@@ -11,7 +11,8 @@ import pandas as pd
 import pytest
 
 from cadsim.dataset.difficulty import FACTORS, LEVELS, LevelRule, difficulty_factors, level_counts
-from eval.engine.difficulty_levels import clusters_needed, headline_level, level_tables
+from eval.engine.difficulty_levels import headline_level, level_tables
+from eval.engine.power_analysis import clusters_needed
 
 ROOT = Path(__file__).resolve().parents[1]
 

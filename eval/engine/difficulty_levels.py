@@ -14,7 +14,6 @@ dataset reader.
 from __future__ import annotations
 
 import json
-import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -22,13 +21,14 @@ import numpy as np
 import pandas as pd
 
 from cadsim.dataset.difficulty import FACTORS, LEVELS, LevelRule
+from eval.engine.power_analysis import clusters_needed
 from eval.protocol.cluster_interval import cluster_standard_error, t_interval
 from eval.protocol.detectable_difference import mdd_factor
 
 REFERENCE = "maximin"
 TARGET_MDD = 0.05
-"""The MDD (F1, fraction) a headline comparison is sized for; the clusters it needs are reported."""
-MAX_CLUSTERS = 100_000
+"""The MDD (F1, fraction) a headline comparison is sized for; the clusters it needs are reported
+(:func:`eval.engine.power_analysis.clusters_needed`)."""
 
 
 def split_levels(
@@ -59,23 +59,6 @@ def _pair_f1(per_pair: pd.DataFrame, metric: str) -> pd.DataFrame:
     means = per_pair.groupby(["pair", "matcher"], sort=True)[metric].mean().unstack("matcher")
     episodes = per_pair.groupby("pair", sort=True)["episode"].first()
     return means.assign(_episode=episodes)
-
-
-def clusters_needed(
-    differences: np.ndarray, clusters: np.ndarray, target: float = TARGET_MDD
-) -> int | None:
-    """The fewest clusters at which the MDD of these paired differences (their per-cluster
-    spread held fixed) falls to ``target``; None without a spread to extrapolate."""
-    se, groups = cluster_standard_error(differences, clusters)
-    if groups < 2 or not np.isfinite(se):
-        return None
-    spread = se * math.sqrt(groups)
-    if spread == 0:
-        return groups
-    g = 2
-    while g < MAX_CLUSTERS and mdd_factor(g) * spread / math.sqrt(g) > target:
-        g = g + max(1, g // 10)
-    return g
 
 
 def level_tables(
@@ -149,7 +132,7 @@ def level_tables(
                 "rival_high": high,
                 "clusters": clusters,
                 "mdd": mdd_factor(clusters) * se if clusters > 1 else float("nan"),
-                "clusters_for_mdd_5": clusters_needed(diff, episodes),
+                "clusters_for_mdd_5": clusters_needed(diff, episodes, TARGET_MDD),
             }
         summary.append(entry)
     return pd.DataFrame(rows), pd.DataFrame(summary)

@@ -10,8 +10,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-DIFFERENCE_GOAL_PP = 5.0
-"""Half-width goal (percentage points) of the best-against-runner-up F1 interval per condition."""
+from eval.engine.power_analysis import GOAL
+
+DIFFERENCE_GOAL_PP = 100 * GOAL
+"""Half-width goal (percentage points) of the best-against-runner-up F1 interval per condition;
+the clusters it needs: :mod:`eval.engine.power_analysis` (``power_analysis.csv``)."""
 ROW_GOAL_PP = 8.0
 """Half-width goal (percentage points) of every single row's F1 interval."""
 REFERENCE_ROWS = ("oracle", "prior")

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from eval.engine.goal import Goal
+from eval.engine.power_analysis import PowerCheck
 from eval.protocol.claims import Claim
 
 
@@ -68,7 +69,9 @@ class Study:
     ``needs``: {study: the result file of it that this study reads ("" when it reads only
     that study's datasets)} — those run first; ``outputs``: the
     result files it writes under ``--out``; ``tables``: re-writes its tables from its result
-    files, runs nothing (None: it has none to re-write)."""
+    files, runs nothing (None: it has none to re-write); ``power``: the comparisons its power
+    analysis covers (:class:`eval.engine.power_analysis.PowerCheck`: the test clusters each
+    would need for a ±5-point half-width or a 5-point MDD, in ``power_analysis.csv``)."""
 
     name: str
     label: str
@@ -83,6 +86,7 @@ class Study:
     needs: Mapping[str, str] = field(default_factory=dict)
     outputs: tuple[str, ...] = ()
     tables: Callable[[Path], object] | None = None
+    power: tuple[PowerCheck, ...] = ()
 
     def data_named(self, name: str) -> Data:
         """The declared dataset ``name`` (KeyError naming the study when it has none)."""

@@ -1,6 +1,12 @@
 """How much ``make reproduce`` generates and runs: the default sizes of every study's splits, and
 :func:`plan_sizes`, every split's size for one run at a scale (``--scale k`` multiplies every split
-and every "first N test pairs" subset by k). Counts are frame pairs, sequences or snapshots."""
+and every "first N test pairs" subset by k). Counts are frame pairs, sequences or snapshots.
+
+What these sizes resolve is measured, not assumed: ``results/power_analysis.csv``
+(:mod:`eval.engine.power_analysis`, written by ``make report``) gives per covered comparison the
+test clusters a ±5-point half-width or a 5-point MDD would need (docs/evaluation.md, "Power
+analysis"). The sizes below are not derived from it; the cold-run budget decides whether those
+clusters are drawn."""
 
 from __future__ import annotations
 
@@ -22,7 +28,8 @@ DEFAULT_VAL_PAIRS = 50
 TABLE1_TEST_PAIRS = {"CAD": 100, "CAD-dense": 100}
 """Table I's test pairs where more than the scenario's 50 are drawn (one episode each): the CAD
 datasets, so that a difficulty level (a third of the pairs) holds ~33 clusters; MRC keeps 50
-(docs/evaluation.md, "Difficulty levels"). ``--pairs`` overrides."""
+(docs/evaluation.md, "Difficulty levels"). ``--pairs`` overrides. The clusters the headline
+level's maximin-against-rival MDD of 5 points would need: ``power_analysis.csv``."""
 # The sweeps are lighter than Table I to keep a cold `make reproduce` within 15 minutes on two
 # cores (docs/evaluation.md). Noise: the first SWEEP_PAIRS test pairs, SWEEP_RUNS seeds.
 SWEEP_PAIRS = 25
@@ -56,13 +63,16 @@ EXTERNAL_TUNE_PAIRS = 0
 V2X_SCENARIO = "scenarios/cad-v2x.toml"
 V2X_LABEL = "CAD-V2X"
 V2X_PAIRS = 100  # test: one pair per episode (the scenarios' pairs_per_episode = 1), 100 clusters
+# (the clusters each preset's best − runner-up ±5-point half-width needs: power_analysis.csv)
 V2X_VAL_PAIRS = 50
 V2X_TRAIN_SEED_OFFSET = 2000
 V2X_TRAIN_FACTOR = 1
 V2X_RUNS = 2  # runs only average the stochastic matchers; 100 clusters carry the precision
 # Multi-agent (cad-multi: 4 vehicles + 2 roadside units per snapshot): test and validation
 # snapshots on disjoint scenario seeds, two-view matchers on every pair of views, fused per
-# subset of N views (eval.studies.multiagent.evaluation), MULTIAGENT_RUNS seeds.
+# subset of N views (eval.studies.multiagent.evaluation), MULTIAGENT_RUNS seeds. The multi-agent
+# and temporal split sizes are the studies' own (Study.data); the clusters their goals' 5-point
+# MDD needs: power_analysis.csv.
 MULTIAGENT_RUNS = 2
 # Transfer of the learned matchers (eval.studies.transfer.evaluation): CAD's training split on its own
 # scenario seed (seed + CAD_TRAIN_SEED_OFFSET; 1000 is validation, 2000/3000 the spread sets),

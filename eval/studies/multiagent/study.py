@@ -17,6 +17,7 @@ from eval.studies.multiagent.evaluation import (
     TEST_SNAPSHOTS,
     VAL_SNAPSHOTS,
 )
+from eval.studies.multiagent.power import CHECKS as POWER
 from eval.studies.multiagent.report import claims as part_claims
 from eval.studies.multiagent.report import readme_part
 
@@ -61,4 +62,5 @@ STUDY = Study(
     ),
     needs={"table1": "tuning.csv"},
     outputs=("table_multiagent.*", "multiagent/", "fig_multiagent.*"),
+    power=POWER,
 )

@@ -25,6 +25,7 @@ from eval.report.benchmark_parts import (
 )
 from eval.studies.table1 import stages
 from eval.studies.table1.claims import benchmark_claims
+from eval.studies.table1.power import CHECKS as POWER
 from eval.studies.table1.regime_cards import readme_part as regime_part
 
 TABLE1 = ("table1.{md,csv,tex}", "metrics_per_pair.csv", "thresholds.csv", "tuning.csv")
@@ -141,4 +142,5 @@ STUDY = Study(
         ),
     ),
     outputs=(*TABLE1, "table1_*", "noise_runs.csv", "regime_sweep.csv", "crossovers.csv"),
+    power=POWER,
 )

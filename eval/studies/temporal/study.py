@@ -19,6 +19,7 @@ from eval.studies.temporal.evaluation import (
     readme_part_lidar,
 )
 from eval.studies.temporal.goals import GOALS
+from eval.studies.temporal.power import CHECKS as POWER
 from eval.studies.temporal.report import claims as table_claims
 from eval.studies.temporal.table import LIDAR_TABLE
 
@@ -101,4 +102,5 @@ STUDY = Study(
         ),
     ),
     outputs=("table_temporal*", "temporal/", "temporal_lidar/"),
+    power=POWER,
 )

@@ -18,6 +18,7 @@ from eval.studies.v2x.boxes import readme_part as boxes_part
 from eval.studies.v2x.boxes import timing_claims
 from eval.studies.v2x.lidar import SCENARIO as LIDAR_SCENARIO
 from eval.studies.v2x.lidar import readme_part as lidar_part
+from eval.studies.v2x.power import CHECKS as POWER
 from eval.studies.v2x.report import GOALS
 from eval.studies.v2x.report import claims as camera_claims
 from eval.studies.v2x.report import readme_part as camera_part
@@ -116,4 +117,5 @@ STUDY = Study(
     ),
     needs={"table1": "tuning.csv"},
     outputs=("localisation_presets.csv", "table_v2x*", "v2x/", "v2x_boxes/", "v2x_lidar/"),
+    power=POWER,
 )
