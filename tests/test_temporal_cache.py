@@ -10,6 +10,7 @@ import logging
 import math
 
 import numpy as np
+import pandas as pd
 import pytest
 import test_sequences as seqs
 
@@ -81,6 +82,8 @@ def test_a_numpy_scalar_nan_and_none_round_trip(tmp_path, dirs):
     outcome = temporal.evaluate_preset(task)
     outcome.rows[0] |= {"tau": math.nan, "frames": np.int64(6), "f1_mean": np.float32(0.5)}
     outcome.continuity[0]["continuity_low"] = None
+    nullable = pd.array([1, None, 3], dtype="Int64")
+    outcome.per_frame.append(pd.DataFrame({"n": nullable, "f": [0.5, math.nan, -0.0]}))
     cache = outcome_cache.OutcomeCache(tmp_path)
     key = outcome_cache.task_key(task)
     cache.store(key, outcome)
@@ -93,6 +96,16 @@ def test_a_numpy_scalar_nan_and_none_round_trip(tmp_path, dirs):
         )
     for a, b in zip(back.per_frame, outcome.per_frame, strict=True):
         assert a.equals(b) and list(a.dtypes) == list(b.dtypes)
+
+
+def test_an_outcome_the_format_cannot_hold_is_not_stored(tmp_path, dirs, caplog):
+    task = (str(dirs / "test"), str(dirs / "val"), "denied", METHODS, (0,), False)
+    outcome = temporal.evaluate_preset(task)
+    outcome.rows[0]["params"] = {"not": "a cell"}.keys()
+    cache = outcome_cache.OutcomeCache(tmp_path)
+    with caplog.at_level(logging.WARNING, logger="eval.reproduce"):
+        assert cache.store("k", outcome) is None
+    assert "not stored" in caplog.text and not list(tmp_path.iterdir())
 
 
 def _edit_value(path):

@@ -49,8 +49,10 @@ per-frame F1 (paired per frame, cluster t-interval). Goals (issue 41) go through
 The study's pieces: the sequences (:mod:`eval.studies.temporal.sequences`), the table's layout
 (:mod:`eval.studies.temporal.table`), runs and tuning (:mod:`eval.studies.temporal.runs`),
 scores (:mod:`eval.studies.temporal.scores`), one preset (:mod:`eval.studies.temporal.preset`),
-the gain (:mod:`eval.studies.temporal.gain`), Markdown (:mod:`eval.studies.temporal.markdown`)
-and the report (:mod:`eval.studies.temporal.report`); their public names are re-exported here.
+the gain (:mod:`eval.studies.temporal.gain`), Markdown (:mod:`eval.studies.temporal.markdown`),
+the report (:mod:`eval.studies.temporal.report`) and the presets' result cache
+(:mod:`eval.studies.temporal.outcome_cache`); the public names but the cache's are re-exported
+here.
 """
 
 from __future__ import annotations

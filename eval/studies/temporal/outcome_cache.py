@@ -95,9 +95,11 @@ def task_key(task: tuple) -> str:
 
 
 def _plain(value):
-    """A numpy scalar as its Python value (JSON's ``default``)."""
+    """A numpy scalar as its Python value, pandas' NA as None (JSON's ``default``)."""
     if isinstance(value, np.generic):
         return value.item()
+    if value is pd.NA:  # a nullable column's missing value
+        return None
     raise TypeError(f"{type(value).__name__} is not a table cell")
 
 
@@ -127,31 +129,29 @@ class OutcomeCache:
         return self.root / f"{key}.json"
 
     def store(self, key: str, outcome: PresetOutcome) -> Path | None:
-        """Write `outcome` atomically (temporary file + rename); its path, or None (logged)
-        when a per-frame column has a dtype this format does not restore."""
+        """Write `outcome` atomically (temporary file + rename); its path, or None (a warning
+        says why) when it holds what this format does not restore (a per-frame dtype, a cell
+        that is no number or text) or the write fails: the study goes on uncached."""
         frames = [_frame_dict(f) for f in outcome.per_frame]
         odd = sorted({t for f in frames for t in f["dtypes"]} - _DTYPES)
-        if odd:
-            log.warning("temporal result cache: not stored (per-frame dtypes %s)", odd)
-            return None
-        payload = {
-            "rows": outcome.rows,
-            "gain": outcome.gain,
-            "tuned": outcome.tuned,
-            "continuity": outcome.continuity,
-            "per_frame": frames,
-        }
-        entry = {"format": _FORMAT, "key": key, "digest": _digest(_dump(payload))}
         path = self.path(key)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".json", dir=path.parent)
         try:
-            with os.fdopen(fd, "w", encoding="utf-8") as f:
-                f.write(_dump(entry | {"outcome": payload}))
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+            if odd:
+                raise TypeError(f"per-frame dtypes {odd}")
+            payload = {
+                "rows": outcome.rows,
+                "gain": outcome.gain,
+                "tuned": outcome.tuned,
+                "continuity": outcome.continuity,
+                "per_frame": frames,
+            }
+            entry = {"format": _FORMAT, "key": key, "digest": _digest(_dump(payload))}
+            text = _dump(entry | {"outcome": payload})
+            path.parent.mkdir(parents=True, exist_ok=True)
+            _write_atomically(path, text)
+        except (TypeError, ValueError, OSError) as exc:
+            log.warning("temporal result cache: %s not stored (%s)", path, exc)
+            return None
         return path
 
     def load(self, key: str, task: tuple) -> PresetOutcome | None:
@@ -166,6 +166,18 @@ class OutcomeCache:
             why = " ".join(str(exc).split())[:200]
             log.warning("temporal result cache: refused %s (%s); recomputing it", path, why)
             return None
+
+
+def _write_atomically(path: Path, text: str) -> None:
+    """`text` as the file `path`, through a temporary file in its folder and a rename."""
+    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".json", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
 
 
 def _read(path: Path, key: str) -> dict:
