@@ -49,12 +49,15 @@ per-frame F1 (paired per frame, cluster t-interval). Goals (issue 41) go through
 The study's pieces: the sequences (:mod:`eval.studies.temporal.sequences`), the table's layout
 (:mod:`eval.studies.temporal.table`), runs and tuning (:mod:`eval.studies.temporal.runs`),
 scores (:mod:`eval.studies.temporal.scores`), one preset (:mod:`eval.studies.temporal.preset`),
-the gain (:mod:`eval.studies.temporal.gain`), Markdown (:mod:`eval.studies.temporal.markdown`)
-and the report (:mod:`eval.studies.temporal.report`); their public names are re-exported here.
+the gain (:mod:`eval.studies.temporal.gain`), Markdown (:mod:`eval.studies.temporal.markdown`),
+the report (:mod:`eval.studies.temporal.report`) and the presets' result cache
+(:mod:`eval.studies.temporal.outcome_cache`); the public names but the cache's are re-exported
+here.
 """
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -65,6 +68,7 @@ from eval.core.result_files import write_csv, write_text
 from eval.engine.result_table import bullets
 from eval.studies.temporal.gain import best_long, gain_rows
 from eval.studies.temporal.markdown import params_cell, to_markdown
+from eval.studies.temporal.outcome_cache import OutcomeCache, task_key
 from eval.studies.temporal.preset import PresetOutcome, evaluate_preset
 from eval.studies.temporal.report import (
     goals,
@@ -138,6 +142,8 @@ METHODS: tuple[tuple[str, tuple[int, ...]], ...] = (
 )
 RUNS = (0,)
 
+log = logging.getLogger("eval.reproduce")
+
 
 def evaluate_temporal(
     test_dir: Path,
@@ -150,6 +156,7 @@ def evaluate_temporal(
     executor=None,
     name: str = TABLE,
     label: str = LABEL,
+    cache: str | Path | None = None,
 ) -> pd.DataFrame:
     """Run the study (module docstring) and write ``out/table_temporal.{md,csv}``,
     ``out/table_temporal_gain.csv``, the per-frame scores ``out/temporal/per_frame.csv`` and
@@ -158,18 +165,14 @@ def evaluate_temporal(
     (:class:`eval.core.executor.Executor`; None or one worker: in this process, in order);
     the outputs are assembled in preset order, whatever the completion order. ``name`` /
     ``label``: the files' stem and the caption's dataset (:func:`evaluate_temporal_lidar`: the
-    LiDAR table, side files under :func:`folder_of`). Returns the table."""
+    LiDAR table, side files under :func:`folder_of`). ``cache``: a folder of
+    :class:`~eval.studies.temporal.outcome_cache.OutcomeCache` entries; a preset found there is
+    read, not run, and each one run is stored there (None: every preset is run, nothing is
+    stored); the files are the same either way. Returns the table."""
     out = Path(out)
     methods = tuple((m, tuple(int(w) for w in ws)) for m, ws in methods)
     tasks = [(str(test_dir), str(val_dir), p, methods, tuple(seeds), bool(tune)) for p in presets]
-    if executor is None or getattr(executor, "workers", 1) <= 1 or len(tasks) <= 1:
-        outcomes = [evaluate_preset(task) for task in tasks]
-    else:
-        outcomes = [None] * len(tasks)
-        for done in executor.map_unordered(evaluate_preset, tasks):
-            if done.error is not None:
-                raise done.error
-            outcomes[done.index] = done.value
+    outcomes = _run_presets(tasks, executor, None if cache is None else OutcomeCache(cache), label)
     rows = [r for o in outcomes for r in o.rows]
     gains = [g for o in outcomes for g in o.gain]
     per_frame_all = [f for o in outcomes for f in o.per_frame]
@@ -214,6 +217,39 @@ def evaluate_temporal(
         out / f"{name}.md", to_markdown(table, gain, label) + "\n\n" + "\n".join(lines) + "\n"
     )
     return table
+
+
+def _run_presets(
+    tasks: list[tuple], executor, cache: OutcomeCache | None, label: str
+) -> list[PresetOutcome]:
+    """Each task's :class:`PresetOutcome`, in task order: read from `cache` where it holds the
+    task, the others run (on `executor` when it has several workers) and stored there."""
+    if cache is None:
+        keys, outcomes = [], [None] * len(tasks)
+    else:
+        keys = [task_key(task) for task in tasks]
+        outcomes = [cache.load(key, task) for key, task in zip(keys, tasks, strict=True)]
+    for task, outcome in zip(tasks, outcomes, strict=True):
+        if outcome is not None:
+            log.info("temporal %s %s: read from the result cache %s", label, task[2], cache.root)
+    todo = [k for k, outcome in enumerate(outcomes) if outcome is None]
+    if executor is None or getattr(executor, "workers", 1) <= 1 or len(todo) <= 1:
+        done = ((k, evaluate_preset(tasks[k])) for k in todo)
+    else:
+        done = _on_executor(executor, [tasks[k] for k in todo], todo)
+    for k, outcome in done:
+        outcomes[k] = outcome
+        if cache is not None:
+            cache.store(keys[k], outcome)
+    return outcomes
+
+
+def _on_executor(executor, tasks: list[tuple], indices: list[int]):
+    """(index, outcome) of each task as it completes on `executor`; a task's error is raised."""
+    for done in executor.map_unordered(evaluate_preset, tasks):
+        if done.error is not None:
+            raise done.error
+        yield indices[done.index], done.value
 
 
 def evaluate_temporal_lidar(
