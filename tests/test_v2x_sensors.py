@@ -334,3 +334,43 @@ def test_the_sensor_table_says_which_objects_it_covers(tmp_path):
     (line,) = sensor_lines(tmp_path)
     assert "same region (camera 9.8 and LiDAR 9.5 detections per view" in line
     assert "the LiDAR's 8.6 others, 4.6 of them false positives, left out" in line
+
+
+@pytest.mark.render
+def test_the_sensor_table_compares_each_familys_validation_choice_on_the_common_region(
+    both_dataset, tmp_path
+):
+    """End to end on a 2-pair test and validation split: the LiDAR table, the camera side and
+    the common-region runs of the matchers chosen on validation alone — one per family and
+    preset, with the parameters and τ of each sensor's full evaluation (no re-tuning)."""
+    from cadsim.generation.local_executor import SerialExecutor
+    from eval.core.cache import ResultCache
+    from eval.core.runner import Runner
+    from eval.studies.v2x.lidar import LIDAR_COMMON, evaluate_lidar
+    from eval.studies.v2x.lidar import NAME as LIDAR_NAME
+    from eval.studies.v2x.table import PRESETS
+
+    shutil.copy(SCENARIOS / "cad-vtypes.add.xml", tmp_path / "cad-vtypes.add.xml")
+    scenario = tmp_path / "both.toml"
+    scenario.write_text(BOTH.read_text())
+    val = tmp_path / "val"
+    args = ["generate", str(scenario), "--out", str(val), "--pairs", "2", "--seed", "1011"]
+    assert main([*args, "--workers", "1", "--no-progress"]) == 0
+    runner = Runner(ResultCache(tmp_path / "cache"), SerialExecutor(), progress=False)
+    specs = [MatcherSpec("sm"), MatcherSpec("consistency"), MatcherSpec("pose_refine")]
+    out = tmp_path / "out"
+    evaluate_lidar(both_dataset, val, specs, [0], runner, out, tune=False)
+    table = pd.read_csv(out / f"table_{NAME}.csv")
+    assert len(table) and table["chosen"].all()
+    for preset, rows in table.groupby("preset"):
+        assert preset in PRESETS
+        assert rows["family"].is_unique  # at most one matcher per family and preset
+    assert "pose_refine" not in set(table.loc[table["preset"] == "denied", "matcher"])
+    common = pd.read_csv(out / LIDAR_NAME / LIDAR_COMMON / "metrics_per_pair.csv")
+    compared = set(zip(table["preset"], table["matcher"], strict=True))
+    assert set(zip(common["preset"], common["matcher"], strict=True)) == compared
+    # each sensor's own τ from its full evaluation, not one fitted on the common region
+    full = pd.read_csv(out / LIDAR_NAME / "rtk" / "thresholds.csv")
+    taus = dict(zip(full["matcher"], full["tau"], strict=True))
+    for row in common[common["preset"] == "rtk"].itertuples():
+        assert row.tau == pytest.approx(taus[row.matcher])

@@ -21,10 +21,12 @@ where its splits hold these very camera records (checked record by record), else
 of the two-sensor split as camera. Files: ``table_v2x_lidar.{md,csv}``,
 ``table_v2x_lidar_intervals.csv``, ``v2x_lidar/<preset>/``; ``table_v2x_sensors.csv``, from the
 two sensors' detections in the region both cover (``sensor="lidar-common"`` and
-``"camera-common"``; under ``v2x_lidar/``: ``table_lidar_common.*``, ``lidar_common/<preset>/``,
-and the camera's likewise unless no camera detection lies outside that region, when the camera
-runs serve); only when the camera side is evaluated here, under ``v2x_lidar/``:
-``table_camera.{md,csv}``, ``table_camera_intervals.csv``, ``camera/<preset>/``.
+``"camera-common"``): per preset the matcher of each family chosen on the two sensors' full
+validation F1, run on the test split's common region with each sensor's own parameters and τ
+(under ``v2x_lidar/``: ``lidar_common/metrics_per_pair.csv`` and ``camera_common/…``, the
+latter the camera runs themselves when no camera detection lies outside the region); only when
+the camera side is evaluated here, under ``v2x_lidar/``: ``table_camera.{md,csv}``,
+``table_camera_intervals.csv``, ``camera/<preset>/``.
 """
 
 from __future__ import annotations
@@ -84,10 +86,14 @@ def evaluate_lidar(
     seeds and tuning); where they hold the very camera records of the two-sensor splits
     (:func:`eval.studies.v2x.sensors.same_camera_frames`), that table's runs are the camera
     side and nothing is evaluated twice."""
+    from eval.core.result_files import write_csv
+    from eval.engine.validation_choice import recorded_validation
     from eval.studies.v2x.boxes import box_matchers
     from eval.studies.v2x.sensors import (
         camera_fully_covered,
+        chosen_per_family,
         coverage_counts,
+        mean_validation,
         same_camera_frames,
         write_sensor_table,
     )
@@ -114,23 +120,73 @@ def evaluate_lidar(
         )  # fmt: skip
     else:
         log.info("[v2x lidar] camera side: the camera table's runs (the same camera records)")
-    # The sensor comparison: both sensors on the objects both cover (eval.studies.v2x_sensors).
-    common = {}
-    for sensor, folder in (("lidar-common", LIDAR_COMMON), ("camera-common", CAMERA_COMMON)):
-        if sensor == "camera-common" and all(map(camera_fully_covered, (test_dir, val_dir))):
-            common[sensor] = camera_dir  # no camera detection lies outside: the same runs
-            continue
-        log.info("[v2x lidar] %s: the detections both sensors cover (%s)", LABEL, sensor)
-        evaluate_v2x(
-            test_dir, val_dir, f"{LABEL} ({sensor})", chosen, seeds, runner, out_dir / NAME,
-            tune=tune, name=folder, sensor=sensor,
-        )  # fmt: skip
-        common[sensor] = out_dir / NAME / folder
-    write_sensor_table(
-        common["lidar-common"], common["camera-common"], out_dir, coverage_counts(test_dir)
+    # The sensor comparison: both sensors on the objects both cover (eval.studies.v2x.sensors),
+    # each family's validation-chosen matcher with each sensor's own parameters and τ.
+    validation = mean_validation(
+        recorded_validation(out_dir, NAME), recorded_validation(camera_dir.parent, camera_dir.name)
     )
+    compared = chosen_per_family(validation, [m.label for m in chosen])
+    common = {}
+    for sensor, folder, source in (
+        ("lidar-common", LIDAR_COMMON, out_dir / NAME),
+        ("camera-common", CAMERA_COMMON, camera_dir),
+    ):
+        where = out_dir / NAME / folder
+        if sensor == "camera-common" and camera_fully_covered(test_dir):
+            per_pair = pd.read_csv(
+                camera_dir / "metrics_per_pair.csv", keep_default_na=False, na_values=[""]
+            )  # no camera detection lies outside the region: the camera runs are its runs
+        else:
+            log.info("[v2x lidar] %s: the detections both sensors cover (%s)", LABEL, sensor)
+            per_pair = common_region_runs(
+                test_dir, val_dir, sensor, source, chosen, compared, seeds, runner
+            )
+        where.mkdir(parents=True, exist_ok=True)
+        write_csv(per_pair, where / "metrics_per_pair.csv")
+        common[sensor] = per_pair
+    write_sensor_table(
+        common["lidar-common"], common["camera-common"], validation, out_dir,
+        coverage_counts(test_dir),
+    )  # fmt: skip
     camera_side = str(camera_dir.relative_to(out_dir))
     return table, {"matchers": [m.name for m in chosen], "camera_side": camera_side}
+
+
+def common_region_runs(
+    test_dir: str | Path,
+    val_dir: str | Path,
+    sensor: str,
+    source: Path,
+    matchers: Sequence[MatcherSpec],
+    compared: dict[str, list[str]],
+    seeds: Sequence[int],
+    runner,
+) -> pd.DataFrame:
+    """Per-pair test metrics (with a ``preset`` column) of the matchers ``compared[preset]``
+    on the test split read as ``sensor`` ("lidar-common" / "camera-common") under each preset,
+    each with the parameters and τ its sensor's full evaluation chose on validation
+    (``source/<preset>/thresholds.csv``): the common region restricts what is scored, not
+    how a matcher was tuned, so no tuning or calibration is repeated on it."""
+    from eval.engine.named_runs import run_named, score_runs
+    from eval.engine.splits import open_entry
+    from eval.engine.validation_choice import chosen_specs
+
+    frames = []
+    for preset, labels in compared.items():
+        if not labels:
+            continue
+        thresholds = pd.read_csv(source / preset / "thresholds.csv", keep_default_na=False)
+        (label,) = set(thresholds["dataset"])
+        named, taus = chosen_specs(source / preset, label, matchers)
+        named = {m: named[m] for m in labels}
+        entry = open_entry(test_dir, val_dir, f"{LABEL} ({sensor})", preset, sensor)
+        runs = run_named(
+            runner, (entry.test_dir, entry.test_checksum), named, seeds,
+            f"{entry.label} {preset} test", localisation=preset, sensor=sensor,
+        )  # fmt: skip
+        scored = score_runs(runs, {m: taus[m] for m in labels}, dataset=entry.label, split="test")
+        frames.append(scored.assign(preset=preset))
+    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
 
 
 def _camera_runs_cover(folder: Path, matchers: Sequence[MatcherSpec], seeds: Sequence[int]) -> bool:

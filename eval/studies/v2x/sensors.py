@@ -21,16 +21,19 @@ their adjusted p shared; a sensor is said to favour a matcher only where the Hol
 (a prior reader under ``denied``, :func:`eval.core.abstention.cannot_run`) is not compared
 there: no input, no number (DESIGN §3).
 
-Per preset and matcher family (with / without the prior) one row is marked ``chosen``: the
-matcher of that family with the highest validation F1 averaged over the two sensors — a choice
-made on validation only, and the same method on both sensors, so the line compares sensors, not
-methods. The report's "cameras / LiDAR favour it" lines are made from those rows alone
-(:func:`sensor_lines`).
+Which matchers are compared: per preset and matcher family (with / without the prior) the
+matcher of highest validation F1 averaged over the two sensors' *full* evaluations
+(:func:`chosen_per_family`) — a choice made on validation only, and the same method on both
+sensors, so a row compares sensors, not methods. Each runs on the common region with the
+parameters and τ its sensor's full evaluation chose (the region restricts what is scored, not
+how a matcher was tuned; no tuning or calibration is repeated on it). Every row is ``chosen``;
+the report's "cameras / LiDAR favour it" lines are made from these rows alone
+(:func:`sensor_lines`), Holm's family is theirs.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -227,24 +230,37 @@ def coverage_counts(dataset_dir: str | Path) -> dict[str, float]:
     }
 
 
+def chosen_per_family(
+    validation: Mapping[str, Mapping[str, float]], matchers: Sequence[str]
+) -> dict[str, list[str]]:
+    """{preset: the matchers compared there}: of ``matchers``, per family (with / without the
+    prior), the one of highest ``validation`` F1 ({preset: {matcher: F1 averaged over the two
+    sensors}}, :func:`mean_validation`; ties: the name), the same rule as the ``chosen`` rows."""
+    from eval.studies.v2x.table import reads_prior
+
+    out: dict[str, list[str]] = {}
+    for preset, scores in validation.items():
+        best: dict[bool, tuple[float, str]] = {}
+        for m in matchers:
+            if m in scores and np.isfinite(scores[m]):
+                key = (-scores[m], m)
+                best[reads_prior(m)] = min(best.get(reads_prior(m), key), key)
+        out[preset] = [name for prior, (_, name) in sorted(best.items(), reverse=True)]
+    return out
+
+
 def write_sensor_table(
-    lidar_dir: str | Path,
-    camera_dir: str | Path,
+    lidar: pd.DataFrame,
+    camera: pd.DataFrame,
+    validation: Mapping[str, Mapping[str, float]],
     out_dir: str | Path,
     coverage: Mapping[str, float] | None = None,
 ) -> pd.DataFrame:
-    """``out_dir/table_v2x_sensors.csv`` from the LiDAR and camera evaluation folders of the same
-    split (each holding ``metrics_per_pair.csv`` and ``validation_f1.csv``) and its
-    :func:`coverage_counts`; returns the table."""
-    from eval.engine.validation_choice import recorded_validation
-
-    lidar_dir, camera_dir = Path(lidar_dir), Path(camera_dir)
-    read = lambda d: pd.read_csv(d / "metrics_per_pair.csv", keep_default_na=False, na_values=[""])  # noqa: E731
-    validation = mean_validation(
-        recorded_validation(lidar_dir.parent, lidar_dir.name),
-        recorded_validation(camera_dir.parent, camera_dir.name),
-    )
-    table = sensor_differences(read(lidar_dir), read(camera_dir), validation, coverage=coverage)
+    """``out_dir/table_v2x_sensors.csv`` from the per-pair test metrics of the same split read
+    as each sensor's common region (with a ``preset`` column), the validation F1 that chose the
+    compared matchers (:func:`mean_validation`) and the split's :func:`coverage_counts`; returns
+    the table."""
+    table = sensor_differences(lidar, camera, validation, coverage=coverage)
     write_csv(table.round(6), Path(out_dir) / f"table_{NAME}.csv")
     return table
 
