@@ -54,8 +54,8 @@ from matchers.blocks.rigid2d import biweight, rotation
 from matchers.core.discretise import canonical_scores
 from matchers.core.matching import Matching
 from matchers.core.options import check_count, check_range, rng_from_seed
-from matchers.core.result import finish
 from matchers.core.sequence_problem import SequenceProblem, ground_positions
+from matchers.temporal.partner_hold import NO_LINKS, check_margin, hold_partners
 from matchers.temporal.temporal_pose import frame_prior
 from matchers.temporal.track_motion import refine_motion
 from matchers.temporal.windowed import accumulate, check_sequence
@@ -279,6 +279,7 @@ def trajectory_pose(
     spread: float = 2.0,
     max_iter: int = 10,
     interval_s: float | None = None,
+    margin: float = 0.0,
 ) -> list[Matching]:
     """One matching per frame (module docstring). Options: ``window`` (5 frames, causal),
     ``cutoff`` (3 m: the support's biweight and the association's gate), ``width`` (1 m: the
@@ -288,7 +289,9 @@ def trajectory_pose(
     ``prior_weight`` (0: off) and ``spread`` (2, × world_sigma) of the GNSS prior's soft term
     where there is one (on cad-v2x-seq's gnss-urban a weight of 1 pulled the motion off: median
     error 6.6 m against 0.3 m without), ``max_iter`` (10) refinement rounds, ``interval_s`` (s between frames; else
-    ``seq.meta["interval_s"]``, else 0.2). Scores: the aligned likelihood accumulated along the
+    ``seq.meta["interval_s"]``, else 0.2), ``margin`` (0: off; score units) by which another
+    partner must out-score a track pair's current one to take it (issue 61,
+    :mod:`matchers.temporal.partner_hold`). Scores: the aligned likelihood accumulated along the
     own tracks ([0, 1]). Info per frame: the window's motion (``yaw_deg``, ``shift_m``),
     ``relative_pose`` [x, y, yaw] of agent 2's body in agent 1's at that frame, ``prior``
     (whether a GNSS prior took part)."""
@@ -306,6 +309,7 @@ def trajectory_pose(
         "prior_weight": check_range("prior_weight", prior_weight, 0.0, 1e6),
         "spread": check_range("spread", spread, 0.0, 1e6, open_low=True),
         "max_iter": check_count("max_iter", max_iter),
+        "margin": check_margin(margin),
     }
     interval_s = seq.meta.get("interval_s", 0.2) if interval_s is None else interval_s
     options["interval_s"] = check_range("interval_s", interval_s, 0.0, 1e6, open_low=True)
@@ -317,7 +321,7 @@ def trajectory_pose(
         frame_prior(a, b, f) if f.world1 is not None and f.world_sigma is not None else None
         for a, b, f in zip(q1, q2, seq.frames, strict=True)
     ]
-    out = []
+    out, held = [], NO_LINKS
     for t in range(seq.num_frames):
         started = time.perf_counter()
         lo = max(0, t - window + 1)
@@ -337,7 +341,8 @@ def trajectory_pose(
         if found is None:
             scores = np.zeros((frame.n1, frame.n2))
             info = {"window": window, "prior": False}
-            out.append(finish("trajectory_pose", scores, threshold, started, 0, info))
+            done, held = _finish(seq, t, scores, threshold, started, held, options, 0, info)
+            out.append(done)
             continue
         (turn, move), info = found
         aligned = []
@@ -358,8 +363,18 @@ def trajectory_pose(
             "prior": options["prior_weight"] > 0 and any(p is not None for p in priors[here]),
             "relative_pose": [float(at[0]), float(at[1]), float(yaw)],
         }
-        out.append(finish("trajectory_pose", scores, threshold, started, info["rounds"], info))
+        rounds = info["rounds"]
+        done, held = _finish(seq, t, scores, threshold, started, held, options, rounds, info)
+        out.append(done)
     return out
+
+
+def _finish(seq, t, scores, threshold, started, held, options, rounds, info):
+    """Frame t's matching and the held links after it (:mod:`matchers.temporal.partner_hold`)."""
+    return hold_partners(
+        "trajectory_pose", scores, threshold, started, seq.tracks1[t], seq.tracks2[t], held,
+        options["margin"], rounds, info,
+    )  # fmt: skip
 
 
 def _labels(classes, count: int):
