@@ -26,25 +26,30 @@ def _frame(world1: np.ndarray, world2: np.ndarray) -> Problem:
 
 
 def _distracted_sequence() -> SequenceProblem:
-    """Four frames, two tracks per view (1 <-> 7, 2 <-> 8 all along); in frame 2 alone the GNSS
-    positions make the crossed pairing score ~0.002 higher than the true one."""
+    """Six frames, two tracks per view (1 <-> 7, 2 <-> 8 all along): frame 2 tells nothing (every
+    pair scores 1), and in frame 3 alone the GNSS positions make the crossed pairing score ~0.002
+    higher than the true one — enough to switch a window of 2 frames (2, 3) at margin 0."""
     clear = _frame(XY, XY)
+    tie = _frame(np.full((2, 2), 5.0) * [1, 0], np.full((2, 2), 5.0) * [1, 0])
     distractor = _frame(np.array([[4.8, 0.0], [5.2, 0.0]]), np.array([[5.1, 0.0], [4.9, 0.0]]))
-    frames = [clear, clear, distractor, clear]
-    return SequenceProblem(frames, [[1, 2]] * 4, [[7, 8]] * 4, np.zeros((4, 3)), np.zeros((4, 3)))
+    frames = [clear, clear, tie, distractor, clear, clear]
+    return SequenceProblem(frames, [[1, 2]] * 6, [[7, 8]] * 6, np.zeros((6, 3)), np.zeros((6, 3)))
 
 
 def test_a_one_frame_distractor_switches_at_margin_zero_not_with_a_margin():
     seq = _distracted_sequence()
     lifted = get_temporal("windowed:pose")
-    plain = lifted(seq, window=1, threshold=0.5)
-    assert plain[2].pairs.tolist() == [[0, 1], [1, 0]]  # switched by the distractor
-    held = lifted(seq, window=1, threshold=0.5, margin=0.1)
-    assert [m.pairs.tolist() for m in held] == [[[0, 0], [1, 1]]] * 4  # partners kept
-    assert held[2].info["held_links"] == 2
-    assert np.array_equal(held[2].scores, plain[2].scores)  # scores are the evidence, unchanged
+    plain = lifted(seq, window=2, threshold=0.5)
+    assert plain[3].pairs.tolist() == [[0, 1], [1, 0]]  # switched by the distractor
+    assert plain[4].pairs.tolist() == [[0, 0], [1, 1]]  # and back
+    held = lifted(seq, window=2, threshold=0.5, margin=0.1)
+    assert [m.pairs.tolist() for m in held] == [[[0, 0], [1, 1]]] * 6  # partners kept
+    assert held[3].info["held_links"] == 2
+    assert np.array_equal(held[3].scores, plain[3].scores)  # scores are the evidence, unchanged
     # a margin below the distractor's lead does not hold it
-    assert lifted(seq, window=1, threshold=0.5, margin=0.001)[2].pairs.tolist() == [[0, 1], [1, 0]]
+    assert lifted(seq, window=2, threshold=0.5, margin=0.001)[3].pairs.tolist() == [[0, 1], [1, 0]]
+    # W = 1 is one frame's evidence: no memory, the base matcher whatever the margin
+    assert lifted(seq, window=1, threshold=0.5, margin=0.1)[3].pairs.tolist() == [[0, 1], [1, 0]]
 
 
 def test_a_clear_change_beyond_the_margin_still_switches():
@@ -117,3 +122,20 @@ def test_margin_is_checked():
         get_temporal("windowed:pose")(seq, window=1, margin=-0.1)
     with pytest.raises(ValueError, match="margin"):
         get_temporal("trajectory_pose")(seq, margin=2.0)
+
+
+def test_trajectory_pose_holds_its_motion_by_the_margin():
+    """On a steady planted sequence the previous frame's motion is kept (it is as good as any
+    new one, and it has the margin); without ``hold_motion`` it never is, and at margin 0 the
+    option changes nothing."""
+    seq = planted_sequence(seed=2, frames=6).seq
+    fn = get_temporal("trajectory_pose")
+    held = fn(seq, threshold=0.3, window=3, margin=0.05)
+    assert not held[0].info["held_motion"]  # nothing to hold at the first frame
+    assert all(m.info["held_motion"] for m in held[1:])
+    free = fn(seq, threshold=0.3, window=3, margin=0.05, hold_motion=False)
+    assert not any(m.info.get("held_motion") for m in free)
+    zero = fn(seq, threshold=0.3, window=3, margin=0.0)
+    off = fn(seq, threshold=0.3, window=3, margin=0.0, hold_motion=False)
+    for a, b in zip(zero, off, strict=True):
+        assert np.array_equal(a.pairs, b.pairs) and np.array_equal(a.scores, b.scores)

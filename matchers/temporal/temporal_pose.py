@@ -176,9 +176,9 @@ def temporal_pose(
     2's detections forward along its own tracks (``interval_s`` s between frames, else
     ``seq.meta["interval_s"]``), the window's motion is estimated for each, and the one with the
     largest support wins (ties: the smaller offset); info ``time_offset_s``. ``margin`` (0: off;
-    score units) by which another partner must out-score a track pair's current one to take it
-    (issue 61, :mod:`matchers.temporal.partner_hold`). Scores: the aligned likelihood accumulated along the own
-    tracks (absolute, [0, 1]). Info per frame: the window's motion of agent 2's frame-0 plane into
+    score units; W >= 2 only): by how much another partner must out-score a track pair's
+    current one to take it (issue 61, :mod:`matchers.temporal.partner_hold`). Scores: the
+    aligned likelihood accumulated along the own tracks (absolute, [0, 1]). Info per frame: the window's motion of agent 2's frame-0 plane into
     agent 1's (``yaw_deg``, ``shift_m``) and ``relative_pose`` [x, y, yaw] of agent 2's body
     into agent 1's at that frame. Needs world1/world2/world_sigma on every non-empty frame.
     Deterministic; ``seed`` unused."""
@@ -190,7 +190,7 @@ def temporal_pose(
     prior_weight = check_range("prior_weight", prior_weight, 0.0, 1e6)
     hypotheses = check_count("hypotheses", hypotheses)
     max_iter = check_count("max_iter", max_iter)
-    margin = check_margin(margin)
+    margin = check_margin(margin) if window > 1 else 0.0  # W = 1: one frame, no memory
     max_offset_s = check_range("max_offset_s", max_offset_s, 0.0, 10.0)
     offsets = np.zeros(1)
     if max_offset_s > 0:

@@ -13,8 +13,9 @@ which both tracks have a detection:
 and frame t's matching is the shared discretisation (Hungarian, then ``threshold``) of
 S~_t[i, j] = A_{track1_t(i), track2_t(j)}; with ``margin`` > 0 (issue 61) a track pair keeps its
 partner unless another assignment scores more than ``margin`` above it
-(:mod:`matchers.temporal.partner_hold`, at every W, W = 1 included). Causal: frame t never looks past t. W = 1 with
-``margin`` 0 is the base matcher itself, bit for bit (tested). Vectorised: one scatter-add per frame of the window.
+(:mod:`matchers.temporal.partner_hold`; W >= 2 only: W = 1 stays one frame's evidence).
+Causal: frame t never looks past t. W = 1 is the base matcher itself, bit for bit, whatever
+``margin`` (tested). Vectorised: one scatter-add per frame of the window.
 ``windowed(base).over_windows(seq, windows, …)`` gives the matchings at several W from one run
 of the base matcher per frame (a table over W need not run it once per W).
 """
@@ -107,7 +108,7 @@ def windowed(base: str):
         return {w: _lift(per_frame, seq, w, reduce, threshold, margin) for w in windows}
 
     def _lift(per_frame, seq, window, reduce, threshold, margin) -> list[Matching]:
-        if window == 1 and margin == 0:
+        if window == 1:  # one frame: the base matcher itself, no hysteresis (no memory)
             return per_frame
         out, held = [], NO_LINKS
         for t in range(seq.num_frames):
