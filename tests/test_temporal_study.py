@@ -250,6 +250,9 @@ def test_every_method_gets_the_equal_budget_and_the_best_validation_f1_wins(stud
     # a prior reader under denied cannot run: not tuned, no candidates
     assert not ((tuning["preset"] == "denied") & (tuning["matcher"] == "temporal_pose")).any()
     assert "window" not in "".join(tuning["params"])  # W is the table's axis, never tuned
+    # the partner hysteresis has no memory at W = 1: its configurations read as without it
+    assert "margin" in "".join(tuning[tuning["window"] == 10]["params"])
+    assert "margin" not in "".join(tuning[tuning["window"] == 1]["params"])
     for (preset, method, window), rows in tuning.groupby(["preset", "matcher", "window"]):
         won = rows[rows["chosen"].astype(str) == "True"]
         assert len(won) == 1

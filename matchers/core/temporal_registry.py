@@ -77,7 +77,9 @@ def temporal_available() -> list[str]:
 def temporal_search_space(name: str) -> list[dict]:
     """The tuning grid of temporal matcher ``name`` (1 to 12 option dicts, ``{}`` = defaults):
     ``windowed:<base>`` searches ``<base>``'s two-view grid
-    (:func:`matchers.core.registry.search_space`), a built-in its entry in
+    (:func:`matchers.core.registry.search_space`) unless
+    :data:`~matchers.core.search_spaces.TEMPORAL_SEARCH_SPACES` names it (``windowed:pose_refine``:
+    with the partner hysteresis ``margin``, issue 61), a built-in its entry in
     :data:`~matchers.core.search_spaces.TEMPORAL_SEARCH_SPACES`, any other its callable's
     ``search_space`` attribute (none: ``[{}]``). ``window`` is never a grid option (it is the
     table's axis): a grid that sets it raises ValueError. Returns a fresh copy.
@@ -86,7 +88,9 @@ def temporal_search_space(name: str) -> list[dict]:
     8
     """
     prefix, _, rest = name.partition(":")
-    if prefix in _FAMILIES and rest:
+    if name in TEMPORAL_SEARCH_SPACES and name not in _registered:  # e.g. windowed:pose_refine
+        space = TEMPORAL_SEARCH_SPACES[name]
+    elif prefix in _FAMILIES and rest:
         from matchers.core.registry import search_space
 
         space = search_space(rest)

@@ -46,8 +46,8 @@ from matchers.blocks.rigid2d import biweight, procrustes_2d, rotation
 from matchers.core.discretise import canonical_scores
 from matchers.core.matching import Matching
 from matchers.core.options import check_count, check_range, rng_from_seed
-from matchers.core.result import finish
 from matchers.core.sequence_problem import SequenceProblem, ground_positions
+from matchers.temporal.partner_hold import NO_LINKS, check_margin, hold_partners
 from matchers.temporal.time_offset import compensated, offset_grid, track_velocities
 from matchers.temporal.track_motion import refine_motion
 from matchers.temporal.windowed import accumulate, check_sequence
@@ -164,6 +164,7 @@ def temporal_pose(
     max_offset_s: float = 0.0,
     offset_step_s: float = 0.05,
     interval_s: float | None = None,
+    margin: float = 0.0,
 ) -> list[Matching]:
     """One matching per frame (module docstring). Options: ``window`` (5 frames, causal),
     ``spread`` (2) and ``gate`` (8) of the candidate prior likelihood (multiples of
@@ -174,8 +175,10 @@ def temporal_pose(
     time_offset`): every offset 0, ``offset_step_s`` (0.05 s), … ≤ ``max_offset_s`` moves agent
     2's detections forward along its own tracks (``interval_s`` s between frames, else
     ``seq.meta["interval_s"]``), the window's motion is estimated for each, and the one with the
-    largest support wins (ties: the smaller offset); info ``time_offset_s``. Scores: the aligned likelihood accumulated along the own
-    tracks (absolute, [0, 1]). Info per frame: the window's motion of agent 2's frame-0 plane into
+    largest support wins (ties: the smaller offset); info ``time_offset_s``. ``margin`` (0: off;
+    score units; W >= 2 only): by how much another partner must out-score a track pair's
+    current one to take it (issue 61, :mod:`matchers.temporal.partner_hold`). Scores: the
+    aligned likelihood accumulated along the own tracks (absolute, [0, 1]). Info per frame: the window's motion of agent 2's frame-0 plane into
     agent 1's (``yaw_deg``, ``shift_m``) and ``relative_pose`` [x, y, yaw] of agent 2's body
     into agent 1's at that frame. Needs world1/world2/world_sigma on every non-empty frame.
     Deterministic; ``seed`` unused."""
@@ -187,6 +190,7 @@ def temporal_pose(
     prior_weight = check_range("prior_weight", prior_weight, 0.0, 1e6)
     hypotheses = check_count("hypotheses", hypotheses)
     max_iter = check_count("max_iter", max_iter)
+    margin = check_margin(margin) if window > 1 else 0.0  # W = 1: one frame, no memory
     max_offset_s = check_range("max_offset_s", max_offset_s, 0.0, 10.0)
     offsets = np.zeros(1)
     if max_offset_s > 0:
@@ -206,7 +210,7 @@ def temporal_pose(
                 "(world1/world2/world_sigma) on every frame"
             )
     q1, q2 = ground_positions(seq, 1), ground_positions(seq, 2)
-    out = []
+    out, held = [], NO_LINKS
     for t in range(seq.num_frames):
         started = time.perf_counter()
         lo = max(0, t - window + 1)
@@ -234,7 +238,11 @@ def temporal_pose(
             found, offset, here2 = tried[best]
         if found is None:
             scores = np.zeros((frame.n1, frame.n2))
-            out.append(finish("temporal_pose", scores, threshold, started, 0, {"window": window}))
+            done, held = hold_partners(
+                "temporal_pose", scores, threshold, started, seq.tracks1[t], seq.tracks2[t],
+                held, margin, 0, {"window": window},
+            )  # fmt: skip
+            out.append(done)
             continue
         (turn, move), info = found
         cut = gate * tighten
@@ -250,7 +258,11 @@ def temporal_pose(
         info |= {"window": window, "relative_pose": [float(at[0]), float(at[1]), float(yaw)]}
         if len(offsets) > 1:
             info["time_offset_s"] = offset
-        out.append(finish("temporal_pose", scores, threshold, started, info["rounds"], info))
+        done, held = hold_partners(
+            "temporal_pose", scores, threshold, started, seq.tracks1[t], seq.tracks2[t], held,
+            margin, info["rounds"], info,
+        )  # fmt: skip
+        out.append(done)
     return out
 
 

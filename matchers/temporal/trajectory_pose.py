@@ -54,8 +54,8 @@ from matchers.blocks.rigid2d import biweight, rotation
 from matchers.core.discretise import canonical_scores
 from matchers.core.matching import Matching
 from matchers.core.options import check_count, check_range, rng_from_seed
-from matchers.core.result import finish
 from matchers.core.sequence_problem import SequenceProblem, ground_positions
+from matchers.temporal.partner_hold import NO_LINKS, check_margin, hold_partners
 from matchers.temporal.temporal_pose import frame_prior
 from matchers.temporal.track_motion import refine_motion
 from matchers.temporal.windowed import accumulate, check_sequence
@@ -186,10 +186,12 @@ def _shortlist(yaw, shift, keep, yaw_bin, shift_bin):
 
 
 def estimate(
-    q1, q2, ids1, ids2, classes1, classes2, priors, sigma, options, rng
+    q1, q2, ids1, ids2, classes1, classes2, priors, sigma, options, rng, previous=None
 ) -> tuple[tuple[np.ndarray, np.ndarray], dict] | None:
     """The window's motion (R, t) of agent 2's frame-0 plane into agent 1's and its info
-    (module docstring); None when no hypothesis can be formed."""
+    (module docstring); None when no hypothesis can be formed. ``previous`` (yaw, shift): the
+    motion held from the frame before (issue 61), a hypothesis whose support gets ``margin`` per
+    detection of agent 1 in the window."""
     o = options
     cutoff, width, other_class = o["cutoff"], o["width"], o["other_class"]
     tr1 = _tracks(q1, ids1, classes1, o["interval_s"])
@@ -206,6 +208,9 @@ def estimate(
         yaw0 = float(np.arctan2(*np.sum([[r[1, 0], r[0, 0]] for _, (r, _) in used], axis=0)))
         shift0 = np.mean([m for _, (_, m) in used], axis=0)
         yaw, shift = np.r_[yaw0, yaw], np.r_[[shift0], shift]
+    held = previous is not None and o["margin"] > 0 and o["hold_motion"]
+    if held:
+        yaw, shift = np.r_[previous[0], yaw], np.r_[[previous[1]], shift]
     if not len(yaw):
         return None
     support = np.zeros(len(yaw))
@@ -224,6 +229,9 @@ def estimate(
             gap = np.linalg.norm(moved - anchors[None], axis=-1)
             like = np.exp(-(gap**2) / (4 * (o["spread"] * sigma) ** 2))
             support += o["prior_weight"] * like.mean(axis=1)
+    if held:  # the held motion keeps the window unless another beats it by margin per detection
+        seen = sum(len(x) for x, y in zip(q1, q2, strict=True) if len(y))
+        support[0] += o["margin"] * seen
     h = int(np.argmax(canonical_scores(support)))  # ties: the first hypothesis
     turn, move = rotation(float(yaw[h])), shift[h]
     # observations (s, i, j) for the refinement: every pair within 2 cutoffs of the winner
@@ -255,6 +263,7 @@ def estimate(
         "hypotheses": len(yaw),
         "moving_hypotheses": len(moving[0]),
         "support": float(support[h]),
+        "held_motion": bool(held and h == 0),
         "rounds": rounds,
         "yaw_deg": float(np.degrees(np.arctan2(turn[1, 0], turn[0, 0]))),
         "shift_m": [float(move[0]), float(move[1])],
@@ -279,6 +288,8 @@ def trajectory_pose(
     spread: float = 2.0,
     max_iter: int = 10,
     interval_s: float | None = None,
+    margin: float = 0.0,
+    hold_motion: bool = True,
 ) -> list[Matching]:
     """One matching per frame (module docstring). Options: ``window`` (5 frames, causal),
     ``cutoff`` (3 m: the support's biweight and the association's gate), ``width`` (1 m: the
@@ -287,15 +298,21 @@ def trajectory_pose(
     that many segment pairs, a random subset beyond), ``hypotheses`` (64 kept by the Hough vote), ``other_class`` (0.5: weight of a pair of different reported classes),
     ``prior_weight`` (0: off) and ``spread`` (2, × world_sigma) of the GNSS prior's soft term
     where there is one (on cad-v2x-seq's gnss-urban a weight of 1 pulled the motion off: median
-    error 6.6 m against 0.3 m without), ``max_iter`` (10) refinement rounds, ``interval_s`` (s between frames; else
-    ``seq.meta["interval_s"]``, else 0.2). Scores: the aligned likelihood accumulated along the
+    error 6.6 m against 0.3 m without), ``max_iter`` (10) refinement rounds, ``interval_s``
+    (s between frames; else ``seq.meta["interval_s"]``, else 0.2), ``margin`` (0: off; score
+    units; W >= 2 only): by how much another partner must out-score a track pair's current one
+    to take it (issue 61, :mod:`matchers.temporal.partner_hold`); with ``margin`` > 0 and ``hold_motion`` (True) the
+    window's motion is held the same way: the previous frame's motion is a hypothesis whose
+    support gets ``margin`` per detection of agent 1 in the window (a new motion must out-vote
+    it by that much). Scores: the aligned likelihood accumulated along the
     own tracks ([0, 1]). Info per frame: the window's motion (``yaw_deg``, ``shift_m``),
     ``relative_pose`` [x, y, yaw] of agent 2's body in agent 1's at that frame, ``prior``
     (whether a GNSS prior took part)."""
     check_sequence(seq)
     rng_from_seed(seed)
+    window = check_count("window", window)
     options = {
-        "window": check_count("window", window),
+        "window": window,
         "cutoff": check_range("cutoff", cutoff, 0.0, 1e6, open_low=True),
         "width": check_range("width", width, 0.0, 1e6, open_low=True),
         "min_speed": check_range("min_speed", min_speed, 0.0, 1e6, open_low=True),
@@ -306,6 +323,8 @@ def trajectory_pose(
         "prior_weight": check_range("prior_weight", prior_weight, 0.0, 1e6),
         "spread": check_range("spread", spread, 0.0, 1e6, open_low=True),
         "max_iter": check_count("max_iter", max_iter),
+        "margin": check_margin(margin) if window > 1 else 0.0,  # W = 1: one frame, no memory
+        "hold_motion": bool(hold_motion),
     }
     interval_s = seq.meta.get("interval_s", 0.2) if interval_s is None else interval_s
     options["interval_s"] = check_range("interval_s", interval_s, 0.0, 1e6, open_low=True)
@@ -317,7 +336,7 @@ def trajectory_pose(
         frame_prior(a, b, f) if f.world1 is not None and f.world_sigma is not None else None
         for a, b, f in zip(q1, q2, seq.frames, strict=True)
     ]
-    out = []
+    out, held, previous = [], NO_LINKS, None
     for t in range(seq.num_frames):
         started = time.perf_counter()
         lo = max(0, t - window + 1)
@@ -332,14 +351,16 @@ def trajectory_pose(
                 q1[here], q2[here], seq.tracks1[here], seq.tracks2[here],
                 [_labels(c, len(x)) for c, x in zip(classes1[here], q1[here], strict=True)],
                 [_labels(c, len(x)) for c, x in zip(classes2[here], q2[here], strict=True)],
-                priors[here], sigma, options, rng,
+                priors[here], sigma, options, rng, previous,
             )  # fmt: skip
         if found is None:
             scores = np.zeros((frame.n1, frame.n2))
             info = {"window": window, "prior": False}
-            out.append(finish("trajectory_pose", scores, threshold, started, 0, info))
+            done, held = _finish(seq, t, scores, threshold, started, held, options, 0, info)
+            out.append(done)
             continue
         (turn, move), info = found
+        previous = (float(np.arctan2(turn[1, 0], turn[0, 0])), np.asarray(move, dtype=float))
         aligned = []
         for s in range(t + 1):
             if s < lo or not (len(q1[s]) and len(q2[s])):
@@ -358,8 +379,18 @@ def trajectory_pose(
             "prior": options["prior_weight"] > 0 and any(p is not None for p in priors[here]),
             "relative_pose": [float(at[0]), float(at[1]), float(yaw)],
         }
-        out.append(finish("trajectory_pose", scores, threshold, started, info["rounds"], info))
+        rounds = info["rounds"]
+        done, held = _finish(seq, t, scores, threshold, started, held, options, rounds, info)
+        out.append(done)
     return out
+
+
+def _finish(seq, t, scores, threshold, started, held, options, rounds, info):
+    """Frame t's matching and the held links after it (:mod:`matchers.temporal.partner_hold`)."""
+    return hold_partners(
+        "trajectory_pose", scores, threshold, started, seq.tracks1[t], seq.tracks2[t], held,
+        options["margin"], rounds, info,
+    )  # fmt: skip
 
 
 def _labels(classes, count: int):

@@ -11,8 +11,11 @@ which both tracks have a detection:
                     scores higher; still in [0, 1])
 
 and frame t's matching is the shared discretisation (Hungarian, then ``threshold``) of
-S~_t[i, j] = A_{track1_t(i), track2_t(j)}. Causal: frame t never looks past t. W = 1 is the
-base matcher itself, bit for bit (tested). Vectorised: one scatter-add per frame of the window.
+S~_t[i, j] = A_{track1_t(i), track2_t(j)}; with ``margin`` > 0 (issue 61) a track pair keeps its
+partner unless another assignment scores more than ``margin`` above it
+(:mod:`matchers.temporal.partner_hold`; W >= 2 only: W = 1 stays one frame's evidence).
+Causal: frame t never looks past t. W = 1 is the base matcher itself, bit for bit, whatever
+``margin`` (tested). Vectorised: one scatter-add per frame of the window.
 ``windowed(base).over_windows(seq, windows, …)`` gives the matchings at several W from one run
 of the base matcher per frame (a table over W need not run it once per W).
 """
@@ -26,8 +29,8 @@ import numpy as np
 
 from matchers.core.matching import Matching
 from matchers.core.options import check_count, rng_from_seed
-from matchers.core.result import finish
 from matchers.core.sequence_problem import SequenceProblem
+from matchers.temporal.partner_hold import NO_LINKS, check_margin, hold_partners
 
 REDUCTIONS = ("mean", "sum")
 
@@ -87,30 +90,35 @@ def windowed(base: str):
         threshold: float | None = None,
         *,
         reduce: str = "mean",
+        margin: float = 0.0,
         **options,
     ) -> dict[int, list[Matching]]:
-        """{W: ``lifted(seq, seed, threshold, window=W, reduce=reduce, **options)``} for every
-        W of ``windows``, the base matcher run once per frame for all of them (the same
-        matchings as one call per W: the base does not depend on W)."""
+        """{W: ``lifted(seq, seed, threshold, window=W, reduce=reduce, margin=margin,
+        **options)``} for every W of ``windows``, the base matcher run once per frame for all
+        of them (the same matchings as one call per W: the base does not depend on W)."""
         check_sequence(seq)
         rng_from_seed(seed)
         windows = [check_count("window", w) for w in windows]
         if reduce not in REDUCTIONS:
             raise ValueError(f"reduce: expected one of {REDUCTIONS}, got {reduce!r}")
+        margin = check_margin(margin)
         per_frame = [
             matcher(frame, seed=seed, threshold=threshold, **options) for frame in seq.frames
         ]
-        return {w: _lift(per_frame, seq, w, reduce, threshold) for w in windows}
+        return {w: _lift(per_frame, seq, w, reduce, threshold, margin) for w in windows}
 
-    def _lift(per_frame, seq, window, reduce, threshold) -> list[Matching]:
-        if window == 1:
+    def _lift(per_frame, seq, window, reduce, threshold, margin) -> list[Matching]:
+        if window == 1:  # one frame: the base matcher itself, no hysteresis (no memory)
             return per_frame
-        out = []
+        out, held = [], NO_LINKS
         for t in range(seq.num_frames):
             start = time.perf_counter()
             scores = accumulate(seq, [m.scores for m in per_frame], t, window, reduce)
             info = {"window": window, "reduce": reduce, "base": per_frame[t].info}
-            done = finish(name, scores, threshold, start, per_frame[t].iterations, info)
+            done, held = hold_partners(
+                name, scores, threshold, start, seq.tracks1[t], seq.tracks2[t], held, margin,
+                per_frame[t].iterations, info,
+            )  # fmt: skip
             done.time_s += per_frame[t].time_s
             out.append(done)
         return out
@@ -122,10 +130,13 @@ def windowed(base: str):
         *,
         window: int = 5,
         reduce: str = "mean",
+        margin: float = 0.0,
         **options,
     ) -> list[Matching]:
         window = check_count("window", window)
-        return over_windows(seq, [window], seed, threshold, reduce=reduce, **options)[window]
+        return over_windows(
+            seq, [window], seed, threshold, reduce=reduce, margin=margin, **options
+        )[window]
 
     lifted.__name__ = lifted.__qualname__ = name
     lifted.requires = frozenset(getattr(matcher, "requires", ()))

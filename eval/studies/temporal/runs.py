@@ -125,8 +125,11 @@ def tune_windows(
             tau, val_f1 = calibrate_tau([(item, found[w][0]) for item, found in runs])
             if declares_nothing:
                 tau = float("nan")  # declares nothing: no τ to calibrate
-            spec = MatcherSpec.of(method, **config)
-            candidates[w].append(Candidate(spec, dict(config), val_f1, tau))
+            # the partner hysteresis (``margin``) has no memory to keep at W = 1 (the matchers
+            # ignore it there): such a configuration is reported as the one without it
+            shown = {k: v for k, v in config.items() if not (w == 1 and k == "margin")}
+            spec = MatcherSpec.of(method, **shown)
+            candidates[w].append(Candidate(spec, shown, val_f1, tau))
     return {
         w: TuningChoice(f"{LABEL} {preset} W={w}", method, tuple(c), best_candidate(c))
         for w, c in candidates.items()
