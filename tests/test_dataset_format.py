@@ -216,6 +216,45 @@ def test_reader_errors_name_the_problem(small_dataset, tmp_path):
         Dataset(copy)
 
 
+def test_a_verified_dataset_is_not_read_again_by_the_next_process_unless_a_file_changed(
+    small_dataset, tmp_path, monkeypatch
+):
+    """The verification stamp (cadsim.dataset.verified_stamps) stands in for a full verify in a
+    later process only while every file is as it was; a rewritten record is checked again."""
+    import shutil
+
+    from cadsim.dataset import reader
+
+    monkeypatch.setenv("CADSIM_CACHE_DIR", str(tmp_path / "cache"))
+    copy = tmp_path / "copy"
+    shutil.copytree(small_dataset, copy)
+    calls = []
+    real = reader.Dataset.verify
+    monkeypatch.setattr(reader.Dataset, "verify", lambda self: calls.append(1) or real(self))
+    Dataset(copy, verify=True)
+    assert len(calls) == 1 and list((tmp_path / "cache" / "verified").glob("*.json"))
+    reader._VERIFIED.clear()  # a new process: only the stamp remembers
+    Dataset(copy, verify=True)
+    assert len(calls) == 1
+    manifest = json.loads((copy / "manifest.json").read_text())
+    (copy / "pairs" / manifest["records"][2]["name"] / "view1.png").write_bytes(b"tampered")
+    reader._VERIFIED.clear()
+    with pytest.raises(DatasetError, match="checksum mismatch"):
+        Dataset(copy, verify=True)
+    assert len(calls) == 2
+
+
+def test_a_fresh_generation_counts_as_verified(tmp_path, monkeypatch):
+    from cadsim.dataset import reader
+
+    monkeypatch.setenv("CADSIM_CACHE_DIR", str(tmp_path / "cache"))
+    out = tmp_path / "fresh"
+    generate_dataset(FakeScenario(), out, pairs=2, workers=1, stages=FAKE_STAGES, progress=False)
+    monkeypatch.setattr(reader.Dataset, "verify", lambda self: pytest.fail("read again"))
+    reader._VERIFIED.clear()
+    Dataset(out, verify=True)  # the generator's stamp: its records were checksummed as written
+
+
 _BLOCKER = """
 import importlib.abc, sys
 BLOCKED = {"libsumo", "traci", "sumolib", "sumo", "pyrender", "OpenGL"}

@@ -22,6 +22,7 @@ from cadsim.dataset.multi_view import SnapshotViews
 from cadsim.dataset.sensor_view import check_sensor, dataset_sensor, sensor_pair
 from cadsim.dataset.sequence_check import check_sequences
 from cadsim.dataset.verification import RecordLayout, record_layout, verify_record
+from cadsim.dataset.verified_stamps import stamp, stamped
 
 __all__ = ["Dataset", "FramePair"]  # FramePair: defined in cadsim.dataset.frame_pair
 
@@ -183,15 +184,25 @@ class Dataset(Sequence[FramePair]):
         return h.hexdigest()
 
     def verify_once(self) -> None:
-        """:meth:`verify`, unless this process already verified the same files (same manifest
-        checksum, and no file rewritten or added since: see ``_file_signature``). Costs one stat per
-        file when it skips; a full read and SHA-256 of every record when it does not."""
+        """:meth:`verify`, unless the same files were already verified — by this process or an
+        earlier one (same manifest checksum, and no file rewritten or added since: see
+        ``_file_signature`` and :mod:`cadsim.dataset.verified_stamps`). Costs one stat per file
+        when it skips; a full read and SHA-256 of every record when it does not."""
         key = str(self.path.resolve())
         signature = (self.checksum, self._file_signature())
         if _VERIFIED.get(key) == signature:
             return
-        self.verify()
+        if not stamped(self.path, signature):
+            self.verify()
+            stamp(self.path, signature)
         _VERIFIED[key] = signature
+
+    def mark_verified(self) -> None:
+        """Record the files as they are now as verified, without reading them: for the process
+        that has just written and checksummed every record (a fresh generation)."""
+        signature = (self.checksum, self._file_signature())
+        stamp(self.path, signature)
+        _VERIFIED[str(self.path.resolve())] = signature
 
     def verify_record(self, index: int) -> None:
         """Verify record ``index`` (dataset order) — its checksum and every view's contents

@@ -1008,6 +1008,10 @@ def _generate(
         render_seconds=sum(r.render_seconds for r in results),
         episode_results=sorted(results, key=lambda r: r.episode),
     )
+    if res.new_records == res.pairs:  # every record written and checksummed just now
+        from cadsim.dataset import Dataset
+
+        Dataset(out).mark_verified()
     log.debug(  # the caller reports the result (the CLI prints it once)
         "%s: %d pairs (%d new) from %d episode(s) in %.1f s; checksum %s",
         out, res.pairs, res.new_records, res.episodes, res.seconds, res.checksum[:12],
