@@ -132,8 +132,15 @@ def matched_pose_error(
     """(RTE, RRE) of the transform fitted to the declared matches ``pairs`` ((k, 2) int (i, j))
     between view 2's ``points2`` and view 1's ``points1``; (nan, nan) for a failed fit."""
     pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
-    fit = rigid_fit(np.asarray(points2)[pairs[:, 1]], np.asarray(points1)[pairs[:, 0]])
-    return pose_error(fit, truth)
+    src, dst = np.asarray(points2)[pairs[:, 1]], np.asarray(points1)[pairs[:, 0]]
+    key = b"6dof" + _content_key(src, dst, truth)
+    found = _PLANAR_MEMO.get(key)
+    if found is None:
+        found = pose_error(rigid_fit(src, dst), truth)
+        if len(_PLANAR_MEMO) >= _PLANAR_MEMO_LIMIT:
+            _PLANAR_MEMO.clear()
+        _PLANAR_MEMO[key] = found
+    return found
 
 
 def match_scales(src: np.ndarray, dst: np.ndarray) -> np.ndarray:
@@ -287,7 +294,7 @@ def planar_fit(
 
 _PLANAR_MEMO: dict[bytes, tuple[float, float]] = {}
 _PLANAR_MEMO_LIMIT = 200_000
-"""Planar fits remembered per process, by the content of their inputs: the oracle's fit (the
+"""Planar (and 6-DoF) fits remembered per process, by the content of their inputs: the oracle's fit (the
 true matches) is the same for every matcher of a frame pair, and matchers that declare the
 same matches share theirs — each is fitted once. Cleared when full."""
 
