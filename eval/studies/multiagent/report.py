@@ -86,6 +86,8 @@ def goal_items(table: pd.DataFrame, stage_s: float | None = None) -> list[Claim 
             lines.append(gain_goal.not_shown(why, study="multiagent", subject=goal, source=SOURCE))
         else:
             p_holm = best.get("gain_p_holm", np.nan)
+            mdd = float(best.get("gain_mdd", np.nan))
+            mdd_text = f"; MDD {100 * mdd:.1f} points" if np.isfinite(mdd) else ""
             lines.append(
                 gain_goal.claim(
                     best,
@@ -95,7 +97,8 @@ def goal_items(table: pd.DataFrame, stage_s: float | None = None) -> list[Claim 
                     detail=f"{best.matcher} + {best.fusion}, N = {best.n_agents}, {best.preset}: "
                     f"the largest gain on the validation snapshots ({100 * best.val_f1_gain:+.1f} "
                     "points), scored on test with its 95 % episode-bootstrap interval; Holm-"
-                    f"adjusted p over the table's {gain_family(table)} gains {p_holm:.3f}",
+                    f"adjusted p over the table's {gain_family(table)} gains {p_holm:.3f}"
+                    + mdd_text,
                 )
             )
     high = table["n_agents"].max()
