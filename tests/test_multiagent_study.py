@@ -231,6 +231,16 @@ def test_the_gain_carries_the_shared_mdd_of_its_linearised_differences():
     assert np.isnan(table.loc["independent", "gain_mdd"])  # the baseline has no gain
 
 
+def test_the_mdd_of_a_split_does_not_depend_on_the_rows_around_it():
+    test = four_episode_rows()
+    val = [r | {"split": "val", "true_positives": 1} for r in test]
+    mixed = [row for pair in zip(val, test, strict=True) for row in pair]  # interleaved
+    alone = ma.multiagent_table(pd.DataFrame(test), resamples=200)
+    within = ma.multiagent_table(pd.DataFrame(mixed), resamples=200)
+    assert np.isfinite(alone["gain_mdd"]).any()
+    np.testing.assert_array_equal(alone["gain_mdd"], within["gain_mdd"])
+
+
 def test_the_markdown_and_the_gain_goal_state_the_mdd():
     frame = pd.DataFrame(four_episode_rows())
     table = ma.multiagent_table(frame, resamples=200)

@@ -126,7 +126,7 @@ def linearised_f1(split: pd.DataFrame) -> np.ndarray:
     declared or true."""
     size = (split["declared"] + split["true_pairs"]).to_numpy(float)
     tp = split["true_positives"].to_numpy(float)
-    keys = [split[c] for c in BY]
+    keys = [split[c].to_numpy() for c in BY]  # by position: ``split`` may be any slice
     frame = pd.DataFrame({"tp": tp, "size": size})
     grouped = frame.groupby(keys, sort=False)
     total = grouped["size"].transform("sum").to_numpy()
