@@ -27,9 +27,9 @@ def to_markdown(table: pd.DataFrame, label: str) -> str:
         "clustering in percent; F1 gain: pooled F1 minus `independent`'s (same matcher, preset "
         "and N), in points, with its two-sided episode-bootstrap p Holm-adjusted over the "
         f"table's {m} gains (family-wise: a gain is shown at the 5 % level when its adjusted p "
-        "≤ 0.05); MDD: the gain's minimum detectable difference in points (95 % two-sided, 80 % "
-        "power, from its cluster-robust standard error over episodes: a smaller true gain the data "
-        "could easily miss); cycle violations: an invariant, 0 for every fused output by construction — "
+        "≤ 0.05); MDD: the minimum detectable difference from `independent` in points, the "
+        "smallest true difference a two-sided 5 % test detects with 80 % power, from the "
+        "cluster-robust standard error over episodes; cycle violations: an invariant, 0 for every fused output by construction — "
         "only `independent`'s raw pairs have any; time in ms per snapshot",
         "",
         f"| Preset | N | Matcher | Fusion | F1 pooled | F1 gain (Holm-adjusted p, m = {m}) "
