@@ -255,3 +255,17 @@ def test_the_markdown_and_the_gain_goal_state_the_mdd():
     with_val = table.assign(val_f1_gain=table["f1_gain"].fillna(0.0), val_f1_pooled=0.5)
     gain_line = next(line for line in mar.goals(with_val) if "raises pooled F1" in line)
     assert f"MDD {mdd:.1f} points" in gain_line
+
+
+def test_the_mdd_column_and_line_add_no_unbacked_comparison():
+    from eval.claims.coverage import unbacked
+    from eval.protocol.claims import claims_in
+
+    table = ma.multiagent_table(pd.DataFrame(four_episode_rows()), resamples=200)
+    table = table.assign(val_f1_gain=table["f1_gain"].fillna(0.0), val_f1_pooled=0.5)
+    items = mar.goal_items(table)
+    claims = pd.DataFrame([vars(c) for c in claims_in(items)])
+    # the definitions name the full table's family size (84); this one has 1 gain
+    markdown = ma.to_markdown(table, "X").replace("table's 1 gains", "table's 84 gains")
+    text = markdown + "\n" + "\n".join(mar.goals(table))
+    assert "MDD" in text and unbacked(text, claims) == []
