@@ -18,6 +18,7 @@ process.
 
 from __future__ import annotations
 
+import threading
 from collections import OrderedDict
 from typing import Any
 
@@ -26,26 +27,30 @@ SNAPSHOTS = 256
 ``cad-multi``) with room, so that a scan over them in index order does not evict itself."""
 
 _kept: OrderedDict[tuple, Any] = OrderedDict()
+_lock = threading.Lock()  # a Dask worker may run tasks on several threads
 
 
 def snapshot(dataset: Any, dataset_dir: str, checksum: str, sensor: str | None, k: int) -> Any:
     """``dataset.snapshot(k)``, read once per process for each (``dataset_dir``, ``checksum``,
     ``sensor``, ``k``); the least recently used is dropped beyond :data:`SNAPSHOTS`."""
     key = (str(dataset_dir), checksum, sensor, int(k))
-    kept = _kept.get(key)
-    if kept is not None:
-        _kept.move_to_end(key)
-        return kept
-    kept = dataset.snapshot(k)
-    _kept[key] = kept
-    while len(_kept) > SNAPSHOTS:
-        _kept.popitem(last=False)
+    with _lock:
+        kept = _kept.get(key)
+        if kept is not None:
+            _kept.move_to_end(key)
+            return kept
+    kept = dataset.snapshot(k)  # outside the lock: two threads may both read it, once
+    with _lock:
+        _kept[key] = kept
+        while len(_kept) > SNAPSHOTS:
+            _kept.popitem(last=False)
     return kept
 
 
 def forget() -> None:
     """Drop every kept snapshot."""
-    _kept.clear()
+    with _lock:
+        _kept.clear()
 
 
 __all__ = ["SNAPSHOTS", "forget", "snapshot"]
