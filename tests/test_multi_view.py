@@ -85,6 +85,53 @@ def test_pair_i_j_is_the_two_view_problem_of_those_views(multi):
         snap.pair(1, 7)
 
 
+def test_view_pair_tasks_read_each_snapshot_once_per_process_and_give_the_same_bits(
+    multi, monkeypatch
+):
+    """eval.core.snapshot_memo: the view-pair tasks of one process share each snapshot's
+    reading; every outcome is the one a fresh reading gives."""
+    from eval.core import snapshot_memo
+    from eval.core.tasks import MatcherSpec, RunTask, execute
+
+    checksum = Dataset(multi).checksum
+    matchers = (MatcherSpec("maximin"), MatcherSpec("pose_refine"))
+
+    def runs():
+        return [
+            execute(
+                RunTask(
+                    str(multi),
+                    checksum,
+                    0,
+                    (None,),
+                    matchers,
+                    "t",
+                    views=views,
+                    localisation="gnss-urban",
+                )
+            )  # fmt: skip
+            for views in ((1, 2), (2, 5), (5, 6))
+        ]
+
+    reads = []
+    original = Dataset.snapshot
+    monkeypatch.setattr(Dataset, "snapshot", lambda ds, k: reads.append(k) or original(ds, k))
+    snapshot_memo.forget()
+    shared = runs()
+    assert sorted(reads) == [0, 1]  # 3 tasks, each snapshot read once
+    monkeypatch.setattr(snapshot_memo, "snapshot", lambda ds, _d, _c, _s, k: ds.snapshot(k))
+    fresh = runs()
+    assert len(reads) == 2 + 3 * 2
+    for task_a, task_b in zip(shared, fresh, strict=True):
+        for a, b in zip(task_a, task_b, strict=True):
+            assert a.spec == b.spec and len(a.outcomes) == 2
+            for x, y in zip(a.outcomes, b.outcomes, strict=True):
+                assert (x.name, x.n1, x.n2) == (y.name, y.n1, y.n2)
+                for field in ("assigned", "scores", "gt_pairs", "points1", "points2", "prior_pose"):  # fmt: skip
+                    assert np.array_equal(getattr(x, field), getattr(y, field)), field
+    snapshot_memo.forget()
+
+
 def test_a_roadside_units_pose_is_exact_and_a_vehicles_is_not(multi):
     snap = Dataset(multi).snapshot(0)
     pair = snap.pair(1, 5).localise_preset("gnss-urban", seed=0)

@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from eval.core import snapshot_memo
 from eval.core.thinning import thin_pair
 
 
@@ -318,7 +319,13 @@ def execute(task: RunTask) -> list[RunResult]:
     count = len(dataset) if task.limit is None else min(task.limit, len(dataset))
     token = task.token
     for k in range(count):
-        pair = dataset[k] if task.views is None else dataset.snapshot(k).pair(*task.views)
+        if task.views is None:
+            pair = dataset[k]
+        else:  # read once per process for every view-pair task (eval.core.snapshot_memo)
+            views = snapshot_memo.snapshot(
+                dataset, task.dataset_dir, task.dataset_checksum, task.sensor, k
+            )
+            pair = views.pair(*task.views)
         if task.noise_rates == (None,):
             variants = [pair]
         else:  # the pair re-detected at every rate: one plan and one noise field per view

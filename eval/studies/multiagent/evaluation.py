@@ -19,7 +19,9 @@ preset, N) — pooled over every view pair of every snapshot and run, the same n
 ``f1_pooled`` column — with a 95 % episode-bootstrap percentile interval (episodes and runs
 resampled, :mod:`eval.protocol.pooled_bootstrap`), the two-sided bootstrap p (``gain_p``) and
 that p Holm-adjusted over every gain of the table (``gain_p_holm``, family size
-``gain_family``; :mod:`eval.protocol.holm`). ``count_error_ci_*``: the count error's episode-
+``gain_family``; :mod:`eval.protocol.holm`); ``gain_mdd``: its minimum detectable difference
+(95 %, 80 % power) from its cluster-robust standard error over episodes
+(:func:`eval.studies.multiagent.gains.gain_mdds`). ``count_error_ci_*``: the count error's episode-
 bootstrap interval. ``time_ratio``: ms per snapshot over that of the same matcher, fusion and
 preset at the smallest N, with its interval. The cycle-violation rate is 0 for every fused
 output by construction: the report checks it as an invariant, not as a goal.
@@ -97,10 +99,10 @@ COLUMNS = (
     "recall_pooled",
     "cluster_precision",
     "cluster_recall",
-    *INTERVAL_COLUMNS[:3],
+    *INTERVAL_COLUMNS[:4],
     "snapshots",
     "runs",
-    *INTERVAL_COLUMNS[3:],
+    *INTERVAL_COLUMNS[4:],
     "val_f1_pooled",
     "val_count_error",
     "val_f1_gain",

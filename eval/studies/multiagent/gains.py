@@ -1,14 +1,19 @@
 """The multi-agent study's own statistics: per (N, matcher, fusion, preset) the pooled-F1 gain of
 a fusion over ``independent`` with its episode-bootstrap interval, two-sided p and Holm-adjusted
 p over every gain of the table, the count error's interval and the time ratio to the smallest N
-(:mod:`eval.protocol.pooled_bootstrap`, :mod:`eval.protocol.holm`). Imports ``eval/protocol/``
-only."""
+(:mod:`eval.protocol.pooled_bootstrap`, :mod:`eval.protocol.holm`); beside each gain its minimum
+detectable difference (``gain_mdd``: 95 % two-sided, 80 % power) from the gain's cluster-robust
+standard error over episodes, the pooled F1 linearised per snapshot and run (delta method,
+:func:`linearised_f1`) and handed to the project's one MDD
+(:func:`eval.protocol.detectable_difference.minimum_detectable_difference`). Imports
+``eval/protocol/`` only."""
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
 
+from eval.protocol.detectable_difference import minimum_detectable_difference
 from eval.protocol.holm import holm
 from eval.protocol.multiway_metrics import count_errors
 from eval.protocol.pooled_bootstrap import (
@@ -29,6 +34,7 @@ INTERVAL_COLUMNS = (
     "f1_gain",
     "gain_ci_low",
     "gain_ci_high",
+    "gain_mdd",
     "gain_p",
     "gain_p_holm",
     "gain_family",
@@ -98,6 +104,7 @@ def gain_intervals(split: pd.DataFrame, resamples: int, seed: int, level: float)
         out["gain_ci_low"][rows], out["gain_ci_high"][rows] = gain.low, gain.high
         out["gain_p_holm"][rows] = holm(gain.p)
         out["gain_family"][rows] = np.count_nonzero(np.isfinite(gain.p))
+        out["gain_mdd"] = gain_mdds(split, groups)
     low_rows = _smallest_n_rows(groups)
     seconds = mean_of(sums, "seconds", "_one")
     out["time_ratio"] = _divide(seconds, seconds[low_rows])
@@ -109,6 +116,45 @@ def gain_intervals(split: pd.DataFrame, resamples: int, seed: int, level: float)
     ratio = _divide(seconds, seconds[:, low_rows])
     out["time_ratio_ci_low"], out["time_ratio_ci_high"] = interval(ratio, level)
     return groups.assign(**out)
+
+
+def linearised_f1(split: pd.DataFrame) -> np.ndarray:
+    """Per row of ``split`` (one snapshot of one run), its linearised share of its group's
+    (:data:`BY`) pooled F1 F = 2 ΣTP / (Σ declared + Σ true pairs): F + n · (2 tp − F · s) / Σ s
+    with s = declared + true pairs and n the group's rows (delta method). Its mean over the group
+    is F; its cluster-robust variance is F's delta-method variance. NaN in a group with no pair
+    declared or true."""
+    size = (split["declared"] + split["true_pairs"]).to_numpy(float)
+    tp = split["true_positives"].to_numpy(float)
+    keys = [split[c].to_numpy() for c in BY]  # by position: ``split`` may be any slice
+    frame = pd.DataFrame({"tp": tp, "size": size})
+    grouped = frame.groupby(keys, sort=False)
+    total = grouped["size"].transform("sum").to_numpy()
+    count = grouped["size"].transform("size").to_numpy(float)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        f1 = 2 * grouped["tp"].transform("sum").to_numpy() / total
+        return np.where(total > 0, f1 + count * (2 * tp - f1 * size) / total, np.nan)
+
+
+def gain_mdds(split: pd.DataFrame, groups: pd.DataFrame) -> np.ndarray:
+    """Per row of ``groups`` (key columns :data:`BY`), the MDD of its pooled-F1 gain over
+    ``independent``: :func:`minimum_detectable_difference` of the per-snapshot-and-run
+    differences of :func:`linearised_f1` (fused − ``independent``, the same snapshot and run;
+    their mean is the gain), clustered by episode. NaN for ``independent``'s rows, a row without
+    its baseline, or fewer than two episodes."""
+    item = ["n_agents", "matcher", "preset", "snapshot", "seed"]
+    terms = split[[*BY, "snapshot", "seed", "episode"]].assign(_term=linearised_f1(split))
+    base = terms.loc[terms["fusion"] == BASELINE, [*item, "_term"]]
+    paired = terms[terms["fusion"] != BASELINE].merge(
+        base, on=item, suffixes=("", "_base"), validate="many_to_one"
+    )
+    paired["_diff"] = paired["_term"] - paired["_term_base"]
+    mdd = {}
+    for key, rows in paired.groupby(BY, sort=False):
+        mdd[key] = minimum_detectable_difference(
+            rows["_diff"].to_numpy(), rows["episode"].to_numpy()
+        )[0]
+    return np.array([mdd.get(tuple(key), np.nan) for key in groups[BY].itertuples(index=False)])
 
 
 def _smallest_n_rows(groups: pd.DataFrame) -> np.ndarray:
@@ -123,4 +169,12 @@ def _divide(num: np.ndarray, den: np.ndarray) -> np.ndarray:
         return num / den
 
 
-__all__ = ["BASELINE", "BY", "INTERVAL_COLUMNS", "gain_intervals", "point_gains"]
+__all__ = [
+    "BASELINE",
+    "BY",
+    "INTERVAL_COLUMNS",
+    "gain_intervals",
+    "gain_mdds",
+    "linearised_f1",
+    "point_gains",
+]

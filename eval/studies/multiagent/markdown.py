@@ -1,6 +1,6 @@
 """The multi-agent table's Markdown (``table_multiagent.md``): one row per (preset, N, matcher,
-fusion), pooled F1, the gain over ``independent`` with its Holm-adjusted p, the count error with
-its interval. Rendering only; imports no study module but the study's own statistics."""
+fusion), pooled F1, the gain over ``independent`` with its Holm-adjusted p and its minimum
+detectable difference, the count error with its interval. Rendering only; imports no study module but the study's own statistics."""
 
 from __future__ import annotations
 
@@ -27,19 +27,21 @@ def to_markdown(table: pd.DataFrame, label: str) -> str:
         "clustering in percent; F1 gain: pooled F1 minus `independent`'s (same matcher, preset "
         "and N), in points, with its two-sided episode-bootstrap p Holm-adjusted over the "
         f"table's {m} gains (family-wise: a gain is shown at the 5 % level when its adjusted p "
-        "≤ 0.05); cycle violations: an invariant, 0 for every fused output by construction — "
+        "≤ 0.05); MDD: the minimum detectable difference from `independent` in points, the "
+        "smallest true difference a two-sided 5 % test detects with 80 % power, from the "
+        "cluster-robust standard error over episodes; cycle violations: an invariant, 0 for every fused output by construction — "
         "only `independent`'s raw pairs have any; time in ms per snapshot",
         "",
         f"| Preset | N | Matcher | Fusion | F1 pooled | F1 gain (Holm-adjusted p, m = {m}) "
-        "| cycle violations | count error [95 % CI] | cluster P / R | ms / snapshot |",
-        "|:---|---:|:---|:---|---:|---:|---:|---:|---:|---:|",
+        "| MDD | cycle violations | count error [95 % CI] | cluster P / R | ms / snapshot |",
+        "|:---|---:|:---|:---|---:|---:|---:|---:|---:|---:|---:|",
     ]
     ordered = table.sort_values(["preset", "n_agents", "matcher"], kind="stable")
     for row in ordered.itertuples(index=False):
         if cannot_run(row.matcher, row.preset):
             lines.append(
                 f"| {row.preset} | {row.n_agents} | {row.matcher} | {row.fusion} | {NO_NUMBER} "
-                "| n/a | n/a | n/a | n/a | n/a |"
+                "| n/a | n/a | n/a | n/a | n/a | n/a |"
             )
             continue
         p_holm = getattr(row, "gain_p_holm", np.nan)
@@ -48,6 +50,8 @@ def to_markdown(table: pd.DataFrame, label: str) -> str:
             if row.fusion == BASELINE or not np.isfinite(row.f1_gain)
             else f"{100 * row.f1_gain:+.1f}" + (f" (p {p_holm:.3f})" if np.isfinite(p_holm) else "")
         )
+        mdd = getattr(row, "gain_mdd", np.nan)  # absent from files written before it
+        mdd_cell = "–" if row.fusion == BASELINE else cell(mdd)
         low = getattr(row, "count_error_ci_low", np.nan)
         high = getattr(row, "count_error_ci_high", np.nan)
         count = cell(row.count_error) + (
@@ -55,7 +59,7 @@ def to_markdown(table: pd.DataFrame, label: str) -> str:
         )
         lines.append(
             f"| {row.preset} | {row.n_agents} | {row.matcher} | {row.fusion} "
-            f"| {cell(row.f1_pooled)} | {gain} | {cell(row.cycle_violation_rate)} "
+            f"| {cell(row.f1_pooled)} | {gain} | {mdd_cell} | {cell(row.cycle_violation_rate)} "
             f"| {count} | {cell(row.cluster_precision)} / "
             f"{cell(row.cluster_recall)} | {row.ms_per_snapshot:.1f} |"
         )
