@@ -85,8 +85,12 @@ format: venv
 
 # SCALE=k multiplies every split size (pairs, sequences, snapshots of every study) by k:
 # `make reproduce SCALE=2`; unset, the default sizes.
+# One BLAS/OpenMP thread in the parent too: it scores, fits and fuses while the worker processes
+# (one thread each) use every core; a multi-threaded eigh there only fights them (docs/multi-agent.md).
+ONE_THREAD := OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1
+
 reproduce: venv
-	$(PY) -m eval.reproduce $(if $(SCALE),--scale $(SCALE))
+	$(ONE_THREAD) $(PY) -m eval.reproduce $(if $(SCALE),--scale $(SCALE))
 
 # The report (results/README.md, results/index.html) and the README's results section, written
 # again from the files in results/: nothing is recomputed.
