@@ -13,6 +13,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
+from eval.core import pose_fit_store
 from eval.core.cache import ResultCache
 from eval.core.executor import make_executor
 from eval.core.runner import Runner
@@ -147,12 +148,15 @@ def walk(stages: Sequence[Stage], state: RunState, timer: StageTimer) -> dict[st
                 state.runner = Runner(
                     ResultCache(args.cache), state.executor, progress=state.progress
                 )
+                pose_fit_store.load(args.cache)  # the fits earlier runs made (speed-up only)
             before = asdict(state.runner.totals) if stage.counts_runs else {}
             with timer.stage(stage.name):
                 for name in stage.stale:
                     (state.out / name).unlink(missing_ok=True)
                 if not skipped(state.args, stage):
                     stage.run(state)
+            if state.runner is not None:
+                pose_fit_store.save(state.args.cache)
             if stage.counts_runs:
                 now = asdict(state.runner.totals)
                 runs[stage.name] = {k: v - before.get(k, 0) for k, v in now.items()}
