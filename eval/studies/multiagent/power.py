@@ -28,7 +28,7 @@ def gain_rows(results: Path) -> list[dict]:
         clusters, items = int(test["episode"].nunique()), int(test["snapshot"].nunique())
     else:
         clusters = int(best.snapshots)
-    comparison = f"pooled-F1 gain over {BASELINE}: {best.matcher} + {best.fusion}, N = {best.n_agents}"  # fmt: skip
+    comparison = f"pooled F1, fused − {BASELINE}: {best.matcher} + {best.fusion}, N = {best.n_agents}"  # fmt: skip
     return [
         interval_row(
             "multiagent",
