@@ -51,7 +51,7 @@ from eval.report.run_part import (
 )
 from eval.report.site import headings, write_site
 from eval.report.summary_captions import SUMMARIES
-from eval.studies import studies
+from eval.studies import power_checks, studies
 
 BEGIN, END = "<!-- results:begin -->", "<!-- results:end -->"
 __all__ = [
@@ -164,7 +164,7 @@ def write_report(results: Path) -> tuple[Path, Path]:
     rendered from those claims and the folder's files."""
     results = Path(results)
     try:
-        power = write_power_analysis(results)
+        power = write_power_analysis(results, power_checks())
         if power is not None:  # shown in full in the report's appendix
             write_text(results / POWER_TABLE, power_markdown(read_csv(power)))
     except Exception as error:  # a file format this code does not read: the report goes on

@@ -60,5 +60,6 @@ def test_a_failed_fit_counts_as_unsuccessful():
 )
 def test_no_matcher_is_above_the_oracle_beyond_its_interval_in_the_committed_tables(path):
     table = oracle_ceiling(pd.read_csv(path))
-    assert len(table) >= 10
+    # a common-region folder holds the sensor comparison's validation-chosen matchers only
+    assert len(table) >= (1 if path.parent.name.endswith("_common") else 10)
     assert (table["verdict"] != "above").all(), table[table["verdict"] == "above"]

@@ -22,6 +22,7 @@ from eval.engine.power_analysis import (
     write_power_analysis,
 )
 from eval.protocol.cluster_correlation import design_effect
+from eval.studies import power_checks
 
 Z975, Z80 = 1.959964, 0.841621
 
@@ -113,7 +114,7 @@ def _plant(folder, rng):
 
 def test_the_csv_is_written_from_a_results_folder(tmp_path):
     per_pair = _plant(tmp_path, np.random.default_rng(3))
-    path = write_power_analysis(tmp_path)  # every study's checks; absent files skipped
+    path = write_power_analysis(tmp_path, power_checks())  # every study's; absent files skipped
     assert path == tmp_path / FILE
     table = pd.read_csv(path)
     assert tuple(table.columns) == COLUMNS
@@ -134,7 +135,7 @@ def test_the_csv_is_written_from_a_results_folder(tmp_path):
 
 
 def test_nothing_written_without_files(tmp_path):
-    assert write_power_analysis(tmp_path) is None
+    assert write_power_analysis(tmp_path, power_checks()) is None
     assert not (tmp_path / FILE).exists()
 
 

@@ -243,15 +243,12 @@ def power_table(results: Path, checks: Iterable[PowerCheck]) -> pd.DataFrame:
     return table
 
 
-def write_power_analysis(results: Path, checks: Iterable[PowerCheck] | None = None) -> Path | None:
-    """``<results>/power_analysis.csv`` from the checks (default: every study's ``power``);
-    None, and nothing written, when no check finds its files."""
+def write_power_analysis(results: Path, checks: Iterable[PowerCheck]) -> Path | None:
+    """``<results>/power_analysis.csv`` from the checks (the report passes every study's
+    ``power``: :func:`eval.studies.power_checks`); None, and nothing written, when no check
+    finds its files."""
     from eval.core.result_files import write_csv
 
-    if checks is None:
-        from eval.studies import studies
-
-        checks = [check for study in studies() for check in study.power]
     table = power_table(results, checks)
     if table.empty:
         return None

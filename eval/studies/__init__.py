@@ -156,3 +156,8 @@ def studies() -> tuple[Study, ...]:
     """Every study's declaration: the built-in ones in :data:`STUDIES` order, then the
     registered ones in the order they were registered."""
     return tuple(study(name) for name in (*STUDIES, *_REGISTERED))
+
+
+def power_checks() -> list:
+    """Every study's power-analysis checks (``Study.power``), in :func:`studies` order."""
+    return [check for declared in studies() for check in declared.power]
