@@ -8,21 +8,21 @@ version they were computed under (:func:`eval.core.cache.code_version`: an edit 
 ``pose_metrics.py`` or anything else that shapes a result discards the file) and a SHA-256 over
 both arrays. Like the run cache, it is a local speed-up: a file that is unreadable, of another
 format or version, or unlike its digest is ignored (logged) and rebuilt; an entry can only
-stand for the fit of exactly the inputs its digest names. Written atomically (temporary file +
-rename) after each stage, so an interrupted run keeps what its finished stages fitted. No
-pickle.
+stand for the fit of exactly the inputs its digest names. Written atomically
+(:func:`cadsim.dataset.atomic_writer.write_file_atomic`) after each stage, so an interrupted run
+keeps what its finished stages fitted. No pickle.
 """
 
 from __future__ import annotations
 
 import hashlib
+import io
 import logging
-import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
 
+from cadsim.dataset.atomic_writer import write_file_atomic
 from eval.core import pose_metrics
 
 log = logging.getLogger(__name__)
@@ -101,16 +101,14 @@ def save(cache_root: str | Path) -> int:
     values = np.array(list(memo.values()), dtype=np.float64).reshape(-1, 2)
     version = code_version()
     path = Path(cache_root) / FILE
+    buffer = io.BytesIO()
+    np.savez(
+        buffer, keys=keys, values=values, version=np.array(version),
+        digest=np.array(_digest(keys, values, version)), format=np.array(FORMAT),
+    )  # fmt: skip
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=path.parent)
-        with os.fdopen(fd, "wb") as f:
-            np.savez(
-                f, keys=keys, values=values, version=np.array(version),
-                digest=np.array(_digest(keys, values, version)), format=np.array(FORMAT),
-            )  # fmt: skip
-        os.replace(tmp, path)
-    except OSError as exc:
+        write_file_atomic(path, buffer.getvalue())
+    except (OSError, ValueError) as exc:  # ValueError: the path is a link or a folder
         log.warning("pose fits: could not write %s (%s)", path, exc)
         return 0
     _saved = len(memo)

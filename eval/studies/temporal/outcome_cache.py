@@ -27,14 +27,13 @@ from __future__ import annotations
 import hashlib
 import json
 import logging
-import os
-import tempfile
 from functools import cache
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from cadsim.dataset.atomic_writer import write_file_atomic
 from eval.studies.temporal.preset import PresetOutcome
 from eval.studies.temporal.table import (
     COLUMNS,
@@ -129,9 +128,10 @@ class OutcomeCache:
         return self.root / f"{key}.json"
 
     def store(self, key: str, outcome: PresetOutcome) -> Path | None:
-        """Write `outcome` atomically (temporary file + rename); its path, or None (a warning
-        says why) when it holds what this format does not restore (a per-frame dtype, a cell
-        that is no number or text) or the write fails: the study goes on uncached."""
+        """Write `outcome` atomically (:func:`cadsim.dataset.atomic_writer.write_file_atomic`);
+        its path, or None (a warning says why) when it holds what this format does not restore
+        (a per-frame dtype, a cell that is no number or text) or the write fails: the study goes
+        on uncached."""
         frames = [_frame_dict(f) for f in outcome.per_frame]
         odd = sorted({t for f in frames for t in f["dtypes"]} - _DTYPES)
         path = self.path(key)
@@ -147,8 +147,7 @@ class OutcomeCache:
             }
             entry = {"format": _FORMAT, "key": key, "digest": _digest(_dump(payload))}
             text = _dump(entry | {"outcome": payload})
-            path.parent.mkdir(parents=True, exist_ok=True)
-            _write_atomically(path, text)
+            write_file_atomic(path, text.encode("utf-8"))
         except (TypeError, ValueError, OSError) as exc:
             log.warning("temporal result cache: %s not stored (%s)", path, exc)
             return None
@@ -166,18 +165,6 @@ class OutcomeCache:
             why = " ".join(str(exc).split())[:200]
             log.warning("temporal result cache: refused %s (%s); recomputing it", path, why)
             return None
-
-
-def _write_atomically(path: Path, text: str) -> None:
-    """`text` as the file `path`, through a temporary file in its folder and a rename."""
-    fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".json", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def _read(path: Path, key: str) -> dict:
