@@ -148,15 +148,16 @@ def _verdict(row) -> str:
 
 
 def _chosen(table: pd.DataFrame, validation: Mapping[str, Mapping[str, float]]) -> list[bool]:
-    """Per row: whether it is its (preset, family)'s matcher of highest validation F1 (ties and
-    a matcher without a figure: the name decides; no figures at all: none is chosen)."""
-    chosen = np.zeros(len(table), dtype=bool)
-    for (preset, _), group in table.groupby(["preset", "family"], sort=False):
-        scores = validation.get(preset) or {}
-        known = [(-scores[m], m, i) for i, m in zip(group.index, group["matcher"], strict=True) if m in scores]  # fmt: skip
-        if known:
-            chosen[min(known)[2]] = True
-    return chosen.tolist()
+    """Per row: whether it is its (preset, family)'s matcher of highest validation F1 among the
+    table's rows (:func:`chosen_per_family`'s rule; no figures at all: none is chosen)."""
+    picked = {
+        (preset, name)
+        for preset, rows in table.groupby("preset", sort=False)
+        for name in chosen_per_family(
+            {preset: validation.get(preset) or {}}, list(rows["matcher"])
+        ).get(preset, [])
+    }
+    return [(p, m) in picked for p, m in zip(table["preset"], table["matcher"], strict=True)]
 
 
 def mean_validation(*tables: Mapping[str, Mapping[str, float]]) -> dict[str, dict[str, float]]:
