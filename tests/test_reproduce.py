@@ -5,6 +5,7 @@ Every output file appears, and a second run generates and computes nothing."""
 from __future__ import annotations
 
 import json
+import logging
 
 import pandas as pd
 import pytest
@@ -61,7 +62,7 @@ MATCHERS = ["maximin", "none", "sm"]
 @pytest.mark.slow
 @pytest.mark.render
 @pytest.mark.timeout(900)  # 84 s on 2 quiet cores, 272 s at load 10: room for a busy machine
-def test_tiny_reproduce_writes_every_output_and_reruns_from_cache(tmp_path, capsys):
+def test_tiny_reproduce_writes_every_output_and_reruns_from_cache(tmp_path, capsys, caplog):
     out, data, cache = tmp_path / "results", tmp_path / "data", tmp_path / "cache"
     argv = ["--pairs", "2", "--val-pairs", "2", "--matchers", "sm,maximin,none"]
     argv += ["--rates", "0,0.01", "--keep", "1,0", "--regime-runs", "1", "--spread-runs", "1"]
@@ -185,7 +186,12 @@ def test_tiny_reproduce_writes_every_output_and_reruns_from_cache(tmp_path, caps
 
     # Everything cached: nothing generated, nothing computed, same table.
     before = (out / "table1.csv").read_text()
-    assert reproduce.main(argv) == 0
+    fused = (out / "multiagent" / "per_snapshot.csv").read_bytes()
+    assert len(list((cache / "multiagent").glob("*.json"))) == 1  # the fused rows, stored
+    with caplog.at_level(logging.INFO, logger="eval.reproduce"):
+        assert reproduce.main(argv) == 0
+    assert "CAD-multi: fused rows read from the result cache" in caplog.text
+    assert (out / "multiagent" / "per_snapshot.csv").read_bytes() == fused  # times included
     again = json.loads((out / "run_record.json").read_text())
     assert all(d["new_records"] == 0 for d in again["datasets"])
     assert all(r["computed"] == 0 for r in again["runs"].values())

@@ -14,6 +14,7 @@ import pandas as pd
 import pytest
 import test_sequences as seqs
 
+from eval.core import digest_store
 from eval.studies.temporal import evaluation as temporal
 from eval.studies.temporal import outcome_cache
 
@@ -91,9 +92,7 @@ def test_a_numpy_scalar_nan_and_none_round_trip(tmp_path, dirs):
     assert math.isnan(back.rows[0]["tau"]) and back.continuity[0]["continuity_low"] is None
     assert type(back.rows[0]["frames"]) is int and back.rows[0]["f1_mean"] == 0.5
     for name in ("rows", "gain", "tuned", "continuity"):  # NaN != NaN: compared as JSON
-        assert outcome_cache._dump(getattr(back, name)) == outcome_cache._dump(
-            getattr(outcome, name)
-        )
+        assert digest_store.dump(getattr(back, name)) == digest_store.dump(getattr(outcome, name))
     for a, b in zip(back.per_frame, outcome.per_frame, strict=True):
         assert a.equals(b) and list(a.dtypes) == list(b.dtypes)
 
@@ -110,15 +109,15 @@ def test_an_outcome_the_format_cannot_hold_is_not_stored(tmp_path, dirs, caplog)
 
 def _edit_value(path):
     entry = json.loads(path.read_text())
-    entry["outcome"]["rows"][0]["f1_pooled"] = 0.999  # a better score than it earned
+    entry["payload"]["rows"][0]["f1_pooled"] = 0.999  # a better score than it earned
     path.write_text(json.dumps(entry))
 
 
 def _drop_key_consistently(path):
     entry = json.loads(path.read_text())
-    del entry["outcome"]["rows"][0]["f1_pooled"]
-    payload = entry["outcome"]
-    entry["digest"] = outcome_cache._digest(outcome_cache._dump(payload))  # a forged digest
+    del entry["payload"]["rows"][0]["f1_pooled"]
+    payload = entry["payload"]
+    entry["digest"] = digest_store.digest(digest_store.dump(payload))  # a forged digest
     path.write_text(json.dumps(entry))
 
 
@@ -145,7 +144,7 @@ def test_a_tampered_entry_is_refused_and_recomputed(dirs, cold, tamper, monkeypa
         _study(dirs, out, dirs / "cache")
     assert len(calls) == 1 and "temporal result cache: refused" in caplog.text
     assert _but_timing(_files(out)) == _but_timing(cold)
-    assert json.loads(entry.read_text())["outcome"]["rows"][0]["f1_pooled"] != 0.999
+    assert json.loads(entry.read_text())["payload"]["rows"][0]["f1_pooled"] != 0.999
     entry.write_bytes(good)  # the next test starts from the first run's entry
 
 

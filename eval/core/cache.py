@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from eval.core.cache_checks import StaleEntry, check_arrays_bounded, check_result, is_hungarian
+from eval.core.cache_checks import StaleEntry, check_result, is_hungarian, read_bounded
 from eval.core.tasks import MatcherSpec, PairOutcome, RunResult, RunSpec
 
 DEFAULT_CACHE = "cache/runs"  # make reproduce's, inside the repository; commands use user_cache()
@@ -196,17 +196,17 @@ class ResultCache:
         path = self.path(spec)
         if not path.is_file():
             raise KeyError(f"{path}: no cached result for {spec}")
-        if checked:
-            check_arrays_bounded(path)
         try:
-            with np.load(path, allow_pickle=False) as data:
-                meta = json.loads(str(data["meta"]))
-                gts = _unragged(data, "gt_pairs")
-                assigned = _unragged(data, "assigned")
-                scores = _unragged(data, "scores")
-                points1 = _unragged(data, "points1")
-                points2 = _unragged(data, "points2")
-                pose = data["pose"]
+            data = read_bounded(path)  # the bounds hold whether or not `checked`: one pass
+            meta = json.loads(str(data["meta"]))
+            gts = _unragged(data, "gt_pairs")
+            assigned = _unragged(data, "assigned")
+            scores = _unragged(data, "scores")
+            points1 = _unragged(data, "points1")
+            points2 = _unragged(data, "points2")
+            pose = data["pose"]
+        except StaleEntry:
+            raise
         except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
             raise ValueError(
                 f"{path}: unreadable cache entry ({exc}); delete it to recompute"

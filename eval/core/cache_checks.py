@@ -5,9 +5,9 @@ error, a stray script or a hand edit has changed must be recomputed, never score
 each cheap enough for a fully cached re-run (one Hungarian assignment per frame pair of an entry,
 the dataset's manifest and stored detections read once per process):
 
-- :func:`check_arrays_bounded`: before anything is read, every ``.npy`` header's declared size is
+- :func:`read_bounded`: before a member's data are read, its ``.npy`` header's declared size is
   held to what its zip member holds (and that to what deflate can expand), so a forged header
-  asking for 10¹² items is refused instead of allocated;
+  asking for 10¹² items is refused instead of allocated (the archive is read in one pass);
 - :func:`check_result`: the entry against itself — view sizes and every index inside them, one-to-one
   assignments and ground truth, finite scores in [0, 1], finite non-negative times, and each
   assignment that was the Hungarian assignment of its scores when stored still being it;
@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 import zipfile
+import zlib
 from collections.abc import Sequence
 from functools import lru_cache
 from pathlib import Path
@@ -38,11 +39,14 @@ class StaleEntry(ValueError):
     """A cache entry that cannot be served (it contradicts itself or its dataset): recompute it."""
 
 
-def check_arrays_bounded(path: Path) -> None:
-    """Raise :class:`StaleEntry` if an array of the ``.npz`` at `path` declares more bytes than
-    its zip member holds (or a member more than deflate can expand to), or a non-numeric dtype."""
+def read_bounded(path: Path) -> dict[str, np.ndarray]:
+    """Every array of the ``.npz`` at `path` ({name: array}, in one pass over the archive), each
+    member held to its bounds before its data are read; :class:`StaleEntry` if a member declares
+    more than deflate can expand to, its header declares more bytes than the member holds or a
+    non-numeric dtype, or its data are cut short."""
     from numpy.lib import format as npy
 
+    arrays = {}
     try:
         with zipfile.ZipFile(path) as archive:
             for member in archive.infolist():
@@ -58,20 +62,29 @@ def check_arrays_bounded(path: Path) -> None:
                         if version == (1, 0)
                         else npy.read_array_header_2_0
                     )
-                    shape, _, dtype = reader(f)
-                if dtype.hasobject or any(int(s) < 0 for s in shape):
-                    raise StaleEntry(f"{path}: {member.filename}: dtype {dtype} or shape {shape}")
-                declared = math.prod(int(s) for s in shape) * dtype.itemsize
-                if declared > member.file_size:
-                    raise StaleEntry(
-                        f"{path}: {member.filename}: header declares shape {shape} "
-                        f"({declared} bytes) in a member of {member.file_size}; delete it to "
-                        "recompute"
-                    )
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+                    shape, fortran, dtype = reader(f)
+                    if dtype.hasobject or any(int(s) < 0 for s in shape):
+                        raise StaleEntry(
+                            f"{path}: {member.filename}: dtype {dtype} or shape {shape}"
+                        )
+                    declared = math.prod(int(s) for s in shape) * dtype.itemsize
+                    if declared > member.file_size:
+                        raise StaleEntry(
+                            f"{path}: {member.filename}: header declares shape {shape} "
+                            f"({declared} bytes) in a member of {member.file_size}; delete it "
+                            "to recompute"
+                        )
+                    data = bytearray(f.read(declared))  # writable, as np.load's arrays are
+                if len(data) != declared:
+                    raise StaleEntry(f"{path}: {member.filename}: its data are cut short")
+                flat = np.frombuffer(data, dtype=dtype)
+                name = member.filename.removesuffix(".npy")
+                arrays[name] = flat.reshape(shape, order="F" if fortran else "C")
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error) as exc:
         if isinstance(exc, StaleEntry):
             raise
         raise StaleEntry(f"{path}: unreadable cache entry ({exc}); delete it to recompute") from exc
+    return arrays
 
 
 def _sorted_pairs(pairs: np.ndarray) -> np.ndarray:
@@ -91,6 +104,44 @@ def is_hungarian(assigned: np.ndarray, scores: np.ndarray) -> bool:
         return False
     rows, cols = linear_sum_assignment(scores, maximize=True)
     return np.array_equal(_sorted_pairs(assigned), np.stack([rows, cols], axis=1))
+
+
+def _hungarian_one_to_one(assigned: np.ndarray, scores: np.ndarray) -> bool:
+    """:func:`is_hungarian` for an `assigned` already known to be one-to-one inside the views
+    and `scores` already known to be finite (what :func:`check_result` has checked by then):
+    the same answer, without sorting — as many pairs as the assignment, each one of its pairs."""
+    from scipy.optimize import linear_sum_assignment
+
+    rows, cols = linear_sum_assignment(scores, maximize=True)
+    pairs = assigned.reshape(-1, 2)
+    if len(pairs) != len(rows):
+        return False
+    partner = np.full(scores.shape[0], -1, dtype=np.int64)
+    partner[rows] = cols
+    return bool((partner[pairs[:, 0]] == pairs[:, 1]).all())
+
+
+def _plainly_valid(outcomes) -> bool:
+    """Whether every outcome's counts are plain ints ≥ 0, its name and checksum text, its time a
+    finite float ≥ 0 and its scores of its views' shape: the common case, checked in one pass
+    (:func:`check_result` walks the outcomes one check at a time, to name what is wrong, only
+    when this fails)."""
+    inf = math.inf
+    return all(
+        type(o.n1) is int
+        and type(o.n2) is int
+        and type(o.index) is int
+        and type(o.episode) is int
+        and type(o.sim_seed) is int
+        and type(o.iterations) is int
+        and min(o.n1, o.n2, o.index, o.episode, o.sim_seed, o.iterations) >= 0
+        and type(o.name) is str
+        and type(o.checksum) is str
+        and type(o.time_s) is float
+        and 0.0 <= o.time_s < inf
+        and o.scores.shape == (o.n1, o.n2)
+        for o in outcomes
+    )
 
 
 def _finite_non_negative(value) -> bool:
@@ -114,7 +165,7 @@ def check_result(result, hungarian: Sequence[bool], path: Path) -> None:
         name = str(outcomes[k].name)[:60]
         return StaleEntry(f"{path}: frame pair {k} ({name}): {why}")
 
-    for k, o in enumerate(outcomes):
+    for k, o in enumerate(outcomes if not _plainly_valid(outcomes) else ()):
         for name in ("n1", "n2", "index", "episode", "sim_seed", "iterations"):
             if not _counted(getattr(o, name)):
                 raise refuse(k, f"{name} {getattr(o, name)!r}: expected an integer ≥ 0")
@@ -143,7 +194,7 @@ def check_result(result, hungarian: Sequence[bool], path: Path) -> None:
             raise refuse(k, f"{what}: {why}")
     for k in np.flatnonzero(np.asarray(hungarian, dtype=bool)):
         o = outcomes[k]
-        if not is_hungarian(o.assigned, o.scores):
+        if not _hungarian_one_to_one(o.assigned, o.scores):
             raise refuse(
                 int(k), "assignment differs from the Hungarian assignment of its stored scores"
             )

@@ -317,6 +317,11 @@ class Runner:
             for name in ("cached", "computed", "failed"):
                 setattr(self.totals, name, getattr(self.totals, name) + getattr(self.stats, name))
 
+    def spec_keys(self, requests: Sequence[RunRequest]) -> list[str]:
+        """The result-cache key of each request's run (:meth:`RunSpec.key`, the run's code
+        version included): what a table derived from these runs alone can be keyed by."""
+        return [req.spec(self._version(req)).key() for req in requests]
+
     def _source(self, spec: RunSpec) -> RunSpec | None:
         """The cached run `spec` can be read from: itself, or — for a run of the first N frame
         pairs — the cached run of the whole dataset (frame pairs are computed independently and in

@@ -25,10 +25,28 @@ import pandas as pd
 
 from eval.core.result_files import save_figure
 from eval.protocol.crossovers import PAIRS
+from eval.report.figure_stamps import drawn_once
 from eval.report.palette import styles
 from eval.report.tables import PAPER_DATASETS, dataset_order, matcher_order, method_name
 
 log = logging.getLogger(__name__)
+
+
+def _inputs(*names: str):
+    """The files a writer reads, relative to its output folder (:func:`drawn_once`)."""
+    return lambda out_dir: [Path(out_dir) / name for name in names]
+
+
+def _qualitative_inputs(out_dir: Path) -> list[Path]:
+    """``qualitative.json`` and the manifest of every dataset it draws from."""
+    path = Path(out_dir) / "qualitative.json"
+    try:
+        spec = json.loads(path.read_text(encoding="utf-8"))
+        folders = [Path(str(entry["dataset_dir"])) for entry in spec.values()]
+    except (OSError, ValueError, AttributeError, KeyError, TypeError):
+        return [path]
+    return [path, *(folder / "manifest.json" for folder in folders)]
+
 
 PANELS = (
     ("accuracy", "Accuracy"), ("precision", "Precision"), ("recall", "Recall"), ("f1", "F1"),
@@ -65,6 +83,7 @@ def _save(fig, base: Path, suffixes=(".png", ".pdf")) -> list[Path]:
     return paths
 
 
+@drawn_once(_inputs("noise_runs.csv"))
 def write_fig4(out_dir: str | Path) -> list[Path]:
     """Fig. 4 from ``noise_runs.csv``; returns the written paths (none without the CSV)."""
     out_dir = Path(out_dir)
@@ -121,6 +140,7 @@ REGIME_PANELS = (("f1_mean", "F1"), ("balanced_accuracy_mean", "Balanced accurac
 CROSSOVER_RIVALS = tuple(b for _, b in PAIRS)
 
 
+@drawn_once(_inputs("regime_sweep.csv"))
 def write_fig_regime(out_dir: str | Path) -> list[Path]:
     """The regime-sweep figure from ``regime_sweep.csv``; none without the CSV."""
     out_dir = Path(out_dir)
@@ -189,6 +209,7 @@ def _curves(ax, rows: pd.DataFrame, x_col: str, metric: str, matchers, colors) -
             ax.fill_between(x, m - s, m + s, color=colors[matcher], alpha=0.15, lw=0)
 
 
+@drawn_once(_inputs("localisation_sweep.csv"))
 def write_fig_localisation(out_dir: str | Path) -> list[Path]:
     """F1 against localisation error from ``localisation_sweep.csv``; none without the CSV."""
     out_dir = Path(out_dir)
@@ -218,6 +239,7 @@ def write_fig_localisation(out_dir: str | Path) -> list[Path]:
     return _save(fig, out_dir / "fig_localisation")
 
 
+@drawn_once(_inputs("localisation_presets.csv"))
 def write_fig_localisation_presets(out_dir: str | Path) -> list[Path]:
     """F1 against a GNSS-like preset's error scale and its message latency, from
     ``localisation_presets.csv`` (one panel per axis); none without the CSV."""
@@ -256,6 +278,7 @@ def write_fig_localisation_presets(out_dir: str | Path) -> list[Path]:
     return _save(fig, out_dir / "fig_localisation_presets")
 
 
+@drawn_once(_inputs("pr_curves.csv"))
 def write_pr_curves(out_dir: str | Path) -> list[Path]:
     """Precision–recall curves from ``pr_curves.csv`` (one panel per dataset)."""
     out_dir = Path(out_dir)
@@ -304,6 +327,7 @@ def _verified_pair(dataset_dir: str, index: int):
     return dataset[index]
 
 
+@drawn_once(_qualitative_inputs)
 def write_qualitative(out_dir: str | Path) -> list[Path]:
     """The Fig. 3-style figure from ``qualitative.json``; skipped (with a log line) when the
     datasets' images are not on this machine."""
@@ -390,6 +414,7 @@ def write_qualitative(out_dir: str | Path) -> list[Path]:
     return _save(fig, out_dir / "qualitative")
 
 
+@drawn_once(_inputs("external/prior_sensitivity.csv"))
 def write_fig_prior_sensitivity(out_dir: str | Path) -> list[Path]:
     """``fig_prior_sensitivity.png/.pdf``: per prior matcher, pooled test F1 of every grid
     configuration (dots), the one chosen on sequence 070 ringed, the defaults marked."""
@@ -426,6 +451,7 @@ def write_fig_prior_sensitivity(out_dir: str | Path) -> list[Path]:
 FUSION_LINES = {"independent": "-", "spectral": "--", "clear": "-.", "transitive": ":"}
 
 
+@drawn_once(_inputs("table_multiagent.csv"))
 def write_fig_multiagent(out_dir: str | Path) -> list[Path]:
     """Pooled pairwise F1 and the cycle-violation rate against the number of agents, from
     ``table_multiagent.csv``: one column per preset, colour per two-view matcher, line style per

@@ -32,6 +32,7 @@ family and no "best".
 
 from __future__ import annotations
 
+import logging
 import time
 from collections.abc import Callable, Mapping, Sequence
 from itertools import combinations
@@ -57,6 +58,7 @@ from eval.protocol.pooled_bootstrap import (
     RESAMPLES,
     SEED,
 )
+from eval.studies.multiagent.fused_cache import FusedCache, cacheable, fused_key
 from eval.studies.multiagent.gains import (
     BY,
     INTERVAL_COLUMNS,
@@ -67,6 +69,8 @@ from eval.studies.multiagent.markdown import to_markdown
 from matchers.core.plugin_guard import PluginError
 from matchers.fusion import PairwiseEvidence, checked_fusion, usable_fusions
 from matchers.fusion.universe import canonical_labels, components
+
+log = logging.getLogger("eval.reproduce")
 
 SCENARIO = "scenarios/cad-multi.toml"
 LABEL = "CAD-multi"
@@ -120,11 +124,15 @@ def evaluate_multiagent(
     presets: Sequence[str] = PRESETS,
     subsets: dict[int, tuple[int, ...]] = SUBSETS,
     fusions: Sequence[str] | None = None,
+    cache: str | Path | None = None,
 ) -> pd.DataFrame:
     """Run, calibrate, fuse and score (module docstring); writes ``table_multiagent.csv/.md`` and
     ``multiagent/per_snapshot.csv`` (test and validation rows, column ``split``) in ``out_dir``;
     returns the table. ``matchers``: specs, or {row label: spec} (e.g. tuned parameters under the
-    matcher's plain name)."""
+    matcher's plain name). ``cache``: a folder of
+    :class:`~eval.studies.multiagent.fused_cache.FusedCache` entries; fused rows found there are
+    read (no run is loaded, no fusion run), else computed and stored there (None: always
+    computed); the files are the same either way."""
     out_dir = Path(out_dir)
     named = as_named(matchers)
     label_of = {spec: label for label, spec in named.items()}
@@ -147,8 +155,37 @@ def evaluate_multiagent(
                 )
                 keys += [(split, preset, label_of[r.matcher], r.seed, pair) for r in made]
                 requests += made
-    results = dict(zip(keys, runner.run(requests, desc=f"{LABEL} view pairs"), strict=True))
     labels = list(named)
+    groups = {
+        (split, n, preset, label, seed, name)
+        for split in SPLITS
+        for n in subsets
+        for preset in presets
+        for label in labels
+        for seed in seeds
+        for name in fusions
+    }
+    store = FusedCache(cache) if cache is not None and cacheable(fusions) else None
+    if store is not None:
+        key = fused_key(runner.spec_keys(requests), labels, subsets, presets, seeds, list(fusions))
+        per_snapshot = store.load(key, groups)
+        if per_snapshot is not None:
+            log.info("%s: fused rows read from the result cache %s", LABEL, store.root)
+    if store is None or per_snapshot is None:
+        results = dict(zip(keys, runner.run(requests, desc=f"{LABEL} view pairs"), strict=True))
+        per_snapshot = _fused_table(results, labels, seeds, presets, subsets, fusions)
+        if store is not None:
+            store.store(key, per_snapshot)
+    write_csv(per_snapshot.round(6), out_dir / "multiagent" / "per_snapshot.csv")
+    table = multiagent_table(per_snapshot)
+    write_csv(table.round(6), out_dir / "table_multiagent.csv")
+    write_text(out_dir / "table_multiagent.md", to_markdown(table, LABEL) + "\n")
+    return table
+
+
+def _fused_table(results: dict, labels, seeds, presets, subsets, fusions) -> pd.DataFrame:
+    """The fused rows of every split, N, preset, matcher and seed: τ calibrated per (preset,
+    matcher) on the validation view pairs, then every fusion per snapshot."""
     taus = {
         (preset, label): calibrate(
             [r for k, r in results.items() if k[0] == "val" and k[1] == preset and k[2] == label]
@@ -169,12 +206,7 @@ def evaluate_multiagent(
                         fused = _fused_rows(outcomes, subset, taus[(preset, label)], fusions)
                         where = {"n_agents": n_agents, "preset": preset, "matcher": label}
                         rows += [r | where | {"seed": seed, "split": split} for r in fused]
-    per_snapshot = pd.DataFrame(rows)
-    write_csv(per_snapshot.round(6), out_dir / "multiagent" / "per_snapshot.csv")
-    table = multiagent_table(per_snapshot)
-    write_csv(table.round(6), out_dir / "table_multiagent.csv")
-    write_text(out_dir / "table_multiagent.md", to_markdown(table, LABEL) + "\n")
-    return table
+    return pd.DataFrame(rows)
 
 
 def _truth(outcomes: dict[tuple[int, int], list[PairOutcome]], subset, k: int) -> list[np.ndarray]:

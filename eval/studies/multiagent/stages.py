@@ -15,6 +15,7 @@ from eval.studies.multiagent.evaluation import PRESETS as MA_PRESETS
 from eval.studies.multiagent.evaluation import SCENARIO as MA_SCENARIO
 from eval.studies.multiagent.evaluation import SUBSETS as MA_SUBSETS
 from eval.studies.multiagent.evaluation import evaluate_multiagent
+from eval.studies.multiagent.fused_cache import FOLDER as FUSED_FOLDER
 from matchers.fusion import usable_fusions
 
 log = logging.getLogger("eval.reproduce")
@@ -45,7 +46,10 @@ def multiagent(state: RunState) -> None:
         MA_LABEL, len(named), len(usable_fusions()), sorted(MA_SUBSETS), len(MA_PRESETS),
         len(seeds),
     )  # fmt: skip
-    evaluate_multiagent(*state.multi_dirs, named, seeds, state.runner, state.out)
+    evaluate_multiagent(
+        *state.multi_dirs, named, seeds, state.runner, state.out,
+        cache=state.runner.cache.root / FUSED_FOLDER,
+    )  # fmt: skip
     record = state.record.setdefault("multiagent", {})
     record |= {"seeds": seeds, "matchers": list(named)}
     record |= {"presets": list(MA_PRESETS), "fusions": usable_fusions()}

@@ -15,9 +15,9 @@ methods and windows, run seeds, tune), both datasets' checksums, the run cache's
 modules) and the sources of the study (``eval/studies/temporal/*.py``, ``eval/protocol/*.py``,
 ``eval/core/abstention.py``) and this format: editing any of them recomputes every outcome.
 
-An entry is a local speed-up, not a trusted record: one that is too large, unreadable, of
-another format or key, whose payload does not match its digest, or whose shape contradicts its
-task (rows missing the table's keys, another set of (method, window) rows, a per-frame table of
+An entry is a local speed-up, not a trusted record: one that
+:meth:`eval.core.digest_store.DigestStore.load` refuses (too large, unreadable, of another format
+or key, not matching its digest), or whose shape contradicts its task (rows missing the table's keys, another set of (method, window) rows, a per-frame table of
 unequal columns) is refused (:meth:`OutcomeCache.load` logs why and returns None) and recomputed.
 A forger who rewrites an entry with a matching digest is not stopped (the run cache's boundary).
 """
@@ -30,10 +30,7 @@ import logging
 from functools import cache
 from pathlib import Path
 
-import numpy as np
-import pandas as pd
-
-from cadsim.dataset.atomic_writer import write_file_atomic
+from eval.core.digest_store import DigestStore, frame_from_payload, frame_payload, sources_version
 from eval.studies.temporal.preset import PresetOutcome
 from eval.studies.temporal.table import (
     COLUMNS,
@@ -49,9 +46,8 @@ log = logging.getLogger("eval.reproduce")
 FOLDER = "temporal"
 """The entries' folder under the run cache's folder (no clash with its two-hex-digit folders)."""
 
-_FORMAT = 1
+_FORMAT = 2
 _MAX_BYTES = 256 << 20  # a preset of the full study is ~2 MB; a larger file is not one of ours
-_DTYPES = frozenset({"int64", "float64", "bool", "str", "string", "object", "Int64", "boolean"})
 _DERIVED = frozenset(
     {"share_of_oracle", "oracle_hota", "oracle_assa", "assa_share_of_oracle"}
 )  # table columns evaluate_temporal computes across presets
@@ -62,17 +58,14 @@ _STUDY_SOURCES = ("eval/studies/temporal", "eval/protocol")
 def _study_files() -> list[str]:
     """The study's sources, relative to the repository, in a fixed order."""
     found = [p for folder in _STUDY_SOURCES for p in sorted((_ROOT / folder).glob("*.py"))]
-    return [p.relative_to(_ROOT).as_posix() for p in found] + ["eval/core/abstention.py"]
+    names = [p.relative_to(_ROOT).as_posix() for p in found]
+    return [*names, "eval/core/abstention.py", "eval/core/digest_store.py"]
 
 
 @cache
 def study_version() -> str:
     """Hex SHA-256 over this format and the names and contents of the study's sources."""
-    h = hashlib.sha256(f"temporal outcome format {_FORMAT}\0".encode())
-    for name in _study_files():
-        h.update(name.encode() + b"\0")
-        h.update(hashlib.sha256((_ROOT / name).read_bytes()).digest())
-    return h.hexdigest()
+    return sources_version(f"temporal outcome format {_FORMAT}", _ROOT, _study_files())
 
 
 def task_key(task: tuple) -> str:
@@ -93,93 +86,38 @@ def task_key(task: tuple) -> str:
     return hashlib.sha256(json.dumps(described, sort_keys=True).encode()).hexdigest()
 
 
-def _plain(value):
-    """A numpy scalar as its Python value, pandas' NA as None (JSON's ``default``)."""
-    if isinstance(value, np.generic):
-        return value.item()
-    if value is pd.NA:  # a nullable column's missing value
-        return None
-    raise TypeError(f"{type(value).__name__} is not a table cell")
-
-
-def _dump(payload: dict) -> str:
-    return json.dumps(payload, default=_plain, separators=(",", ":"))
-
-
-def _digest(text: str) -> str:
-    return hashlib.sha256(text.encode()).hexdigest()
-
-
-def _frame_dict(frame: pd.DataFrame) -> dict:
-    return {
-        "columns": [str(c) for c in frame.columns],
-        "dtypes": [str(t) for t in frame.dtypes],
-        "values": [frame[c].tolist() for c in frame.columns],
-    }
-
-
 class OutcomeCache:
     """Preset outcomes stored under `root`, one JSON file per task key."""
 
     def __init__(self, root: str | Path) -> None:
-        self.root = Path(root)
+        self.entries = DigestStore(root, "temporal result cache", _FORMAT, _MAX_BYTES)
+        self.root = self.entries.root
 
     def path(self, key: str) -> Path:
-        return self.root / f"{key}.json"
+        return self.entries.path(key)
 
     def store(self, key: str, outcome: PresetOutcome) -> Path | None:
-        """Write `outcome` atomically (:func:`cadsim.dataset.atomic_writer.write_file_atomic`);
-        its path, or None (a warning says why) when it holds what this format does not restore
-        (a per-frame dtype, a cell that is no number or text) or the write fails: the study goes
-        on uncached."""
-        frames = [_frame_dict(f) for f in outcome.per_frame]
-        odd = sorted({t for f in frames for t in f["dtypes"]} - _DTYPES)
-        path = self.path(key)
+        """Write `outcome` (:meth:`DigestStore.store`); its path, or None (a warning says why)
+        when it holds what this format does not restore (a per-frame dtype, a cell that is no
+        number or text) or the write fails: the study goes on uncached."""
         try:
-            if odd:
-                raise TypeError(f"per-frame dtypes {odd}")
-            payload = {
-                "rows": outcome.rows,
-                "gain": outcome.gain,
-                "tuned": outcome.tuned,
-                "continuity": outcome.continuity,
-                "per_frame": frames,
-            }
-            entry = {"format": _FORMAT, "key": key, "digest": _digest(_dump(payload))}
-            text = _dump(entry | {"outcome": payload})
-            write_file_atomic(path, text.encode("utf-8"))
-        except (TypeError, ValueError, OSError) as exc:
-            log.warning("temporal result cache: %s not stored (%s)", path, exc)
+            frames = [frame_payload(f) for f in outcome.per_frame]
+        except TypeError as exc:
+            log.warning("temporal result cache: %s not stored (%s)", self.path(key), exc)
             return None
-        return path
+        payload = {
+            "rows": outcome.rows,
+            "gain": outcome.gain,
+            "tuned": outcome.tuned,
+            "continuity": outcome.continuity,
+            "per_frame": frames,
+        }
+        return self.entries.store(key, payload)
 
     def load(self, key: str, task: tuple) -> PresetOutcome | None:
         """The stored outcome of `task` (whose key is `key`); None when there is none, or when
         the entry is refused (a warning names it and why)."""
-        path = self.path(key)
-        if not path.is_file():
-            return None
-        try:
-            return _outcome(_read(path, key), task)
-        except (OSError, ValueError, TypeError, KeyError, AttributeError, RecursionError) as exc:
-            why = " ".join(str(exc).split())[:200]
-            log.warning("temporal result cache: refused %s (%s); recomputing it", path, why)
-            return None
-
-
-def _read(path: Path, key: str) -> dict:
-    """The payload of the entry at `path`: ValueError unless it is at most :data:`_MAX_BYTES`,
-    JSON of this format and key, and matches its digest."""
-    size = path.stat().st_size
-    if size > _MAX_BYTES:
-        raise ValueError(f"{size} bytes, more than {_MAX_BYTES}")
-    entry = json.loads(path.read_text(encoding="utf-8"))
-    if not isinstance(entry, dict) or entry.get("format") != _FORMAT or entry.get("key") != key:
-        raise ValueError("another format or key")
-    payload = entry["outcome"]
-    if not isinstance(payload, dict) or entry.get("digest") != _digest(_dump(payload)):
-        raise ValueError("its contents do not match their digest")
-    return payload
+        return self.entries.load(key, lambda payload: _outcome(payload, task))
 
 
 def _records(payload: dict, name: str, required) -> list[dict]:
@@ -219,30 +157,7 @@ def _outcome(payload: dict, task: tuple) -> PresetOutcome:
     return PresetOutcome(
         rows=rows,
         gain=gain,
-        per_frame=[_frame(f, k) for k, f in enumerate(frames)],
+        per_frame=[frame_from_payload(f, f"per_frame {k}") for k, f in enumerate(frames)],
         tuned=_records(payload, "tuned", TUNING_COLUMNS),
         continuity=_records(payload, "continuity", CONTINUITY_COLUMNS),
-    )
-
-
-def _frame(stored: dict, k: int) -> pd.DataFrame:
-    """A per-frame table from its stored form; ValueError unless its columns, dtypes and
-    value lists agree."""
-    columns, dtypes, values = stored["columns"], stored["dtypes"], stored["values"]
-    if not (
-        isinstance(columns, list)
-        and isinstance(dtypes, list)
-        and isinstance(values, list)
-        and len(columns) == len(dtypes) == len(values) == len(set(columns))
-        and all(isinstance(c, str) for c in columns)
-        and all(isinstance(v, list) for v in values)
-        and len({len(v) for v in values}) <= 1
-        and set(dtypes) <= _DTYPES
-    ):
-        raise ValueError(f"per_frame {k}: columns, dtypes and values do not agree")
-    if any(isinstance(x, list | dict) for v in values for x in v):
-        raise ValueError(f"per_frame {k}: a value that is not a table cell")
-    return pd.DataFrame(
-        {c: pd.Series(v, dtype=t) for c, t, v in zip(columns, dtypes, values, strict=True)},
-        columns=columns,
     )
