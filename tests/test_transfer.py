@@ -341,3 +341,20 @@ def test_a_table_written_before_the_intervals_reads_as_not_shown(tmp_path):
     goals = [line for line in lines if line.startswith("- ")]
     assert len(goals) == 4 and all(": not shown —" in line for line in goals)
     assert "Freealign not chosen on validation" in goals[0]  # an older table says so
+
+
+def test_the_overlap_from_manifests_is_the_overlap_from_records(tmp_path):
+    from test_generate_fakes import FAKE_STAGES, FakeScenario
+
+    from cadsim.dataset import Dataset, training_set
+    from cadsim.generation.pipeline import generate_dataset
+    from eval.protocol import model_options
+
+    folder = tmp_path / "d"
+    generate_dataset(FakeScenario(), folder, pairs=3, workers=1, stages=FAKE_STAGES, progress=False)
+    records = [pair.checksum for pair in Dataset(folder)]
+    for trained in (set(), {records[0]}, set(records[1:]) | {"elsewhere"}):
+        assert model_options.overlapping_records(trained, [folder]) == (
+            training_set.overlapping_records(trained, [folder])
+        )
+    assert model_options.overlapping_records({records[2]}, [folder]) == {str(folder): 1}

@@ -55,3 +55,34 @@ def test_stage_writes_the_box_table_and_its_report_part(tmp_path):
     assert part[0] == "### The V2X task with boxes only" and any(
         "with boxes only" in p for p in part
     )
+
+
+@pytest.mark.slow
+def test_the_box_folder_is_reused_until_its_source_or_manifest_changes(tmp_path, monkeypatch):
+    import json
+
+    import cadsim.exporters.opv2v as opv2v
+
+    monkeypatch.setenv("CADSIM_CACHE_DIR", str(tmp_path / "cadsim-cache"))
+    camera, boxes = tmp_path / "data" / "cad-v2x", tmp_path / "data" / "cad-v2x-boxes"
+
+    def generate(pairs):
+        generate_dataset(
+            FakeScenario(), camera, pairs=pairs, workers=1, stages=FAKE_STAGES, progress=False
+        )
+
+    generate(2)
+    exports = []
+    real = opv2v.export_opv2v
+    monkeypatch.setattr(opv2v, "export_opv2v", lambda *a, **k: exports.append(a) or real(*a, **k))
+    as_boxes(camera, boxes)
+    built = (boxes / "manifest.json").stat().st_mtime_ns
+    as_boxes(camera, boxes)
+    assert len(exports) == 1 and (boxes / "manifest.json").stat().st_mtime_ns == built  # reused
+    generate(3)  # the source split gains a pair: another checksum
+    as_boxes(camera, boxes)
+    assert len(exports) == 2 and len(Dataset(boxes)) == 3
+    manifest = json.loads((boxes / "manifest.json").read_text())
+    (boxes / "manifest.json").write_text(json.dumps(manifest | {"checksum": "0" * 64}))
+    as_boxes(camera, boxes)  # not the manifest it built: rebuilt
+    assert len(exports) == 3 and Dataset(boxes).checksum == manifest["checksum"]

@@ -189,7 +189,13 @@ class RankedAssignments:
 
     @classmethod
     def from_frames(cls, frames: Sequence[tuple]) -> RankedAssignments:
-        """frames: (assigned (k, 2), assigned_scores (k,), ground_truth (g, 2), n1, n2) per pair."""
+        """frames: (assigned (k, 2), assigned_scores (k,), ground_truth (g, 2), n1, n2) per pair.
+        Every frame is checked as :func:`pair_metrics` checks it (ValueError naming the first
+        frame at fault); the common case — integer (k, 2) arrays — in one vectorised pass."""
+        frames = list(frames)
+        fast = _from_integer_frames(frames)
+        if fast is not None:
+            return cls(**fast)
         parts = {k: [] for k in ("frame", "score", "correct", "cov1", "cov2")}
         n1s, n2s, n_gts = [], [], []
         for f, (assigned, scores, gt, n1, n2) in enumerate(frames):
@@ -217,6 +223,71 @@ class RankedAssignments:
             n2=np.asarray(n2s, dtype=np.int64),
             n_gt=np.asarray(n_gts, dtype=np.int64),
         )
+
+
+def _integer_pairs(pairs) -> np.ndarray | None:
+    """`pairs` as an (k, 2) int64 array when it is an integer (k, 2) array or empty; else None."""
+    arr = np.asarray(pairs)
+    if arr.size == 0:
+        return np.zeros((0, 2), dtype=np.int64)
+    if arr.ndim != 2 or arr.shape[1] != 2 or arr.dtype.kind not in "iu":
+        return None
+    return arr
+
+
+def _one_to_one_inside(pairs: np.ndarray, frame: np.ndarray, n1: np.ndarray, n2: np.ndarray) -> bool:  # fmt: skip
+    """Whether every frame's rows of `pairs` lie inside its n1 x n2 views and repeat no index."""
+    if not len(pairs):
+        return True
+    if (pairs < 0).any() or (pairs[:, 0] >= n1[frame]).any() or (pairs[:, 1] >= n2[frame]).any():
+        return False
+    for column in (0, 1):
+        key = frame * (int(pairs[:, column].max()) + 1) + pairs[:, column]
+        if len(np.unique(key)) != len(key):
+            return False
+    return True
+
+
+def _from_integer_frames(frames: list[tuple]) -> dict | None:
+    """:meth:`RankedAssignments.from_frames`' fields for frames whose arrays are all integer
+    (k, 2) arrays inside their views, one-to-one, with a score per assigned pair, in one pass
+    over all frames; None when some frame is not (the per-frame path then names it)."""
+    assigned = [_integer_pairs(f[0]) for f in frames]
+    truth = [_integer_pairs(f[2]) for f in frames]
+    if any(a is None for a in assigned) or any(g is None for g in truth):
+        return None
+    scores = [np.asarray(f[1], dtype=float).reshape(-1) for f in frames]
+    k_a = np.array([len(a) for a in assigned], dtype=np.int64)
+    if any(len(s) != k for s, k in zip(scores, k_a, strict=True)):
+        return None
+    n1 = np.array([f[3] for f in frames], dtype=np.int64).reshape(-1)
+    n2 = np.array([f[4] for f in frames], dtype=np.int64).reshape(-1)
+    if (n1 < 0).any() or (n2 < 0).any():
+        return None
+    k_g = np.array([len(g) for g in truth], dtype=np.int64)
+    frame_of = np.arange(len(frames), dtype=np.int64)
+    fa, fg = np.repeat(frame_of, k_a), np.repeat(frame_of, k_g)
+    a = np.concatenate([np.zeros((0, 2), np.int64), *assigned]).astype(np.int64, copy=False)
+    g = np.concatenate([np.zeros((0, 2), np.int64), *truth]).astype(np.int64, copy=False)
+    if not (_one_to_one_inside(a, fa, n1, n2) and _one_to_one_inside(g, fg, n1, n2)):
+        return None
+    start1 = np.concatenate([[0], np.cumsum(n1)])[:-1]
+    start2 = np.concatenate([[0], np.cumsum(n2)])[:-1]
+    partner = np.full(int(n1.sum()), -1, dtype=np.int64)  # every frame's _partner, end to end
+    partner[start1[fg] + g[:, 0]] = g[:, 1]
+    covered2 = np.zeros(int(n2.sum()), dtype=bool)  # every frame's _covered(n2, g[:, 1])
+    covered2[start2[fg] + g[:, 1]] = True
+    mate = partner[start1[fa] + a[:, 0]]
+    return {
+        "frame": fa,
+        "score": np.concatenate([np.zeros(0), *scores]),
+        "correct": mate == a[:, 1],
+        "cov1": mate >= 0,
+        "cov2": covered2[start2[fa] + a[:, 1]],
+        "n1": n1,
+        "n2": n2,
+        "n_gt": k_g,
+    }
 
 
 def _kept_counts(ranked: RankedAssignments, weights: np.ndarray, thresholds: np.ndarray):

@@ -15,10 +15,26 @@ from pathlib import Path
 from eval.core.tasks import MatcherSpec
 
 
+def overlapping_records(trained_on: set[str], dirs: Iterable[str | Path]) -> dict[str, int]:
+    """{dataset folder: how many of its records are among ``trained_on``} for the folders that
+    share at least one record with a model's training data: what
+    :func:`cadsim.dataset.training_set.overlapping_records` says, from each verified dataset's
+    manifest (the checksum of every record, as its records carry them) instead of reading every
+    record."""
+    from cadsim.dataset import Dataset
+
+    shared = {}
+    for folder in dirs:
+        records = Dataset(folder, verify=True).manifest["records"]
+        common = len({r["checksum"] for r in records} & trained_on)
+        if common:
+            shared[str(folder)] = common
+    return shared
+
+
 def check_no_overlap(model_path: str | Path, scored_dirs: Iterable[str | Path]) -> str:
     """The model's sha256 after checking that it loads and that none of ``scored_dirs`` holds a
     record it was trained on; ValueError in one line otherwise."""
-    from cadsim.dataset.training_set import overlapping_records
     from matchers.learned.model import load_model
 
     model = load_model(model_path)

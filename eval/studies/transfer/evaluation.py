@@ -134,7 +134,7 @@ def _trained_already(path: Path, dirs: Sequence[Path]):
 def check_tau_split(model_path: str | Path, val_dir: str | Path) -> None:
     """ValueError in one line when the model at ``model_path`` was trained on a record (by
     checksum) of ``val_dir``, the split its τ would be calibrated on."""
-    from cadsim.dataset.training_set import overlapping_records
+    from eval.protocol.model_options import overlapping_records
 
     trained = load_model(model_path).training_records()
     shared = overlapping_records(trained, [val_dir])

@@ -8,8 +8,10 @@ positions, reported classes, ground truth), the sizes each view's detector repor
 size noise; never the objects' true sizes, which would name the pair: docs/dataset.md, "Sizes in
 exported boxes") and headings instead of image appearance, no pixels. The record identity and the observers' bodies
 survive the round trip, so every localisation preset draws the same prior as for the full
-table. The folders are rebuilt on every run (a few seconds; the records' bytes, hence the
-result cache's keys, do not change while cad-v2x does not).
+table. A folder is rebuilt when its source split or the export/import code (the result cache's
+code version) has changed since it was built, or its manifest is not the one built (a stamp
+under ``<cadsim cache>/boxes/``); otherwise it is reused as it is (its records' bytes, hence the
+result cache's keys, would not change).
 
 Protocol. Exactly the full table's (:func:`eval.studies.v2x.table.evaluate_v2x`): every matcher
 that runs without pixels (:func:`box_matchers`) under every preset with the same tuning budget,
@@ -20,6 +22,7 @@ matchers compare box sizes here. Files: ``table_v2x_boxes.{md,csv}``,
 
 from __future__ import annotations
 
+import hashlib
 import json
 import logging
 import shutil
@@ -71,19 +74,62 @@ def _ours(folder: Path) -> bool:
 def as_boxes(camera_dir: str | Path, box_dir: str | Path) -> Path:
     """``camera_dir`` exported (OPV2V layout, a temporary folder) and imported as box-only
     records at ``box_dir`` (replaced if this stage wrote it; refused otherwise)."""
+    from cadsim.dataset import Dataset
     from cadsim.exporters.opv2v import export_opv2v
     from cadsim.importers.opv2v import import_opv2v
+    from eval.core.cache import code_version
 
     box_dir = Path(box_dir)
     if not _ours(box_dir):
         raise ValueError(f"{box_dir}: exists and is not a box dataset this stage wrote")
+    source = {"split": Dataset(camera_dir).checksum, "code": code_version()}
+    if _built_from(box_dir) == source:
+        return box_dir
     if box_dir.exists():
         shutil.rmtree(box_dir)
     with tempfile.TemporaryDirectory(prefix="cadsim-opv2v-") as tmp:
         exported = Path(tmp) / "opv2v"
         export_opv2v(camera_dir, exported)
         import_opv2v(exported, box_dir, prior=False)
+    _remember(box_dir, source)
     return box_dir
+
+
+def _stamp_path(box_dir: Path) -> Path:
+    from matchers.core.jit import cache_root
+
+    name = hashlib.sha256(str(box_dir.resolve()).encode()).hexdigest()[:32]
+    return cache_root() / "boxes" / f"{name}.json"
+
+
+def _built_from(box_dir: Path) -> dict | None:
+    """The source {split checksum, code version} ``box_dir`` was built from, if it still holds
+    the manifest it was built with; None otherwise (rebuild it)."""
+    from cadsim.dataset import Dataset
+
+    try:
+        stamp = json.loads(_stamp_path(box_dir).read_text())
+        built = Dataset(box_dir).checksum
+    except (OSError, ValueError):
+        return None
+    ok = isinstance(stamp, dict) and stamp.get("folder") == str(box_dir.resolve())
+    return stamp.get("source") if ok and stamp.get("checksum") == built else None
+
+
+def _remember(box_dir: Path, source: dict) -> None:
+    """Stamp ``box_dir`` as built from ``source`` (a folder that cannot be written only costs
+    the next run a rebuild)."""
+    from cadsim.dataset import Dataset
+    from cadsim.dataset.atomic_writer import write_file_atomic
+
+    stamp = {"folder": str(box_dir.resolve()), "source": source}
+    stamp["checksum"] = Dataset(box_dir).checksum
+    path = _stamp_path(box_dir)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write_file_atomic(path, json.dumps(stamp).encode())
+    except (OSError, ValueError):
+        return
 
 
 def evaluate_boxes(
