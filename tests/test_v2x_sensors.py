@@ -374,3 +374,19 @@ def test_the_sensor_table_compares_each_familys_validation_choice_on_the_common_
     taus = dict(zip(full["matcher"], full["tau"], strict=True))
     for row in common[common["preset"] == "rtk"].itertuples():
         assert row.tau == pytest.approx(taus[row.matcher])
+
+
+@pytest.mark.render
+def test_the_coverage_counts_are_counted_once_per_dataset(both_dataset, tmp_path, monkeypatch):
+    from eval.studies.v2x import sensors
+
+    monkeypatch.setenv("CADSIM_CACHE_DIR", str(tmp_path / "cadsim-cache"))
+    counted = sensors.coverage_counts(both_dataset)
+    monkeypatch.setattr(sensors, "_coverage_counts", lambda folder: pytest.fail("counted again"))
+    assert sensors.coverage_counts(both_dataset) == counted
+    (entry,) = (tmp_path / "cadsim-cache" / "derived").glob("*.json")
+    entry.write_text(entry.read_text().replace('"lidar_per_view":', '"lidar_per_view":1'))
+    recounted = []
+    monkeypatch.setattr(sensors, "_coverage_counts", lambda f: recounted.append(f) or counted)
+    assert sensors.coverage_counts(both_dataset) == counted
+    assert recounted == [both_dataset]  # the edited entry was refused, the counts counted again

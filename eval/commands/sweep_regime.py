@@ -164,9 +164,10 @@ def sweep_regime(
     return SweepResult(summary[list(SWEEP_COLUMNS)], find_crossovers(per_pair))
 
 
-def write_sweep(out_dir: str | Path, result: SweepResult) -> list[Path]:
+def write_sweep(out_dir: str | Path, result: SweepResult, draw: bool = True) -> list[Path]:
     """Merge the sweep's rows into ``regime_sweep.csv`` and ``crossovers.csv`` (its datasets'
-    rows replaced, the others kept), then redraw the figure from the whole table; returns the
+    rows replaced, the others kept), then redraw the figure from the whole table (``draw=False``:
+    not yet — a caller sweeping several datasets draws once after the last); returns the
     written paths."""
     from eval.report.figures import write_fig_regime
 
@@ -174,7 +175,8 @@ def write_sweep(out_dir: str | Path, result: SweepResult) -> list[Path]:
     out_dir.mkdir(parents=True, exist_ok=True)
     upsert_csv(out_dir / "regime_sweep.csv", rounded(result.rows))
     upsert_csv(out_dir / "crossovers.csv", result.crossovers.round(4))
-    return [out_dir / "regime_sweep.csv", out_dir / "crossovers.csv", *write_fig_regime(out_dir)]
+    written = [out_dir / "regime_sweep.csv", out_dir / "crossovers.csv"]
+    return written + (write_fig_regime(out_dir) if draw else [])
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:

@@ -144,7 +144,7 @@ def regime_sweep(state: RunState) -> None:
         )  # fmt: skip
         named, _ = chosen_specs(state.out, entry.label, state.matchers)
         result = sweep_regime(entry, named, seeds, keeps, state.runner, pairs, val_seeds)
-        write_sweep(state.out, result)
+        write_sweep(state.out, result, draw=False)  # drawn once, with every figure (tables_figures)
     state.record["regime_sweep"] = {
         "datasets": [e.label for e in state.entries] if keeps else [],
         "keep": keeps,

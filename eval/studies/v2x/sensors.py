@@ -211,7 +211,47 @@ def camera_fully_covered(dataset_dir: str | Path) -> bool:
 def coverage_counts(dataset_dir: str | Path) -> dict[str, float]:
     """Per view of two-sensor dataset ``dataset_dir``, on average: the camera's and the LiDAR's
     detections in the region both cover, the LiDAR's boxes outside it and how many of those are
-    false positives (no object's id) — the ``objects`` … ``lidar_extra_false_per_view`` columns."""
+    false positives (no object's id) — the ``objects`` … ``lidar_extra_false_per_view`` columns.
+    Counted once per dataset content and code: kept under ``<cadsim cache>/derived/`` in the
+    form of :mod:`eval.core.digest_store`, keyed by the dataset's checksum, the result cache's
+    code version (the readers) and this module's source."""
+    import hashlib
+    import json
+
+    from cadsim.dataset import Dataset
+    from eval.core.cache import code_version
+    from eval.core.digest_store import DigestStore, sources_version
+    from matchers.core.jit import cache_root
+
+    root = Path(__file__).resolve().parents[3]
+    source = sources_version(
+        "coverage counts 1", root, [Path(__file__).relative_to(root).as_posix()]
+    )
+    described = [Dataset(dataset_dir).checksum, code_version(), source]
+    key = hashlib.sha256(json.dumps(described).encode()).hexdigest()
+    store = DigestStore(cache_root() / "derived", "coverage counts", 1, 1 << 16)
+    found = store.load(key, lambda payload: _plain_counts(payload["counts"]))
+    if found is None:
+        found = _coverage_counts(dataset_dir)
+        store.store(key, {"counts": found})
+    return found
+
+
+def _plain_counts(counts) -> dict[str, float]:
+    """Stored counts as :func:`coverage_counts` returns them; ValueError unless they have its
+    keys, ``objects`` text and the rest numbers."""
+    keys = ("objects", "camera_per_view", "lidar_per_view", "lidar_extra_per_view", "lidar_extra_false_per_view")  # fmt: skip
+    if not isinstance(counts, dict) or list(counts) != list(keys):
+        raise ValueError("counts: not the coverage columns")
+    if not isinstance(counts["objects"], str) or not all(
+        isinstance(counts[k], int | float) and not isinstance(counts[k], bool) for k in keys[1:]
+    ):
+        raise ValueError("counts: a value of the wrong type")
+    return counts
+
+
+def _coverage_counts(dataset_dir: str | Path) -> dict[str, float]:
+    """:func:`coverage_counts`, counted from the records."""
     from cadsim.dataset import Dataset
 
     def per_view(sensor: str, false_only: bool = False) -> float:
