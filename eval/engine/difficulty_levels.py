@@ -21,6 +21,7 @@ import numpy as np
 import pandas as pd
 
 from cadsim.dataset.difficulty import FACTORS, LEVELS, LevelRule
+from eval.engine.matcher_list import PAPER_ORDER
 from eval.engine.power_analysis import clusters_needed
 from eval.protocol.cluster_interval import cluster_standard_error, t_interval
 from eval.protocol.detectable_difference import mdd_factor
@@ -192,8 +193,10 @@ def write_levels(
     return rows, summary
 
 
-PAPER_METHODS = ("sm", "rrwm", "hgm", "tm", "bcagm", "rrwhm", "mos", "maximin")
-"""The paper's eight methods: the ones whose spread on validation picks the headline level."""
+BASELINES = ("appearance", "none")
+PAPER_METHODS = tuple(m for m in PAPER_ORDER if m not in BASELINES)
+"""The paper's eight methods (:data:`~eval.engine.matcher_list.PAPER_ORDER` without the two
+baselines): the ones whose spread on validation picks the headline level."""
 
 
 def write_table1_levels(
@@ -222,7 +225,7 @@ def write_table1_levels(
     columns = ["dataset", "pair", "level", *FACTORS]
     write_csv(test_levels[columns].round(6), out_dir / "difficulty_levels.csv")
     headline = headline_level(val, val_levels, PAPER_METHODS)
-    order = [m for m in (*PAPER_METHODS, "appearance", "none") if m in set(test["matcher"])]
+    order = [m for m in PAPER_ORDER if m in set(test["matcher"])]
     order += [m for m in dict.fromkeys(test["matcher"]) if m not in order]
     extra = headline | {
         "variant": variant,
