@@ -16,6 +16,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from eval.claims.budget import budget_claims
 from eval.core.result_files import write_csv
 from eval.protocol.claims import FILE, Claim, to_frame
 from eval.studies import studies
@@ -32,7 +33,7 @@ def study_claims(results: str | Path) -> list[Claim]:
             out += study.emitted(Path(results))
         except Exception as error:  # any file format this code does not read
             log.warning("%s: claims left out: %s: %s", study.name, type(error).__name__, error)
-    return out
+    return out + budget_claims(results)
 
 
 def build_claims(results: str | Path) -> pd.DataFrame:

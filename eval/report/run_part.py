@@ -8,6 +8,7 @@ import json
 import os
 from pathlib import Path
 
+from eval.claims.budget import budget_claims
 from eval.report.run_record import COLD_RECORD, cold_record
 
 
@@ -133,4 +134,11 @@ def run_part(results: Path, record: dict) -> list[str]:
     timed = last_cold(results, record) or record
     if timed.get("wall_s"):
         out += ["### Stage times", "", *stage_table(timed)]
+        budget = [c.statement for c in budget_claims(results)]
+        if budget:
+            out += [
+                "Per study, the sum of its stages against its share of the cold-run budget:",
+                "",
+            ]
+            out += [f"- {line}" for line in budget] + [""]
     return out
