@@ -50,8 +50,8 @@ def budget_parts(record: dict) -> list[tuple[str, float, float]]:
 
 def budget_claims(results: str | Path) -> list[Claim]:
     """The claims of :func:`budget_parts` for the folder's last cold run (none without one)."""
-    path = Path(results) / "cold_run.json"
-    if not path.is_file():
+    path = Path(results) / "cold_run.json"  # eval.report.run_record's COLD_RECORD; read here,
+    if not path.is_file():  # since eval.report reads these claims (no folder loop)
         return []
     record = json.loads(path.read_text())
     claims = []

@@ -188,16 +188,17 @@ class ResultCache:
             raise
         return path
 
-    def load(self, spec: RunSpec, checked: bool = True) -> RunResult:
+    def load(self, spec: RunSpec, checked: bool = True, raw: bytes | None = None) -> RunResult:
         """The cached result of `spec`; ``KeyError`` if absent, ``ValueError`` if unreadable,
         :class:`StaleEntry` (a ValueError) if its contents contradict themselves.
         ``checked=False``: the read-time checks of an untrusted entry are skipped — only for
-        an entry this process has just stored (the runner's read-back of what it computed)."""
+        an entry this process has just stored (the runner's read-back of what it computed).
+        ``raw``: the entry file's bytes, when the caller has read them already."""
         path = self.path(spec)
-        if not path.is_file():
+        if raw is None and not path.is_file():
             raise KeyError(f"{path}: no cached result for {spec}")
         try:
-            data = read_bounded(path)  # the bounds hold whether or not `checked`: one pass
+            data = read_bounded(path, raw)  # the bounds hold whether or not `checked`: one pass
             meta = json.loads(str(data["meta"]))
             gts = _unragged(data, "gt_pairs")
             assigned = _unragged(data, "assigned")

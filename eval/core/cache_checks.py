@@ -39,16 +39,18 @@ class StaleEntry(ValueError):
     """A cache entry that cannot be served (it contradicts itself or its dataset): recompute it."""
 
 
-def read_bounded(path: Path) -> dict[str, np.ndarray]:
+def read_bounded(path: Path, raw: bytes | None = None) -> dict[str, np.ndarray]:
     """Every array of the ``.npz`` at `path` ({name: array}, in one pass over the archive), each
     member held to its bounds before its data are read; :class:`StaleEntry` if a member declares
     more than deflate can expand to, its header declares more bytes than the member holds or a
-    non-numeric dtype, or its data are cut short."""
+    non-numeric dtype, or its data are cut short. ``raw``: the file's bytes, already read."""
+    import io
+
     from numpy.lib import format as npy
 
     arrays = {}
     try:
-        with zipfile.ZipFile(path) as archive:
+        with zipfile.ZipFile(path if raw is None else io.BytesIO(raw)) as archive:
             for member in archive.infolist():
                 if member.file_size > _MAX_RATIO * member.compress_size + _SLACK_BYTES:
                     raise StaleEntry(
@@ -189,7 +191,7 @@ def check_result(result, hungarian: Sequence[bool], path: Path) -> None:
         ("ground truth", [o.gt_pairs for o in outcomes]),
         ("assignment", [o.assigned for o in outcomes]),
     ):
-        k, why = _first_not_one_to_one(pairs, n1, n2)
+        k, why = first_not_one_to_one(pairs, n1, n2)
         if why is not None:
             raise refuse(k, f"{what}: {why}")
     for k in np.flatnonzero(np.asarray(hungarian, dtype=bool)):
@@ -200,7 +202,7 @@ def check_result(result, hungarian: Sequence[bool], path: Path) -> None:
             )
 
 
-def _first_not_one_to_one(pairs: list[np.ndarray], n1: np.ndarray, n2: np.ndarray):
+def first_not_one_to_one(pairs: list[np.ndarray], n1: np.ndarray, n2: np.ndarray):
     """(frame pair, why) of the first (k, 2) array of `pairs` that is not a one-to-one matching
     inside its views' n1 x n2 objects; (-1, None) when every one is."""
     counts = np.array([len(p) for p in pairs], dtype=np.int64)

@@ -58,6 +58,11 @@ def digest(text: str) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
+def key_of(described) -> str:
+    """Hex SHA-256 of the canonical JSON of `described` (what an entry is stored under)."""
+    return hashlib.sha256(json.dumps(described, sort_keys=True).encode()).hexdigest()
+
+
 def sources_version(tag: str, root: Path, names: Iterable[str]) -> str:
     """Hex SHA-256 over `tag` and the names and contents of the files `names` (relative to
     `root`, in the given order): a cache key's code part."""

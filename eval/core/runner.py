@@ -349,14 +349,14 @@ class Runner:
         times, and each read would decompress and check the entry again. A digest of the
         entry's bytes is part of the key, so a rewritten entry is read and checked afresh."""
         try:
-            digest = hashlib.blake2b(self.cache.path(spec).read_bytes(), digest_size=16)
-            key = (spec, digest.digest(), checked)
+            raw = self.cache.path(spec).read_bytes()  # read once: digested, then parsed
+            key = (spec, hashlib.blake2b(raw, digest_size=16).digest(), checked)
         except OSError:
-            key = None
+            raw = key = None
         if key is not None and key in self._memo:
             self._memo.move_to_end(key)
             return self._memo[key]
-        result = self.cache.load(spec, checked=checked)
+        result = self.cache.load(spec, checked=checked, raw=raw)
         if key is not None:
             self._memo[key] = result
             while len(self._memo) > READ_MEMO:

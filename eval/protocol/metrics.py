@@ -33,6 +33,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from eval.core.cache_checks import first_not_one_to_one
+
 METRICS = ("accuracy", "balanced_accuracy", "precision", "recall", "f1")
 
 
@@ -235,19 +237,6 @@ def _integer_pairs(pairs) -> np.ndarray | None:
     return arr
 
 
-def _one_to_one_inside(pairs: np.ndarray, frame: np.ndarray, n1: np.ndarray, n2: np.ndarray) -> bool:  # fmt: skip
-    """Whether every frame's rows of `pairs` lie inside its n1 x n2 views and repeat no index."""
-    if not len(pairs):
-        return True
-    if (pairs < 0).any() or (pairs[:, 0] >= n1[frame]).any() or (pairs[:, 1] >= n2[frame]).any():
-        return False
-    for column in (0, 1):
-        key = frame * (int(pairs[:, column].max()) + 1) + pairs[:, column]
-        if len(np.unique(key)) != len(key):
-            return False
-    return True
-
-
 def _from_integer_frames(frames: list[tuple]) -> dict | None:
     """:meth:`RankedAssignments.from_frames`' fields for frames whose arrays are all integer
     (k, 2) arrays inside their views, one-to-one, with a score per assigned pair, in one pass
@@ -269,8 +258,9 @@ def _from_integer_frames(frames: list[tuple]) -> dict | None:
     fa, fg = np.repeat(frame_of, k_a), np.repeat(frame_of, k_g)
     a = np.concatenate([np.zeros((0, 2), np.int64), *assigned]).astype(np.int64, copy=False)
     g = np.concatenate([np.zeros((0, 2), np.int64), *truth]).astype(np.int64, copy=False)
-    if not (_one_to_one_inside(a, fa, n1, n2) and _one_to_one_inside(g, fg, n1, n2)):
-        return None
+    for pairs in (assigned, truth):  # inside the views, one-to-one: the cache's own check
+        if first_not_one_to_one(pairs, n1, n2)[1] is not None:
+            return None
     start1 = np.concatenate([[0], np.cumsum(n1)])[:-1]
     start2 = np.concatenate([[0], np.cumsum(n2)])[:-1]
     partner = np.full(int(n1.sum()), -1, dtype=np.int64)  # every frame's _partner, end to end

@@ -2,8 +2,7 @@
 they were when it last drew is not run again (a fully cached ``make reproduce`` drew the same
 eight figures every time, ≈ 12 s, and rewrote each PDF with a new creation date).
 
-A stamp per output folder under ``<cadsim cache>/figures/`` (``$CADSIM_CACHE_DIR``, else
-``~/.cache/cadsim``; :func:`matchers.core.jit.cache_root`) holds, per writer, the key it drew
+A stamp per output folder (:mod:`eval.core.folder_stamps`, kind ``figures``) holds, per writer, the key it drew
 under and the SHA-256 of every file it wrote. The key (:func:`figure_key`) is a SHA-256 over the
 writer's name, matplotlib's version, the drawing sources (``eval/report/*.py``,
 ``cadsim/*_drawing.py``) and the bytes of each input file (a missing one counts as missing). The
@@ -17,14 +16,14 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import json
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
-from cadsim.dataset.atomic_writer import write_file_atomic
+from eval.core.folder_stamps import read_stamp, write_stamp
 
 _ROOT = Path(__file__).resolve().parents[2]
 _SOURCES = ("eval/report/*.py", "cadsim/*_drawing.py")
+KIND = "figures"
 
 
 def _digest(path: Path) -> str | None:
@@ -54,20 +53,9 @@ def figure_key(writer: str, inputs: Iterable[Path]) -> str:
     return h.hexdigest()
 
 
-def _stamp_path(out_dir: Path) -> Path:
-    from matchers.core.jit import cache_root
-
-    name = hashlib.sha256(str(out_dir.resolve()).encode()).hexdigest()[:32]
-    return cache_root() / "figures" / f"{name}.json"
-
-
 def _stamps(out_dir: Path) -> dict:
-    try:
-        stored = json.loads(_stamp_path(out_dir).read_text())
-    except (OSError, ValueError):
-        return {}
-    ok = isinstance(stored, dict) and stored.get("folder") == str(out_dir.resolve())
-    return stored.get("writers", {}) if ok and isinstance(stored.get("writers"), dict) else {}
+    stored = read_stamp(KIND, out_dir) or {}
+    return stored["writers"] if isinstance(stored.get("writers"), dict) else {}
 
 
 def _current(out_dir: Path, writer: str, key: str) -> list[Path] | None:
@@ -90,13 +78,7 @@ def _record(out_dir: Path, writer: str, key: str, paths: list[Path]) -> None:
         Path(p).resolve().relative_to(out_dir.resolve()).as_posix(): _digest(Path(p)) for p in paths
     }
     writers[writer] = {"key": key, "outputs": outputs}
-    text = json.dumps({"folder": str(out_dir.resolve()), "writers": writers})
-    path = _stamp_path(out_dir)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        write_file_atomic(path, text.encode())
-    except (OSError, ValueError):
-        return
+    write_stamp(KIND, out_dir, {"writers": writers})
 
 
 def drawn_once(inputs: Callable[[Path], Iterable[Path]]):

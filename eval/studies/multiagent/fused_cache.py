@@ -20,8 +20,6 @@ task's, is logged and recomputed.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import logging
 from collections.abc import Mapping, Sequence
 from functools import cache
@@ -29,7 +27,13 @@ from pathlib import Path
 
 import pandas as pd
 
-from eval.core.digest_store import DigestStore, frame_from_payload, frame_payload, sources_version
+from eval.core.digest_store import (
+    DigestStore,
+    frame_from_payload,
+    frame_payload,
+    key_of,
+    sources_version,
+)
 from eval.protocol.multiway_metrics import MultiwayCounts
 from matchers.fusion import get_fusion
 
@@ -87,7 +91,7 @@ def fused_key(
         "fusions": list(fusions),
         "code": study_version(),
     }
-    return hashlib.sha256(json.dumps(described, sort_keys=True).encode()).hexdigest()
+    return key_of(described)
 
 
 class FusedCache:

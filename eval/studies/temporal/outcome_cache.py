@@ -24,13 +24,17 @@ A forger who rewrites an entry with a matching digest is not stopped (the run ca
 
 from __future__ import annotations
 
-import hashlib
-import json
 import logging
 from functools import cache
 from pathlib import Path
 
-from eval.core.digest_store import DigestStore, frame_from_payload, frame_payload, sources_version
+from eval.core.digest_store import (
+    DigestStore,
+    frame_from_payload,
+    frame_payload,
+    key_of,
+    sources_version,
+)
 from eval.studies.temporal.preset import PresetOutcome
 from eval.studies.temporal.table import (
     COLUMNS,
@@ -83,7 +87,7 @@ def task_key(task: tuple) -> str:
         "checksums": [Dataset(test_dir).checksum, Dataset(val_dir).checksum],
         "code": [code_version(), study_version()],
     }
-    return hashlib.sha256(json.dumps(described, sort_keys=True).encode()).hexdigest()
+    return key_of(described)
 
 
 class OutcomeCache:

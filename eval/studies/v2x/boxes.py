@@ -9,9 +9,9 @@ size noise; never the objects' true sizes, which would name the pair: docs/datas
 exported boxes") and headings instead of image appearance, no pixels. The record identity and the observers' bodies
 survive the round trip, so every localisation preset draws the same prior as for the full
 table. A folder is rebuilt when its source split or the export/import code (the result cache's
-code version) has changed since it was built, or its manifest is not the one built (a stamp
-under ``<cadsim cache>/boxes/``); otherwise it is reused as it is (its records' bytes, hence the
-result cache's keys, would not change).
+code version) has changed since it was built, or its manifest is not the one built (a stamp of
+kind ``boxes``, :mod:`eval.core.folder_stamps`); otherwise it is reused as it is (its records'
+bytes, hence the result cache's keys, would not change).
 
 Protocol. Exactly the full table's (:func:`eval.studies.v2x.table.evaluate_v2x`): every matcher
 that runs without pixels (:func:`box_matchers`) under every preset with the same tuning budget,
@@ -22,7 +22,6 @@ matchers compare box sizes here. Files: ``table_v2x_boxes.{md,csv}``,
 
 from __future__ import annotations
 
-import hashlib
 import json
 import logging
 import shutil
@@ -32,6 +31,7 @@ from pathlib import Path
 
 import pandas as pd
 
+from eval.core.folder_stamps import read_stamp, write_stamp
 from eval.core.tasks import MatcherSpec
 from eval.protocol.claims import Claim, measurement_claim
 
@@ -95,41 +95,24 @@ def as_boxes(camera_dir: str | Path, box_dir: str | Path) -> Path:
     return box_dir
 
 
-def _stamp_path(box_dir: Path) -> Path:
-    from matchers.core.jit import cache_root
-
-    name = hashlib.sha256(str(box_dir.resolve()).encode()).hexdigest()[:32]
-    return cache_root() / "boxes" / f"{name}.json"
-
-
 def _built_from(box_dir: Path) -> dict | None:
     """The source {split checksum, code version} ``box_dir`` was built from, if it still holds
     the manifest it was built with; None otherwise (rebuild it)."""
     from cadsim.dataset import Dataset
 
+    stamp = read_stamp("boxes", box_dir)
     try:
-        stamp = json.loads(_stamp_path(box_dir).read_text())
         built = Dataset(box_dir).checksum
     except (OSError, ValueError):
         return None
-    ok = isinstance(stamp, dict) and stamp.get("folder") == str(box_dir.resolve())
-    return stamp.get("source") if ok and stamp.get("checksum") == built else None
+    return stamp.get("source") if stamp and stamp.get("checksum") == built else None
 
 
 def _remember(box_dir: Path, source: dict) -> None:
-    """Stamp ``box_dir`` as built from ``source`` (a folder that cannot be written only costs
-    the next run a rebuild)."""
+    """Stamp ``box_dir`` as built from ``source`` (:mod:`eval.core.folder_stamps`)."""
     from cadsim.dataset import Dataset
-    from cadsim.dataset.atomic_writer import write_file_atomic
 
-    stamp = {"folder": str(box_dir.resolve()), "source": source}
-    stamp["checksum"] = Dataset(box_dir).checksum
-    path = _stamp_path(box_dir)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        write_file_atomic(path, json.dumps(stamp).encode())
-    except (OSError, ValueError):
-        return
+    write_stamp("boxes", box_dir, {"source": source, "checksum": Dataset(box_dir).checksum})
 
 
 def evaluate_boxes(

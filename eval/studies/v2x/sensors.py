@@ -215,12 +215,9 @@ def coverage_counts(dataset_dir: str | Path) -> dict[str, float]:
     Counted once per dataset content and code: kept under ``<cadsim cache>/derived/`` in the
     form of :mod:`eval.core.digest_store`, keyed by the dataset's checksum, the result cache's
     code version (the readers) and this module's source."""
-    import hashlib
-    import json
-
     from cadsim.dataset import Dataset
     from eval.core.cache import code_version
-    from eval.core.digest_store import DigestStore, sources_version
+    from eval.core.digest_store import DigestStore, key_of, sources_version
     from matchers.core.jit import cache_root
 
     root = Path(__file__).resolve().parents[3]
@@ -228,7 +225,7 @@ def coverage_counts(dataset_dir: str | Path) -> dict[str, float]:
         "coverage counts 1", root, [Path(__file__).relative_to(root).as_posix()]
     )
     described = [Dataset(dataset_dir).checksum, code_version(), source]
-    key = hashlib.sha256(json.dumps(described).encode()).hexdigest()
+    key = key_of(described)
     store = DigestStore(cache_root() / "derived", "coverage counts", 1, 1 << 16)
     found = store.load(key, lambda payload: _plain_counts(payload["counts"]))
     if found is None:
