@@ -3,6 +3,7 @@ points (bounded) and the boxes, box-only matching problems, ``cadsim show`` from
 
 from __future__ import annotations
 
+import json
 import shutil
 from pathlib import Path
 
@@ -191,3 +192,44 @@ def test_the_regime_card_reports_recall_by_range_and_centre_error(lidar_dataset)
     assert len(card_lines(card)) == 4
     # camera datasets have no card
     assert lidar_detector_card([]) is None
+
+
+def _record_bytes(folder: Path) -> dict[str, bytes]:
+    root = folder / "pairs"
+    return {
+        str(p.relative_to(root)): p.read_bytes() for p in sorted(root.rglob("*")) if p.is_file()
+    }
+
+
+def test_both_sensors_sweep_only_accepted_pairs_and_write_the_same_records(tmp_path, monkeypatch):
+    """With both sensors a pair is accepted by its camera detections, so the LiDAR sweeps only
+    the accepted pairs' views (two per record), and the records are byte for byte those of
+    sweeping every candidate at capture time (each view's LiDAR draws on its own seed)."""
+    from cadsim.generation import pipeline
+
+    path = _scenario(tmp_path, (SCENARIOS / "cad-v2x-both.toml").read_text())
+    sweeps = []
+    observe = pipeline._lidar_observation
+    monkeypatch.setattr(
+        pipeline, "_lidar_observation", lambda *a: sweeps.append(a[-1]) or observe(*a)
+    )
+
+    def generate(out: Path) -> int:
+        sweeps.clear()
+        args = ["generate", str(path), "--out", str(out), "--pairs", "3", "--workers", "1"]
+        assert main([*args, "--no-progress"]) == 0
+        return len(sweeps)
+
+    deferred = generate(tmp_path / "deferred")
+    summaries = [
+        json.loads(p.read_text())
+        for p in (tmp_path / "deferred" / layout.EPISODES_DIR).glob("*.json")
+    ]
+    assert deferred == 2 * 3 == 2 * sum(s["accepted"] for s in summaries)
+    capture = pipeline._capture
+    monkeypatch.setattr(pipeline, "_capture", lambda *a, **k: capture(*a, **{**k, "lidar_now": True}))  # fmt: skip
+    monkeypatch.setattr(pipeline, "_with_lidar", lambda task, snapshot, views, slot, result: views)
+    at_capture = generate(tmp_path / "at-capture")
+    assert at_capture > deferred
+    assert sum(s["candidates"] for s in summaries) > 3  # a candidate was refused: a sweep saved
+    assert _record_bytes(tmp_path / "deferred") == _record_bytes(tmp_path / "at-capture")

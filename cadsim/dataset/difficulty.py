@@ -152,6 +152,21 @@ def _column(rows: Sequence[Mapping], key: str) -> np.ndarray:
     return np.array([np.nan if r.get(key) is None else float(r[key]) for r in rows], dtype=float)
 
 
+def _composite(reference: Mapping[str, np.ndarray], factors: Sequence[Mapping]) -> np.ndarray:
+    """:meth:`LevelRule.composite` against the sorted ``reference`` values of each factor."""
+    shares = []
+    for key, values_sorted in reference.items():
+        values = _hardness(_column(factors, key), key)
+        share = np.searchsorted(values_sorted, values, side="right") / values_sorted.size
+        shares.append(np.where(np.isfinite(values), share, np.nan))
+    if not shares:
+        return np.full(len(factors), np.nan)
+    stacked = np.vstack(shares)
+    known = np.isfinite(stacked).sum(axis=0)
+    total = np.nansum(stacked, axis=0)
+    return np.divide(total, known, out=np.full(len(factors), np.nan), where=known > 0)
+
+
 @dataclass(frozen=True)
 class LevelRule:
     """The declared level rule fitted on reference pairs (module docstring): per factor the
@@ -174,25 +189,13 @@ class LevelRule:
             values = np.sort(values[np.isfinite(values)])
             if values.size:
                 reference[key] = values
-        rule = cls(reference, (0.0, 0.0), len(factors))
-        composite = rule.composite(factors)
-        low, high = np.quantile(composite, [1 / 3, 2 / 3])
+        low, high = np.quantile(_composite(reference, factors), [1 / 3, 2 / 3])
         return cls(reference, (float(low), float(high)), len(factors))
 
     def composite(self, factors: Sequence[Mapping]) -> np.ndarray:
         """Per pair, the mean over its known factors of the share of reference pairs it is at
         least as hard as (0 … 1; nan for a pair without any known factor)."""
-        shares = []
-        for key, reference in self.reference.items():
-            values = _hardness(_column(factors, key), key)
-            share = np.searchsorted(reference, values, side="right") / reference.size
-            shares.append(np.where(np.isfinite(values), share, np.nan))
-        if not shares:
-            return np.full(len(factors), np.nan)
-        stacked = np.vstack(shares)
-        known = np.isfinite(stacked).sum(axis=0)
-        total = np.nansum(stacked, axis=0)
-        return np.divide(total, known, out=np.full(len(factors), np.nan), where=known > 0)
+        return _composite(self.reference, factors)
 
     def levels(self, factors: Sequence[Mapping]) -> list[str]:
         """Per pair its level: ``easy`` up to the first cut, ``hard`` above the second."""

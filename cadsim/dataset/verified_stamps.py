@@ -16,9 +16,9 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
-import tempfile
 from pathlib import Path
+
+from cadsim.dataset.atomic_writer import write_file_atomic
 
 
 def _stamp_path(folder: Path) -> Path:
@@ -47,10 +47,6 @@ def stamp(folder: Path, signature: tuple[str, str]) -> None:
         {"folder": str(Path(folder).resolve()), "checksum": signature[0], "files": signature[1]}
     )
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".json", dir=path.parent)
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
+        write_file_atomic(path, text.encode())
     except OSError:
         return

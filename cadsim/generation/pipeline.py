@@ -609,18 +609,17 @@ def _taken_at(out: Path, episode: int, slots: int, time_s: float) -> int:
     return sum(t == time_s for t in times)
 
 
-def _capture(task, stages, noise_cfg, det_cfg, snapshot, camera, observer, view, slot, result):  # fmt: skip
+def _capture(task, stages, noise_cfg, det_cfg, snapshot, camera, observer, view, slot, result, lidar_now=True):  # fmt: skip
     """Render, noise and detect view ``view`` (1-based; its seeds are (episode, slot, view)'s)
-    of ``camera``, carried by ``observer`` ("" for none). The view's capture."""
+    of ``camera``, carried by ``observer`` ("" for none). The view's capture. ``lidar_now``
+    False (sensor "both" only): the camera alone, the LiDAR added by :func:`_with_lidar` once
+    the pair is accepted."""
     seed = noise_seed(task.root_seed, task.episode, slot, view)
     attr_seed = attribute_seed(task.root_seed, task.episode, slot, view)
     sensor = getattr(task.scenario, "sensor", "camera")
     lidar = None
-    if sensor != "camera":
-        t, c = time.perf_counter(), time.process_time()
-        lidar = _lidar_observation(task, snapshot, camera, observer, seed, slot, view)
-        result.render_seconds += time.perf_counter() - t
-        result.view_core_seconds += time.process_time() - c
+    if sensor == "lidar" or (sensor == "both" and lidar_now):
+        lidar = _timed_lidar(task, snapshot, camera, observer, seed, slot, view, result)
     if sensor == "lidar":
         result.views += 1
         return ViewCapture(
@@ -658,6 +657,26 @@ def _observer_pose(snapshot, camera, observer: str) -> ObserverPose:
     return ObserverPose.of_carrier(carrier) if carrier else ObserverPose.of_camera(camera)
 
 
+def _timed_lidar(task, snapshot, camera, observer, seed, slot, view, result):
+    """:func:`_lidar_observation`, its wall and core time added to ``result``'s view times."""
+    t, c = time.perf_counter(), time.process_time()
+    lidar = _lidar_observation(task, snapshot, camera, observer, seed, slot, view)
+    result.render_seconds += time.perf_counter() - t
+    result.view_core_seconds += time.process_time() - c
+    return lidar
+
+
+def _with_lidar(task, snapshot, views: list[ViewCapture], slot, result) -> list[ViewCapture]:
+    """Camera captures of an accepted pair (sensor "both") with their LiDAR observations, drawn
+    from each view's own seed (its own stream, ``cadsim.sensing.lidar.observe``): the same
+    observations as sensing both at capture time, without sweeping candidates that fail."""
+    sweep = [
+        _timed_lidar(task, snapshot, v.camera, v.observer_id, v.noise_seed, slot, k, result)
+        for k, v in enumerate(views, start=1)
+    ]
+    return [dataclasses.replace(v, lidar=lidar) for v, lidar in zip(views, sweep, strict=True)]
+
+
 def _lidar_observation(task, snapshot, camera, observer, seed, slot, view):
     """The view's LiDAR sweep and boxes (``cadsim.sensing.lidar.observe``), seeded by the
     view's noise seed on the LiDAR's own stream."""
@@ -672,13 +691,17 @@ def _lidar_observation(task, snapshot, camera, observer, seed, slot, view):
 def _try_pair(
     task, stages, noise_cfg, det_cfg, snapshot, pair, candidate, slot, result
 ) -> PairRecord | None:
-    """Render, noise and detect both views of a candidate; the record if it is acceptable."""
+    """Render, noise and detect both views of a candidate; the record if it is acceptable. With
+    both sensors the pair is accepted by its camera detections, so the LiDAR sweeps only the
+    pairs that pass (:func:`_with_lidar`)."""
     crit = task.criteria
+    later = getattr(task.scenario, "sensor", "camera") == "both"
     views = []
     for v, camera, observer in ((1, pair.camera1, pair.observer1_id), (2, pair.camera2, pair.observer2_id)):  # fmt: skip
         capture = _capture(
-            task, stages, noise_cfg, det_cfg, snapshot, camera, observer, v, slot, result
-        )
+            task, stages, noise_cfg, det_cfg, snapshot, camera, observer, v, slot, result,
+            lidar_now=not later,
+        )  # fmt: skip
         if len(capture.detections) < crit.min_covisible + crit.min_exclusive:
             return None  # cannot pass, whatever the other view sees
         views.append(capture)
@@ -686,6 +709,8 @@ def _try_pair(
         views[0].detections, views[1].detections, crit.min_covisible, crit.min_exclusive
     ):
         return None
+    if later:
+        views = _with_lidar(task, snapshot, views, slot, result)
     meta = {"candidate": candidate, "pair": dict(pair.meta), "snapshot": dict(snapshot.meta)}
     return PairRecord(
         task.episode, slot, simulation_seed(task.root_seed, task.episode), float(snapshot.time),

@@ -1,4 +1,4 @@
-"""Hysteresis on the cross-agent links of a temporal matcher (issue 61): a track pair keeps its
+"""Hysteresis on the cross-agent links of a temporal matcher: a track pair keeps its
 partner unless the evidence for a change exceeds the evidence for the current partner by a
 margin.
 
@@ -6,16 +6,18 @@ State: the held links, pairs (a, b) of own track ids (agent 1's, agent 2's). At 
 the frame's scores S (n_t, m_t) (already in [0, 1], e.g. accumulated along the own tracks over
 the window) and the frame's own track ids:
 
-    boosted[i, j] = S[i, j] + margin · [(track1_t(i), track2_t(j)) is held and S[i, j] > 0]
+    boosted[i, j] = S[i, j] + margin · [(track1_t(i), track2_t(j)) is held]
 
 and the assignment is the Hungarian one on ``boosted``: a held link is given up only when the
 other assignment gains more than ``margin`` of score (one held link against one new one:
-S[i, j'] > S[i, j] + margin). A held link with no evidence now (S = 0) is not helped. The
-reported scores stay S and ``threshold`` reads S (a held pair below it is dropped, not kept).
+S[i, j'] > S[i, j] + margin). A held link is helped even with no evidence now (S = 0), so a
+partner survives a frame in which its object is briefly unscored. The reported scores stay S
+and ``threshold`` reads S (a held pair below it is dropped from the frame's pairs, not kept).
 
-Update after frame t: the assigned pairs with S > 0 become held; a held link is forgotten when
-either of its tracks takes another partner, or when both of its tracks are seen at t and it was
-not assigned; a link whose track is unseen at t is kept (the object may come back on that track).
+Update after frame t: the assigned pairs with S > 0, and the held links assigned again, are
+held; a held link is forgotten when either of its tracks takes another partner, or when both of
+its tracks are seen at t and it was not assigned; a link whose track is unseen at t is kept (the
+object may come back on that track).
 The held links do not depend on ``threshold`` (a run with ``threshold=None`` whose pairs are cut
 at τ afterwards, as the evaluation does, declares what a run at τ declares).
 

@@ -1,4 +1,4 @@
-"""The stages of the learned matchers' transfer matrix: CAD's training split, then models
+"""The stages of the learned matchers' transfer matrix: CAD's and CAD-V2X's training splits, then models
 trained on each training set and run on each test set. They fill the run record's ``transfer``
 section; they need cad-v2x and the external pairs (skipped without either)."""
 
@@ -6,7 +6,14 @@ from __future__ import annotations
 
 import logging
 
-from eval.pipeline.sizes import CAD_TRAIN_SEED_OFFSET, ROOT, SCENARIOS
+from eval.pipeline.sizes import (
+    CAD_TRAIN_SEED_OFFSET,
+    ROOT,
+    SCENARIOS,
+    V2X_LABEL,
+    V2X_SCENARIO,
+    V2X_TRAIN_SEED_OFFSET,
+)
 from eval.pipeline.stage import RunState, shown
 from eval.studies.external.evaluation import CALIBRATION_DIR, TEST_DIR
 from eval.studies.transfer.evaluation import evaluate_transfer, test_sets, train_models, train_sets
@@ -15,21 +22,30 @@ log = logging.getLogger("eval.reproduce")
 
 
 def transfer_generate(state: RunState) -> None:
-    """CAD's training split for the learned matchers (scenario seed + CAD_TRAIN_SEED_OFFSET),
-    when cad-v2x and the external pairs are part of this run and the CAD scenario exists."""
+    """The learned matchers' training splits, each on its scenario's own seed: CAD's (seed +
+    CAD_TRAIN_SEED_OFFSET) and CAD-V2X's (seed + V2X_TRAIN_SEED_OFFSET, beside the test split
+    the V2X study made), when cad-v2x and the external pairs are part of this run and the CAD
+    scenario exists. No other study reads them."""
     from cadsim.scenario import load_scenario
 
     path = ROOT / SCENARIOS[0]
     if state.v2x_entry is None or not state.args.external_runs or not path.is_file():
         return
-    seed = load_scenario(path).seed + CAD_TRAIN_SEED_OFFSET
-    pairs, folder = state.sizes.cad_train, state.data / "cad-train"
-    log.info("[transfer generate] CAD train: %d pairs (seed %d)", pairs, seed)
-    made = state.generate(path, folder, pairs, seed)
     record = state.record.setdefault("transfer", {})
-    record["cad_train"] = {"dir": str(folder), "pairs": pairs, "seed": seed}
-    record["cad_train"] |= {"new_records": made.new_records}
-    state.cad_train = folder
+    v2x_path = ROOT / V2X_SCENARIO
+    splits = (
+        ("cad_train", "CAD", path, CAD_TRAIN_SEED_OFFSET, state.sizes.cad_train, "cad-train"),
+        ("v2x_train", V2X_LABEL, v2x_path, V2X_TRAIN_SEED_OFFSET, state.sizes.v2x["train"],
+         f"{V2X_LABEL.lower()}-train"),
+    )  # fmt: skip
+    for key, label, scenario, offset, pairs, name in splits:
+        folder = state.data / name
+        seed = load_scenario(scenario).seed + offset
+        log.info("[transfer generate] %s train: %d pairs (seed %d)", label, pairs, seed)
+        made = state.generate(scenario, folder, pairs, seed)
+        record[key] = {"dir": str(folder), "pairs": pairs, "seed": seed}
+        record[key] |= {"new_records": made.new_records}
+    state.cad_train = state.data / "cad-train"
 
 
 def transfer(state: RunState) -> None:

@@ -44,10 +44,10 @@ STUDY = Study(
     stages=(
         Stage(
             name="transfer_generate",
-            reads=("scenarios/cad-intersection.toml",),
-            writes=("cad-train",),
+            reads=("scenarios/cad-intersection.toml", "scenarios/cad-v2x.toml"),
+            writes=("cad-train", "cad-v2x-train"),
             run=stages.transfer_generate,
-            budget_s=20,
+            budget_s=50,
             skip="transfer",
             executor=False,
             counts_runs=False,
@@ -63,6 +63,6 @@ STUDY = Study(
             stale=("table_transfer.csv", "table_transfer.md"),
         ),
     ),
-    needs={"v2x": ""},  # cad-v2x's training split
+    needs={"v2x": ""},  # cad-v2x's test split (a test set) and its scenario's generation
     outputs=("table_transfer.*", "transfer/"),
 )

@@ -22,7 +22,6 @@ from eval.pipeline.sizes import (
     ROOT,
     V2X_LABEL,
     V2X_SCENARIO,
-    V2X_TRAIN_SEED_OFFSET,
     VAL_SEED_OFFSET,
 )
 from eval.pipeline.stage import RunState, shown
@@ -41,8 +40,9 @@ def v2x_seeds(state: RunState) -> list[int]:
 
 
 def v2x_generate(state: RunState) -> None:
-    """cad-v2x's test, validation and training splits (disjoint scenario seeds); its test +
-    validation entry for the later stages."""
+    """cad-v2x's test and validation splits (disjoint scenario seeds); their entry for the later
+    stages. Its training split, read by the transfer study alone, is that study's to generate
+    (:func:`eval.studies.transfer.stages.transfer_generate`)."""
     from cadsim.scenario import load_scenario
 
     record = state.record.setdefault("v2x", {})
@@ -51,13 +51,8 @@ def v2x_generate(state: RunState) -> None:
     path = ROOT / V2X_SCENARIO
     scenario = load_scenario(path)
     base = state.data / V2X_LABEL.lower()
-    seeds = {
-        "test": scenario.seed,
-        "val": scenario.seed + VAL_SEED_OFFSET,
-        "train": scenario.seed + V2X_TRAIN_SEED_OFFSET,
-    }
+    seeds = {"test": scenario.seed, "val": scenario.seed + VAL_SEED_OFFSET}
     folders = {"test": base, "val": base.with_name(f"{base.name}-val")}
-    folders["train"] = base.with_name(f"{base.name}-train")
     for split, folder in folders.items():
         n, seed = state.sizes.v2x[split], seeds[split]
         log.info("[v2x generate] %s %s: %d pairs (seed %d)", V2X_LABEL, split, n, seed)

@@ -75,7 +75,7 @@ STUDY = Study(
         Stage(
             name="v2x_generate",
             reads=("scenarios/cad-v2x.toml",),
-            writes=("cad-v2x", "cad-v2x-val", "cad-v2x-train"),
+            writes=("cad-v2x", "cad-v2x-val"),
             run=stages.v2x_generate,
             budget_s=60,
             executor=False,
