@@ -233,3 +233,37 @@ def test_both_sensors_sweep_only_accepted_pairs_and_write_the_same_records(tmp_p
     assert at_capture > deferred
     assert sum(s["candidates"] for s in summaries) > 3  # a candidate was refused: a sweep saved
     assert _record_bytes(tmp_path / "deferred") == _record_bytes(tmp_path / "at-capture")
+
+
+def test_a_two_sensor_split_takes_its_frames_from_the_camera_split_of_the_same_frames(tmp_path):
+    """``--frames-from``: the episodes a camera-only dataset of the same settings and seed holds
+    take their camera captures from it (no simulation, no rendering: two sweeps per record),
+    the others are simulated; the records and checksum are those of a full generation. A camera
+    dataset generated otherwise (another seed) is not used."""
+    both = _scenario(tmp_path, (SCENARIOS / "cad-v2x-both.toml").read_text())
+    camera = _scenario(tmp_path, (SCENARIOS / "cad-v2x.toml").read_text(), "camera.toml")
+
+    def generate(path: Path, out: str, pairs: int, *extra: str) -> Path:
+        args = ["generate", str(path), "--out", str(tmp_path / out), "--pairs", str(pairs)]
+        assert main([*args, "--workers", "1", "--no-progress", *extra]) == 0
+        return tmp_path / out
+
+    full = generate(both, "full", 3)
+    frames = generate(camera, "frames", 2)
+    derived = generate(both, "derived", 3, "--frames-from", str(frames))
+    assert _record_bytes(derived) == _record_bytes(full)
+    assert Dataset(derived, verify=True).checksum == Dataset(full, verify=True).checksum
+    summaries = sorted(
+        (json.loads(p.read_text()) for p in (derived / layout.EPISODES_DIR).glob("*.json")),
+        key=lambda s: s["episode"],
+    )
+    taken = [s for s in summaries if s["candidates"] == 0]  # no candidate tried: from the frames
+    assert [s["episode"] for s in taken] == [0, 1] and all(s["views"] == 2 for s in taken)
+    assert summaries[-1]["candidates"] >= 1  # the episode the frames lack was simulated
+
+    other = generate(camera, "other-seed", 1, "--seed", "5")
+    elsewhere = generate(both, "elsewhere", 1, "--frames-from", str(other))
+    summary = json.loads((elsewhere / layout.EPISODES_DIR / "e00000.json").read_text())
+    assert summary["candidates"] >= 1 and _record_bytes(elsewhere) == {
+        k: v for k, v in _record_bytes(full).items() if k.startswith("e00000_")
+    }

@@ -1,5 +1,5 @@
 """`cadsim generate SCENARIO.toml --out DIR [--pairs N] [--seed S] [--workers W]
-[--scheduler ADDRESS]`."""
+[--scheduler ADDRESS] [--frames-from DIR]`."""
 
 from __future__ import annotations
 
@@ -31,6 +31,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="worker processes, one simulation each (default: CPU count)",
     )
     add_scheduler_argument(parser)
+    parser.add_argument(
+        "--frames-from",
+        metavar="DIR",
+        help='a two-sensor scenario (sensor = "both"): take the camera captures from this '
+        "camera-only dataset of the same scenario settings and seed, and sweep only the LiDAR "
+        "(the same records, without rendering again; ignored if it was generated otherwise)",
+    )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -50,6 +57,7 @@ def run(args: argparse.Namespace) -> int:
             workers=args.workers,
             progress=not args.no_progress,
             scheduler=args.scheduler,
+            frames_from=args.frames_from,
         )
     except KeyboardInterrupt:
         print(

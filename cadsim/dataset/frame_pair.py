@@ -253,7 +253,9 @@ class FramePair:
     def difficulty(self) -> dict:
         """The pair's difficulty factors (:mod:`cadsim.dataset.difficulty`; truth, never a
         matcher's input): as the record stores them, else (imported records) what its truth
-        allows, computed here."""
+        allows, computed here. They describe the pair as recorded: a copy with fewer detections
+        (:meth:`select`, a thinning level) or another prior keeps its record's factors and level,
+        so a pair is at one level under every condition."""
         from cadsim.dataset.difficulty import difficulty_factors
 
         stored = self.record.get("difficulty")

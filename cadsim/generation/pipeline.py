@@ -78,6 +78,7 @@ from cadsim.dataset.seeds import (
 from cadsim.dataset.writer_lock import exclusive_writer
 from cadsim.generation.executor import Executor, report_progress
 from cadsim.generation.executors import make_executor
+from cadsim.generation.frames_from import usable_frames
 from cadsim.limits import MAX_PAIRS, MAX_SEED, MAX_WORKERS
 from cadsim.observer_pose import ObserverPose
 from cadsim.render.appearance import AppearanceConfig, exposed
@@ -157,6 +158,8 @@ class EpisodeTask:
     max_slots: int
     criteria: Criteria
     stages: Stages
+    frames_from: str | None = None
+    """A camera-only dataset of the same frames (:mod:`cadsim.generation.frames_from`), or None."""
 
 
 @dataclass
@@ -313,6 +316,10 @@ def run_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
     ``task.max_slots``. ``on_record()`` is called after each record written."""
     if getattr(task.scenario, "sequence", None):
         return run_sequence_episode(task, on_record)
+    if task.frames_from is not None:
+        derived = _episode_from_frames(task, on_record)
+        if derived is not None:
+            return derived
     t0, c0 = time.perf_counter(), time.process_time()
     out = Path(task.out)
     e = task.episode
@@ -377,10 +384,49 @@ def run_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
     result.accepted = slot
     result.seconds = time.perf_counter() - t0
     result.core_seconds = time.process_time() - c0
-    summary = asdict(result)
-    write_file_atomic(
-        out / layout.EPISODES_DIR / layout.episode_summary_name(e), json_bytes(summary)
-    )
+    _write_summary(out, result)
+    return result
+
+
+def _write_summary(out: Path, result: EpisodeResult) -> None:
+    path = out / layout.EPISODES_DIR / layout.episode_summary_name(result.episode)
+    write_file_atomic(path, json_bytes(asdict(result)))
+
+
+def _episode_from_frames(task: EpisodeTask, on_record=None) -> EpisodeResult | None:
+    """Episode ``task.episode`` of a two-sensor scenario derived from the camera-only dataset
+    ``task.frames_from`` (:mod:`cadsim.generation.frames_from`): the records a simulation would
+    write are that dataset's records of the episode with each view's LiDAR added. None when
+    that dataset does not settle the episode (fewer records and not exhausted there): it is
+    then simulated."""
+    from cadsim.generation.frames_from import lidar_added
+
+    t0, c0 = time.perf_counter(), time.process_time()
+    frames, out, e = Path(task.frames_from), Path(task.out), task.episode
+    found = _episode_done_on_disk(frames, e, task.max_slots)
+    if found is None:
+        return None
+    slots = min(found, task.max_slots)
+    result = EpisodeResult(e, simulation_seed(task.root_seed, e), task.max_slots, 0, found < task.max_slots)  # fmt: skip
+    on_disk, _ = _existing_prefix(out, e)
+    records = layout.existing_records(frames)
+
+    def sweep(snapshot, camera, observer, seed, view, slot):
+        return _timed_lidar(task, snapshot, camera, observer, seed, slot, view, result)
+
+    for slot in range(on_disk, slots):
+        files = lidar_added(records[(e, slot)], lambda *a, slot=slot: sweep(*a, slot))
+        c = time.process_time()
+        if write_record(out, layout.record_name(e, slot), files):
+            result.new_records += 1
+        result.write_core_seconds += time.process_time() - c
+        result.views += 2
+        if on_record is not None:
+            on_record()
+    result.accepted = slots
+    result.seconds = time.perf_counter() - t0
+    result.core_seconds = time.process_time() - c0
+    _write_summary(out, result)
     return result
 
 
@@ -575,9 +621,7 @@ def run_sequence_episode(task: EpisodeTask, on_record=None) -> EpisodeResult:
             result.exhausted = result.accepted < task.max_slots
     result.seconds = time.perf_counter() - t0
     result.core_seconds = time.process_time() - c0
-    write_file_atomic(
-        out / layout.EPISODES_DIR / layout.episode_summary_name(e), json_bytes(asdict(result))
-    )
+    _write_summary(out, result)
     return result
 
 
@@ -889,6 +933,7 @@ def generate_dataset(
     max_episodes: int | None = None,
     scheduler: str | None = None,
     executor: Executor | None = None,
+    frames_from: str | Path | None = None,
 ) -> GenerationResult:
     """Generate (or resume) the dataset of ``scenario`` (a path or a loaded scenario) in ``out``.
 
@@ -898,6 +943,9 @@ def generate_dataset(
     worker mounts at the same path. executor: run episodes there instead (not closed here).
     max_episodes: give up after this many episodes without N pairs (default
     10·⌈N / pairs_per_episode⌉ + 10).
+    frames_from: a camera-only dataset of the same frames for a two-sensor scenario: the episodes
+    it holds take their camera captures from it (:mod:`cadsim.generation.frames_from`); ignored,
+    with a log line, when it was generated otherwise.
 
     Every argument is checked before ``out`` is touched; ``out`` is then locked against a
     second writer (``cadsim.dataset.writer_lock``) until the final manifest is written.
@@ -906,7 +954,9 @@ def generate_dataset(
     plan = _plan(scenario, out, pairs, seed, workers, max_episodes)
     plan.out.mkdir(parents=True, exist_ok=True)
     with exclusive_writer(plan.out):
-        return _generate(plan, stages or Stages(), workers, progress, scheduler, executor, t0)
+        return _generate(
+            plan, stages or Stages(), workers, progress, scheduler, executor, t0, frames_from
+        )  # fmt: skip
 
 
 def _generate(
@@ -917,6 +967,7 @@ def _generate(
     scheduler: str | None,
     executor: Executor | None,
     t0: float,
+    frames_from: str | Path | None = None,
 ) -> GenerationResult:
     """The generation itself, with ``plan.out`` locked."""
     scenario, out, n_pairs, root_seed = plan.scenario, plan.out, plan.n_pairs, plan.root_seed
@@ -925,10 +976,13 @@ def _generate(
     )  # fmt: skip
     _check_resume(out, config)
     sequential = bool(getattr(scenario, "sequence", None))
+    frames = None if sequential or _views(scenario) != 2 else usable_frames(frames_from, config)
     stale = remove_stale_temp(out)
     if stale:
         log.info("removed %d unfinished record(s) of an interrupted run", len(stale))
     earlier_gl = _earlier_gl(out)  # the drivers that drew the records of a finished earlier run
+    if frames is not None:  # the drivers that drew the frames' images
+        earlier_gl = gl_drivers(_earlier_gl(Path(frames)), earlier_gl)
     started = build_manifest(scenario, config, seed_source, [], {}, complete=False)
     write_manifest(out, started | ({"gl": earlier_gl} if earlier_gl else {}))
 
@@ -975,7 +1029,7 @@ def _generate(
                     bump(min(on_disk, need))
                 else:
                     task = EpisodeTask(
-                        scenario, str(out), root_seed, next_episode, need, crit, stages
+                        scenario, str(out), root_seed, next_episode, need, crit, stages, frames
                     )
                     future = executor.submit(_worker_run, task, resources={"simulation": 1})
                     in_flight[future] = (next_episode, need)

@@ -71,7 +71,10 @@ class Study:
     result files it writes under ``--out``; ``tables``: re-writes its tables from its result
     files, runs nothing (None: it has none to re-write); ``power``: the comparisons its power
     analysis covers (:class:`eval.engine.power_analysis.PowerCheck`: the test clusters each
-    would need for a ±5-point half-width or a 5-point MDD, in ``power_analysis.csv``)."""
+    would need for a ±5-point half-width or a 5-point MDD, in ``power_analysis.csv``);
+    ``budget_units``: the tables it adds, each as (what, the names of the stages that make it)
+    — the unit of the cold-run budget (``eval.claims.budget``: each added table with its
+    sweep ≤ 240 s); empty: the study is one unit."""
 
     name: str
     label: str
@@ -87,6 +90,7 @@ class Study:
     outputs: tuple[str, ...] = ()
     tables: Callable[[Path], object] | None = None
     power: tuple[PowerCheck, ...] = ()
+    budget_units: tuple[tuple[str, tuple[str, ...]], ...] = ()
 
     def data_named(self, name: str) -> Data:
         """The declared dataset ``name`` (KeyError naming the study when it has none)."""

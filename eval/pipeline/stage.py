@@ -53,9 +53,18 @@ class RunState:
     def progress(self) -> bool:
         return not self.args.no_progress
 
-    def generate(self, scenario: Path, folder: Path, pairs: int, seed: int | None):
+    def generate(
+        self,
+        scenario: Path,
+        folder: Path,
+        pairs: int,
+        seed: int | None,
+        frames_from: str | Path | None = None,
+    ):
         """Generate (or resume) ``pairs`` records of ``scenario`` in ``folder`` (``seed``: the
-        scenario seed, None for the scenario's own); the generation result."""
+        scenario seed, None for the scenario's own; ``frames_from``: a camera-only dataset of the
+        same frames, for a two-sensor scenario, :mod:`cadsim.generation.frames_from`); the
+        generation result."""
         from cadsim.generation.pipeline import generate_dataset
 
         result = generate_dataset(
@@ -66,6 +75,7 @@ class RunState:
             workers=self.args.workers,
             progress=self.progress,
             scheduler=self.args.scheduler,
+            frames_from=frames_from,
         )
         log.info(
             "%s: %d pairs (%d new) in %.1f s",

@@ -103,4 +103,8 @@ STUDY = Study(
     ),
     outputs=("table_temporal*", "temporal/", "temporal_lidar/"),
     power=POWER,
+    budget_units=(
+        ("the temporal camera table", ("temporal_generate", "temporal")),
+        ("the temporal LiDAR table", ("temporal_lidar_generate", "temporal_lidar")),
+    ),
 )

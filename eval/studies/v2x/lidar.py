@@ -50,21 +50,29 @@ SCENARIO = "scenarios/cad-v2x-both.toml"
 
 
 def generate_lidar_splits(
-    root: Path, data: Path, pairs: dict[str, int], val_seed_offset: int, generate: Callable
+    root: Path,
+    data: Path,
+    pairs: dict[str, int],
+    val_seed_offset: int,
+    generate: Callable,
+    frames: tuple[str | Path, str | Path] | None = None,
 ) -> tuple[Path, Path, dict]:
     """The test and validation splits of :data:`SCENARIO` under ``data``, ``pairs[split]`` frame
-    pairs each (``generate(path, folder, n, seed)`` makes or resumes one); (test dir, val dir,
-    what the run record keeps)."""
+    pairs each (``generate(path, folder, n, seed, frames_from)`` makes or resumes one); (test
+    dir, val dir, what the run record keeps). ``frames``: cad-v2x's (test, validation) folders,
+    the camera splits of the same frames, from which the records take their camera captures
+    (only the LiDAR is swept; :mod:`cadsim.generation.frames_from`)."""
     from cadsim.scenario import load_scenario
 
     path = root / SCENARIO
     seed = load_scenario(path).seed
     test, val = data / "cad-v2x-both", data / "cad-v2x-both-val"
     record = {}
-    for split, folder, split_seed in (("test", test, None), ("val", val, seed + val_seed_offset)):
+    splits = (("test", test, None), ("val", val, seed + val_seed_offset))
+    for (split, folder, split_seed), frames_from in zip(splits, frames or (None, None), strict=True):  # fmt: skip
         n = pairs[split]
         log.info("[v2x lidar generate] %s %s: %d pairs", LABEL, split, n)
-        made = generate(path, folder, n, split_seed)
+        made = generate(path, folder, n, split_seed, frames_from)
         record[split] = {"dir": str(folder), "pairs": n, "seed": split_seed or seed}
         record[split] |= {"new_records": made.new_records}
     return test, val, record

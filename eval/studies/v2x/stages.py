@@ -115,12 +115,11 @@ def v2x_lidar(state: RunState) -> None:
     seeds = v2x_seeds(state)
     if not seeds or not (ROOT / LIDAR_SCENARIO).is_file():
         return
-    test, val, record = generate_lidar_splits(
-        ROOT, state.data, state.sizes.lidar, VAL_SEED_OFFSET,
-        lambda path, folder, n, seed: state.generate(path, folder, n, seed),
-    )  # fmt: skip
     entry = state.v2x_entry
     camera_table = None if entry is None else (entry.test_dir, entry.val_dir)
+    test, val, record = generate_lidar_splits(
+        ROOT, state.data, state.sizes.lidar, VAL_SEED_OFFSET, state.generate, camera_table
+    )
     _, used = evaluate_lidar(
         test, val, with_prior(state.args.matchers), seeds, state.runner, state.out,
         tune=state.args.tune, camera_table=camera_table,

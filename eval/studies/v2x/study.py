@@ -107,7 +107,7 @@ STUDY = Study(
         ),
         Stage(
             name="v2x_lidar",
-            reads=(LIDAR_SCENARIO, "cad-v2x"),
+            reads=(LIDAR_SCENARIO, "cad-v2x", "cad-v2x-val"),
             writes=("cad-v2x-both", "table_v2x_lidar.*", "table_v2x_sensors.csv", "v2x_lidar/"),
             run=stages.v2x_lidar,
             budget_s=110,
@@ -118,4 +118,9 @@ STUDY = Study(
     needs={"table1": "tuning.csv"},
     outputs=("localisation_presets.csv", "table_v2x*", "v2x/", "v2x_boxes/", "v2x_lidar/"),
     power=POWER,
+    budget_units=(
+        ("the V2X camera table and its preset sweep", ("v2x_generate", "v2x_sweep", "v2x_table")),
+        ("the V2X box-only table", ("v2x_boxes",)),
+        ("the V2X LiDAR table", ("v2x_lidar",)),
+    ),
 )
