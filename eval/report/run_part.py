@@ -137,7 +137,8 @@ def run_part(results: Path, record: dict) -> list[str]:
         budget = [c.statement for c in budget_claims(results)]
         if budget:
             out += [
-                "Per study, the sum of its stages against its share of the cold-run budget:",
+                "Per added table (and each study of several tables, whole), the sum of its stages "
+                'against its share of the cold-run budget (docs/evaluation.md, "The cold-run budget"):',
                 "",
             ]
             out += [f"- {line}" for line in budget] + [""]
