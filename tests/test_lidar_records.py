@@ -267,3 +267,21 @@ def test_a_two_sensor_split_takes_its_frames_from_the_camera_split_of_the_same_f
     assert summary["candidates"] >= 1 and _record_bytes(elsewhere) == {
         k: v for k, v in _record_bytes(full).items() if k.startswith("e00000_")
     }
+
+
+def test_a_tampered_frames_dataset_is_a_one_line_error_before_anything_is_written(tmp_path, capsys):
+    """``--frames-from`` copies the frames' records, so the command verifies them first: a
+    record changed after generation stops it with one line, and the output is not created."""
+    both = _scenario(tmp_path, (SCENARIOS / "cad-v2x-both.toml").read_text())
+    camera = _scenario(tmp_path, (SCENARIOS / "cad-v2x.toml").read_text(), "camera.toml")
+    frames = tmp_path / "frames"
+    args = ["--pairs", "1", "--workers", "1", "--no-progress"]
+    assert main(["generate", str(camera), "--out", str(frames), *args]) == 0
+    record = next((frames / layout.PAIRS_DIR).iterdir()) / layout.RECORD_JSON
+    record.write_text(record.read_text().replace('"time"', '"time" ', 1))
+    capsys.readouterr()
+    out = tmp_path / "derived"
+    code = main(["generate", str(both), "--out", str(out), "--frames-from", str(frames), *args])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "cadsim generate: error:" in err
+    assert not out.exists()

@@ -48,6 +48,10 @@ def run(args: argparse.Namespace) -> int:
         for noisy in ("OpenGL", "trimesh"):  # their INFO lines say nothing a user can act on
             logging.getLogger(noisy).setLevel(logging.WARNING)
 
+    if args.frames_from is not None:  # its records are copied: a tampered one stops here
+        from cadsim.dataset import Dataset
+
+        Dataset(args.frames_from).verify_once()
     try:
         result = generate_dataset(
             args.scenario,
@@ -77,10 +81,16 @@ def _summary(result) -> str:
     kept = min(result.new_records, result.pairs)
     surplus = result.new_records - kept
     dropped = f", {surplus} more written by parallel episodes and dropped" if surplus else ""
+    sensed = (
+        f"{result.views} views rendered in {result.seconds:.1f} s for {result.candidates} "
+        "candidates, those with too few shared objects included"
+        if result.candidates or not result.views
+        else f"{result.views} views sensed in {result.seconds:.1f} s, the frames taken from "
+        "--frames-from"
+    )
     return (
         f"{result.out}: {result.pairs} {_records_word(result.out)} ({kept} new{dropped}; "
-        f"{result.views} views rendered in {result.seconds:.1f} s for {result.candidates} "
-        f"candidates, those with too few shared objects included); checksum {result.checksum}"
+        f"{sensed}); checksum {result.checksum}"
     )
 
 
