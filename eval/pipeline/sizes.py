@@ -59,7 +59,8 @@ EXTERNAL_TUNE_PAIRS = 0
 # V2X realism (cad-v2x, outside Table I): test, validation and training splits on disjoint
 # scenario seeds (seed, seed + VAL_SEED_OFFSET, seed + V2X_TRAIN_SEED_OFFSET; the training split,
 # V2X_TRAIN_FACTOR × the test pairs, is for learned matchers and is never evaluated on: the
-# transfer study generates it, its only reader), then the localisation sweep's preset axes (error scale, latency) with CAD's tuned parameters, τ per level.
+# transfer study generates it, its only reader), then the localisation sweep's preset axes
+# (error scale, latency) with CAD's tuned parameters, τ per level.
 V2X_SCENARIO = "scenarios/cad-v2x.toml"
 V2X_LABEL = "CAD-V2X"
 V2X_PAIRS = 100  # test: one pair per episode (the scenarios' pairs_per_episode = 1), 100 clusters

@@ -21,6 +21,7 @@ SIM_ONLY = "cadsim CAD + CAD-V2X train"  # the "trained on cadsim only" model of
 EXTERNAL_TRAIN_PAIRS = 100
 EXTERNAL_GAP = EXTERNAL_BLOCK
 EXTERNAL_SPLIT = ("dmgm-070-train", "dmgm-070-calibration")  # folders under the data folder
+CAD_TRAIN_DIR, V2X_TRAIN_DIR = "cad-train", "cad-v2x-train"  # the simulated training splits
 EXTERNAL_TRAIN = "DMGM 070 (pairs 1–100)"
 EXTERNAL_TEST = "DMGM 069 + 071"
 
@@ -117,7 +118,7 @@ def train_sets(data: Path, cad_train: Path, external_train: Path) -> dict[str, l
     """{training-set label: dataset folders}: labels start with ``cadsim`` (simulated) or
     ``DMGM`` (external); the DMGM model trains on the training part of ``external_train``
     (:func:`split_external`, written into ``data``)."""
-    v2x_train = Path(data) / "cad-v2x-train"
+    v2x_train = Path(data) / V2X_TRAIN_DIR
     external, _ = split_external(external_train, data)
     return {
         "cadsim CAD train": [cad_train],

@@ -1,5 +1,5 @@
-"""The stages of the learned matchers' transfer matrix: CAD's and CAD-V2X's training splits, then models
-trained on each training set and run on each test set. They fill the run record's ``transfer``
+"""The stages of the learned matchers' transfer matrix: CAD's and CAD-V2X's training splits,
+then models trained on each training set and run on each test set. They fill the run record's ``transfer``
 section; they need cad-v2x and the external pairs (skipped without either)."""
 
 from __future__ import annotations
@@ -10,13 +10,13 @@ from eval.pipeline.sizes import (
     CAD_TRAIN_SEED_OFFSET,
     ROOT,
     SCENARIOS,
-    V2X_LABEL,
     V2X_SCENARIO,
     V2X_TRAIN_SEED_OFFSET,
 )
 from eval.pipeline.stage import RunState, shown
 from eval.studies.external.evaluation import CALIBRATION_DIR, TEST_DIR
 from eval.studies.transfer.evaluation import evaluate_transfer, test_sets, train_models, train_sets
+from eval.studies.transfer.sets import CAD_TRAIN_DIR, V2X_TRAIN_DIR
 
 log = logging.getLogger("eval.reproduce")
 
@@ -34,9 +34,9 @@ def transfer_generate(state: RunState) -> None:
     record = state.record.setdefault("transfer", {})
     v2x_path = ROOT / V2X_SCENARIO
     splits = (
-        ("cad_train", "CAD", path, CAD_TRAIN_SEED_OFFSET, state.sizes.cad_train, "cad-train"),
-        ("v2x_train", V2X_LABEL, v2x_path, V2X_TRAIN_SEED_OFFSET, state.sizes.v2x["train"],
-         f"{V2X_LABEL.lower()}-train"),
+        ("cad_train", "CAD", path, CAD_TRAIN_SEED_OFFSET, state.sizes.cad_train, CAD_TRAIN_DIR),
+        ("v2x_train", "CAD-V2X", v2x_path, V2X_TRAIN_SEED_OFFSET, state.sizes.v2x["train"],
+         V2X_TRAIN_DIR),
     )  # fmt: skip
     for key, label, scenario, offset, pairs, name in splits:
         folder = state.data / name
@@ -45,7 +45,7 @@ def transfer_generate(state: RunState) -> None:
         made = state.generate(scenario, folder, pairs, seed)
         record[key] = {"dir": str(folder), "pairs": pairs, "seed": seed}
         record[key] |= {"new_records": made.new_records}
-    state.cad_train = state.data / "cad-train"
+    state.cad_train = state.data / CAD_TRAIN_DIR
 
 
 def transfer(state: RunState) -> None:
